@@ -1,0 +1,381 @@
+//! Degrees of freedom, the sparsity pattern (built once per model) and the assembly of
+//! tangent matrix and internal-force vector from sets of elements.
+//!
+//! The global matrix is stored in full compressed-column form over the free degrees of
+//! freedom, so that unsymmetric element contributions (friction, paper Eq. 21) can be
+//! assembled as they are; the Cholesky path reads only its lower triangle.
+//!
+//! Assembly runs in parallel without locks: elements are greedily coloured so that no two
+//! elements of one colour share a node, hence no two write the same matrix entry or vector
+//! component, and the colours are processed one after another.
+
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use rayon::prelude::*;
+
+use crate::element::{ElementMatrix, ElementVector};
+
+/// Marker for a constrained (prescribed) degree of freedom in [`DofMap`].
+const FIXED: u32 = u32::MAX;
+
+/// Numbering of the equations: two degrees of freedom (x, y) per node, global dof index
+/// `2·node + component`; free dofs get consecutive equation numbers in node order.
+#[derive(Clone, Debug)]
+pub struct DofMap {
+    equation: Vec<u32>,
+    free: usize,
+}
+
+impl DofMap {
+    /// Numbers the dofs of `node_count` nodes; `fixed[dof]` marks prescribed ones.
+    pub fn new(fixed: &[bool]) -> Self {
+        let mut free = 0u32;
+        let equation = fixed
+            .iter()
+            .map(|&f| {
+                if f {
+                    FIXED
+                } else {
+                    free += 1;
+                    free - 1
+                }
+            })
+            .collect();
+        Self {
+            equation,
+            free: free as usize,
+        }
+    }
+
+    /// Number of free dofs (unknowns).
+    pub fn free_count(&self) -> usize {
+        self.free
+    }
+
+    /// Total number of dofs (2 per node).
+    pub fn dof_count(&self) -> usize {
+        self.equation.len()
+    }
+
+    /// Equation number of global dof `dof`, or `None` if it is prescribed.
+    #[inline]
+    pub fn equation(&self, dof: usize) -> Option<usize> {
+        let e = self.equation[dof];
+        (e != FIXED).then_some(e as usize)
+    }
+
+    /// Gathers the free components of a full dof vector into an equation vector.
+    pub fn gather_free(&self, full: &[f64], out: &mut [f64]) {
+        for (dof, &v) in full.iter().enumerate() {
+            if let Some(eq) = self.equation(dof) {
+                out[eq] = v;
+            }
+        }
+    }
+
+    /// Adds an equation vector into the free components of a full dof vector.
+    pub fn add_free(&self, eqs: &[f64], full: &mut [f64]) {
+        for (dof, v) in full.iter_mut().enumerate() {
+            if let Some(eq) = self.equation(dof) {
+                *v += eqs[eq];
+            }
+        }
+    }
+}
+
+/// A family of elements sharing a kernel and a kind of integration-point state (continuum
+/// cells, interface elements, ...). The assembler is generic over this trait.
+pub trait ElementSet: Sync {
+    /// History stored per integration point.
+    type State: Copy + Default + Send + Sync;
+
+    /// Number of elements.
+    fn len(&self) -> usize;
+
+    /// Whether the set is empty.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Global node indices of element `e` (at most 8).
+    fn nodes(&self, e: usize) -> &[u32];
+
+    /// State slots per element; element `e` owns slots `e·P .. (e+1)·P`.
+    fn points_per_element(&self) -> usize;
+
+    /// Internal force `f` (and tangent `k` if requested) of element `e` for its nodal
+    /// displacements `u` (dof order of [`ElementVector`]), updating `trial` from `committed`.
+    #[allow(clippy::too_many_arguments)]
+    fn evaluate(
+        &self,
+        e: usize,
+        u: &ElementVector,
+        committed: &[Self::State],
+        trial: &mut [Self::State],
+        k: Option<&mut ElementMatrix>,
+        f: &mut ElementVector,
+    );
+}
+
+/// Groups of elements of one set such that no two elements of a group share a node.
+#[derive(Clone, Debug, Default)]
+pub struct Coloring {
+    groups: Vec<Vec<u32>>,
+}
+
+impl Coloring {
+    /// Greedy colouring of the elements of `set` over `node_count` nodes.
+    pub fn new<S: ElementSet>(set: &S, node_count: usize) -> Self {
+        const MAX_COLORS: usize = 64;
+        let mut used = vec![0u64; node_count];
+        let mut groups: Vec<Vec<u32>> = Vec::new();
+        for e in 0..set.len() {
+            let nodes = set.nodes(e);
+            let taken = nodes.iter().fold(0u64, |m, &n| m | used[n as usize]);
+            // With more than 64 colours (never seen on 2D meshes) the rest share the last
+            // group, which `assemble` then runs serially.
+            let color = (taken.trailing_ones() as usize).min(MAX_COLORS - 1);
+            for &n in nodes {
+                used[n as usize] |= 1 << color;
+            }
+            if groups.len() <= color {
+                groups.resize_with(color + 1, Vec::new);
+            }
+            groups[color].push(e as u32);
+        }
+        Self { groups }
+    }
+
+    /// Number of colours.
+    pub fn len(&self) -> usize {
+        self.groups.len()
+    }
+
+    /// Whether there are no elements at all.
+    pub fn is_empty(&self) -> bool {
+        self.groups.is_empty()
+    }
+}
+
+/// The compressed-column pattern of the global matrix over the free dofs, built once per
+/// model from the element connectivity.
+#[derive(Clone, Debug)]
+pub struct SparsityPattern {
+    symbolic: SymbolicSparseColMat<u32>,
+}
+
+impl SparsityPattern {
+    /// Pattern of all element sets' couplings. `connectivity` yields the node lists of every
+    /// element of every set.
+    pub fn new<'a>(
+        node_count: usize,
+        dofs: &DofMap,
+        connectivity: impl Iterator<Item = &'a [u32]> + Clone,
+    ) -> Self {
+        // node → elements (CSR), then node → neighbouring nodes.
+        let mut start = vec![0usize; node_count + 1];
+        let mut element_count = 0;
+        for nodes in connectivity.clone() {
+            for &n in nodes {
+                start[n as usize + 1] += 1;
+            }
+            element_count += 1;
+        }
+        for i in 0..node_count {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut node_elements = vec![0u32; start[node_count]];
+        let mut element_nodes: Vec<&[u32]> = Vec::with_capacity(element_count);
+        for (e, nodes) in connectivity.enumerate() {
+            for &n in nodes {
+                node_elements[fill[n as usize]] = e as u32;
+                fill[n as usize] += 1;
+            }
+            element_nodes.push(nodes);
+        }
+        let neighbours: Vec<Vec<u32>> = (0..node_count)
+            .into_par_iter()
+            .map(|n| {
+                let mut v: Vec<u32> = node_elements[start[n]..start[n + 1]]
+                    .iter()
+                    .flat_map(|&e| element_nodes[e as usize].iter().copied())
+                    .collect();
+                v.sort_unstable();
+                v.dedup();
+                v
+            })
+            .collect();
+        let mut col_ptr = Vec::with_capacity(dofs.free_count() + 1);
+        col_ptr.push(0u32);
+        let mut row_idx = Vec::new();
+        for (node, adjacent) in neighbours.iter().enumerate() {
+            for c in 0..2 {
+                if dofs.equation(2 * node + c).is_none() {
+                    continue;
+                }
+                for &m in adjacent {
+                    row_idx.extend(
+                        (0..2)
+                            .filter_map(|d| dofs.equation(2 * m as usize + d))
+                            .map(|e| e as u32),
+                    );
+                }
+                col_ptr.push(row_idx.len() as u32);
+            }
+        }
+        let n = dofs.free_count();
+        let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        Self { symbolic }
+    }
+
+    /// Number of rows (= columns = free dofs).
+    pub fn size(&self) -> usize {
+        self.symbolic.nrows()
+    }
+
+    /// Number of stored entries (both triangles).
+    pub fn nnz(&self) -> usize {
+        self.symbolic.row_idx().len()
+    }
+
+    /// The faer symbolic matrix.
+    pub fn symbolic(&self) -> &SymbolicSparseColMat<u32> {
+        &self.symbolic
+    }
+
+    /// Position in the value array of entry (`row`, `col`); the pattern guarantees it exists
+    /// for any two dofs of one element.
+    #[inline]
+    fn position(&self, row: usize, col: usize) -> usize {
+        let cp = self.symbolic.col_ptr();
+        let (a, b) = (cp[col] as usize, cp[col + 1] as usize);
+        let rows = &self.symbolic.row_idx()[a..b];
+        a + rows
+            .binary_search(&(row as u32))
+            .expect("entry of an element's dofs is in the pattern")
+    }
+}
+
+/// The assembled tangent matrix (values over a [`SparsityPattern`]) and internal-force vector
+/// over all dofs (free and prescribed, so reactions can be read from it).
+#[derive(Clone, Debug)]
+pub struct GlobalSystem {
+    pub pattern: SparsityPattern,
+    pub values: Vec<f64>,
+    pub internal_force: Vec<f64>,
+}
+
+/// A raw pointer that may be shared between threads; writes through it are made disjoint by
+/// the element colouring (see [`GlobalSystem::assemble`]).
+#[derive(Clone, Copy)]
+struct SharedMut<T>(*mut T);
+// SAFETY: only used to write locations that the colouring guarantees no other thread
+// touches at the same time.
+unsafe impl<T: Send> Send for SharedMut<T> {}
+unsafe impl<T: Send> Sync for SharedMut<T> {}
+
+impl<T> SharedMut<T> {
+    /// The pointer. A method (not a field access) so that closures capture the whole
+    /// `Sync` wrapper rather than the bare pointer.
+    #[inline]
+    fn get(self) -> *mut T {
+        self.0
+    }
+}
+
+impl GlobalSystem {
+    /// Zeroed system over `pattern` with `dof_count` total dofs.
+    pub fn new(pattern: SparsityPattern, dof_count: usize) -> Self {
+        let nnz = pattern.nnz();
+        Self {
+            pattern,
+            values: vec![0.0; nnz],
+            internal_force: vec![0.0; dof_count],
+        }
+    }
+
+    /// Zeroes the matrix values (if `with_tangent`) and the internal force.
+    pub fn clear(&mut self, with_tangent: bool) {
+        if with_tangent {
+            self.values.fill(0.0);
+        }
+        self.internal_force.fill(0.0);
+    }
+
+    /// The assembled matrix as a faer view.
+    pub fn matrix(&self) -> SparseColMatRef<'_, u32, f64> {
+        SparseColMatRef::new(self.pattern.symbolic().as_ref(), &self.values)
+    }
+
+    /// Adds the contributions of every element of `set` for the full displacement vector `u`
+    /// (2 dofs per node), updating `trial` states from `committed` ones.
+    #[allow(clippy::too_many_arguments)]
+    pub fn assemble<S: ElementSet>(
+        &mut self,
+        set: &S,
+        coloring: &Coloring,
+        dofs: &DofMap,
+        u: &[f64],
+        committed: &[S::State],
+        trial: &mut [S::State],
+        with_tangent: bool,
+    ) {
+        let ppe = set.points_per_element();
+        assert_eq!(trial.len(), set.len() * ppe);
+        assert_eq!(committed.len(), trial.len());
+        let values = SharedMut(self.values.as_mut_ptr());
+        let force = SharedMut(self.internal_force.as_mut_ptr());
+        let states = SharedMut(trial.as_mut_ptr());
+        let pattern = &self.pattern;
+        let element = |e: usize| {
+            let nodes = set.nodes(e);
+            let mut ue = ElementVector::zeros();
+            for (a, &n) in nodes.iter().enumerate() {
+                ue[2 * a] = u[2 * n as usize];
+                ue[2 * a + 1] = u[2 * n as usize + 1];
+            }
+            let mut ke = ElementMatrix::zeros();
+            let mut fe = ElementVector::zeros();
+            // SAFETY: every element is evaluated exactly once, and its state slots are its own.
+            let trial_e = unsafe { std::slice::from_raw_parts_mut(states.get().add(e * ppe), ppe) };
+            set.evaluate(
+                e,
+                &ue,
+                &committed[e * ppe..(e + 1) * ppe],
+                trial_e,
+                with_tangent.then_some(&mut ke),
+                &mut fe,
+            );
+            let global = |a: usize| 2 * nodes[a / 2] as usize + a % 2;
+            for a in 0..2 * nodes.len() {
+                // SAFETY: elements of one colour share no node, hence no dof.
+                unsafe { *force.get().add(global(a)) += fe[a] };
+            }
+            if !with_tangent {
+                return;
+            }
+            for b in 0..2 * nodes.len() {
+                let Some(col) = dofs.equation(global(b)) else {
+                    continue;
+                };
+                for a in 0..2 * nodes.len() {
+                    if let Some(row) = dofs.equation(global(a)) {
+                        // SAFETY: as above; (row, col) belong to this element's dofs only.
+                        unsafe { *values.get().add(pattern.position(row, col)) += ke[(a, b)] };
+                    }
+                }
+            }
+        };
+        let last = coloring.groups.len().saturating_sub(1);
+        for (c, group) in coloring.groups.iter().enumerate() {
+            if c == last && coloring.groups.len() == 64 {
+                group.iter().for_each(|&e| element(e as usize));
+            } else {
+                group
+                    .par_iter()
+                    .with_min_len(64)
+                    .for_each(|&e| element(e as usize));
+            }
+        }
+    }
+}

@@ -1,0 +1,73 @@
+//! Elements: shape functions ([`shape`]), quadrature rules ([`quadrature`]), the analysis
+//! type that decides thickness, hoop strain and volume measure ([`Analysis`]), and the 2D
+//! continuum element ([`continuum`]).
+//!
+//! All element matrices are fixed 16×16 (8 nodes × 2 degrees of freedom); elements with fewer
+//! nodes use the leading block. Fixed sizes let nalgebra keep them on the stack, so assembly
+//! allocates nothing per element.
+
+pub mod continuum;
+pub mod quadrature;
+pub mod shape;
+
+use nalgebra::{SMatrix, SVector};
+use serde::Deserialize;
+
+/// Element stiffness (tangent) matrix, 8 nodes × 2 dofs, dof order (u_x1, u_y1, u_x2, ...).
+pub type ElementMatrix = SMatrix<f64, 16, 16>;
+/// Element force or displacement vector in the same dof order.
+pub type ElementVector = SVector<f64, 16>;
+
+/// The 2D idealisation of the 3D problem.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Analysis {
+    /// σ_zz = 0; the out-of-plane strain follows from the material. `thickness` in mm.
+    PlaneStress { thickness: f64 },
+    /// ε_zz = 0. `thickness` in mm (forces are per this thickness; default 1).
+    PlaneStrain {
+        #[serde(default = "unit_thickness")]
+        thickness: f64,
+    },
+    /// Axisymmetric about the y axis: x = r, y = z, hoop strain ε_θθ = u_r / r.
+    /// Forces are totals over the full circle (2πr weighting).
+    Axisymmetric,
+}
+
+fn unit_thickness() -> f64 {
+    1.0
+}
+
+impl Analysis {
+    /// Factor that turns an in-plane area (or length) integral into a volume (or area)
+    /// integral at radius `r`: the thickness, or 2πr in axisymmetry (paper Eq. 37).
+    #[inline]
+    pub fn measure(&self, r: f64) -> f64 {
+        match *self {
+            Analysis::PlaneStress { thickness } | Analysis::PlaneStrain { thickness } => thickness,
+            Analysis::Axisymmetric => 2.0 * std::f64::consts::PI * r,
+        }
+    }
+
+    /// Whether the out-of-plane stress vanishes (plane stress) rather than the out-of-plane
+    /// strain being given by the kinematics (plane strain, axisymmetry).
+    #[inline]
+    pub fn is_plane_stress(&self) -> bool {
+        matches!(self, Analysis::PlaneStress { .. })
+    }
+
+    /// Whether this is an axisymmetric analysis.
+    #[inline]
+    pub fn is_axisymmetric(&self) -> bool {
+        matches!(self, Analysis::Axisymmetric)
+    }
+
+    /// Short name for logs and reports.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Analysis::PlaneStress { .. } => "plane stress",
+            Analysis::PlaneStrain { .. } => "plane strain",
+            Analysis::Axisymmetric => "axisymmetric",
+        }
+    }
+}

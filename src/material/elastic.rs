@@ -1,0 +1,122 @@
+//! Isotropic linear elasticity.
+
+use super::{Material, OutOfPlane, PointState, Tangent, Voigt, ZZ};
+
+/// Isotropic linear-elastic material with Young's modulus `e` (MPa) and Poisson's ratio `nu`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinearElastic {
+    pub e: f64,
+    pub nu: f64,
+}
+
+impl LinearElastic {
+    /// Checks the parameters: E > 0 and −1 < ν < 0.5.
+    pub fn new(e: f64, nu: f64) -> Result<Self, String> {
+        if !(e.is_finite() && e > 0.0) {
+            return Err(format!("Young's modulus E = {e} must be positive"));
+        }
+        if !(nu > -1.0 && nu < 0.5) {
+            return Err(format!("Poisson's ratio nu = {nu} must lie in (-1, 0.5)"));
+        }
+        Ok(Self { e, nu })
+    }
+
+    /// Shear modulus μ.
+    pub fn shear_modulus(&self) -> f64 {
+        self.e / (2.0 * (1.0 + self.nu))
+    }
+
+    /// Lamé's first parameter λ.
+    pub fn lame_lambda(&self) -> f64 {
+        self.e * self.nu / ((1.0 + self.nu) * (1.0 - 2.0 * self.nu))
+    }
+
+    /// Elasticity matrix for the given out-of-plane condition.
+    pub fn stiffness(&self, out_of_plane: OutOfPlane) -> Tangent {
+        let mut d = Tangent::zeros();
+        match out_of_plane {
+            OutOfPlane::StrainGiven => {
+                let (l, m) = (self.lame_lambda(), self.shear_modulus());
+                for i in [0, 1, ZZ] {
+                    for j in [0, 1, ZZ] {
+                        d[(i, j)] = l;
+                    }
+                    d[(i, i)] += 2.0 * m;
+                }
+                d[(2, 2)] = m;
+            }
+            OutOfPlane::StressFree => {
+                let c = self.e / (1.0 - self.nu * self.nu);
+                d[(0, 0)] = c;
+                d[(1, 1)] = c;
+                d[(0, 1)] = c * self.nu;
+                d[(1, 0)] = c * self.nu;
+                d[(2, 2)] = self.shear_modulus();
+            }
+        }
+        d
+    }
+
+    /// The out-of-plane strain of a plane-stress state with in-plane strains εxx, εyy.
+    pub fn plane_stress_zz_strain(&self, exx: f64, eyy: f64) -> f64 {
+        -self.nu / (1.0 - self.nu) * (exx + eyy)
+    }
+}
+
+impl Material for LinearElastic {
+    fn update(
+        &self,
+        strain: &Voigt,
+        _committed: &PointState,
+        out_of_plane: OutOfPlane,
+    ) -> (PointState, Tangent) {
+        let d = self.stiffness(out_of_plane);
+        let mut strain = *strain;
+        if out_of_plane == OutOfPlane::StressFree {
+            strain[ZZ] = self.plane_stress_zz_strain(strain[0], strain[1]);
+        }
+        let stress = d * strain;
+        (
+            PointState {
+                strain,
+                stress,
+                ..PointState::default()
+            },
+            d,
+        )
+    }
+
+    fn describe(&self) -> String {
+        format!("linear elastic, E = {} MPa, nu = {}", self.e, self.nu)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uniaxial_stress_in_plane_stress_gives_poisson_contraction() {
+        let m = LinearElastic::new(200_000.0, 0.3).unwrap();
+        let eps = Voigt::new(1e-3, -0.3e-3, 0.0, 0.0);
+        let (s, _) = m.update(&eps, &PointState::default(), OutOfPlane::StressFree);
+        assert!((s.stress[0] - 200.0).abs() < 1e-9);
+        assert!(s.stress[1].abs() < 1e-9);
+        assert!((s.strain[ZZ] + 0.3e-3).abs() < 1e-15);
+    }
+
+    #[test]
+    fn uniaxial_stress_in_3d_form() {
+        let m = LinearElastic::new(200_000.0, 0.25).unwrap();
+        let eps = Voigt::new(1e-3, -0.25e-3, 0.0, -0.25e-3);
+        let (s, _) = m.update(&eps, &PointState::default(), OutOfPlane::StrainGiven);
+        assert!((s.stress[0] - 200.0).abs() < 1e-9);
+        assert!(s.stress[1].abs() < 1e-9 && s.stress[ZZ].abs() < 1e-9);
+    }
+
+    #[test]
+    fn rejects_bad_parameters() {
+        assert!(LinearElastic::new(-1.0, 0.3).is_err());
+        assert!(LinearElastic::new(1.0, 0.5).is_err());
+    }
+}

@@ -1,0 +1,66 @@
+//! Constitutive models of the bulk (continuum) material, behind the [`Material`] trait.
+//!
+//! A material is a pure function from the total strain at an integration point and the state
+//! committed at the end of the last converged step to the new stress, the new (trial) state
+//! and the consistent tangent. It knows nothing of elements. The solver keeps two state
+//! arrays, *committed* and *trial*; trial states are copied into committed ones only when a
+//! load step converges, so a failed or cut-back step leaves history untouched.
+
+pub mod elastic;
+
+use nalgebra::{SMatrix, SVector};
+
+/// Stress or strain in the solver's Voigt order (xx, yy, xy, zz); in axisymmetry
+/// (rr, zz, rz, θθ). Strain uses engineering shear γ_xy = 2ε_xy.
+pub type Voigt = SVector<f64, 4>;
+/// Material tangent dσ/dε in Voigt order.
+pub type Tangent = SMatrix<f64, 4, 4>;
+
+/// Index of the out-of-plane (zz or θθ) component in [`Voigt`] vectors.
+pub const ZZ: usize = 3;
+
+/// How the out-of-plane component is determined.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutOfPlane {
+    /// ε_zz is given by the kinematics (plane strain: 0, axisymmetry: u_r / r).
+    StrainGiven,
+    /// σ_zz = 0; the material returns the ε_zz that satisfies it.
+    StressFree,
+}
+
+/// History and results at one integration point.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PointState {
+    /// Total strain, including the out-of-plane component the material determined in plane
+    /// stress.
+    pub strain: Voigt,
+    pub stress: Voigt,
+    pub plastic_strain: Voigt,
+    /// Accumulated equivalent plastic strain ε̄ᵖ = ∫ √(2/3 dεᵖ:dεᵖ).
+    pub equivalent_plastic_strain: f64,
+    /// Whether the point yielded in the step that produced this state.
+    pub yielding: bool,
+}
+
+/// A bulk constitutive model.
+pub trait Material: Send + Sync + std::fmt::Debug {
+    /// Stress update for the total strain `strain` (its zz entry is ignored when
+    /// `out_of_plane` is [`OutOfPlane::StressFree`]) starting from the `committed` state.
+    /// Returns the new state and the consistent tangent dσ/dε (with zero zz row and column in
+    /// plane stress, where it is the condensed in-plane tangent).
+    fn update(
+        &self,
+        strain: &Voigt,
+        committed: &PointState,
+        out_of_plane: OutOfPlane,
+    ) -> (PointState, Tangent);
+
+    /// Short description for logs, e.g. "elastic E=210000 nu=0.3".
+    fn describe(&self) -> String;
+}
+
+/// Von Mises equivalent stress of a Voigt stress (xx, yy, xy, zz).
+pub fn von_mises(s: &Voigt) -> f64 {
+    let (xx, yy, xy, zz) = (s[0], s[1], s[2], s[3]);
+    (0.5 * ((xx - yy).powi(2) + (yy - zz).powi(2) + (zz - xx).powi(2)) + 3.0 * xy * xy).sqrt()
+}

@@ -1,0 +1,532 @@
+//! The model: a mesh together with bodies and their materials, supports, loads and the
+//! degree-of-freedom numbering. Built once from a [`Mesh`] and a [`Case`]; the solver only
+//! reads it.
+//!
+//! Physical groups are referred to by name: bodies are physical surfaces, supports and loads
+//! are physical curves or points (see the README's naming convention).
+
+use std::collections::HashMap;
+
+use crate::assembly::{Coloring, DofMap, ElementSet, SparsityPattern};
+use crate::case::{Case, LoadSpec, SupportSpec};
+use crate::element::continuum::{evaluate_cell, min_jacobian};
+use crate::element::quadrature::{GAUSS3, MAX_CELL_POINTS};
+use crate::element::shape::line3;
+use crate::element::{Analysis, ElementMatrix, ElementVector};
+use crate::material::elastic::LinearElastic;
+use crate::material::{Material, PointState};
+use crate::mesh::{CellKind, Line3, Mesh, PhysicalGroup};
+use crate::{Error, Result};
+
+/// A continuum cell of the model with its node coordinates copied in (so assembly reads one
+/// contiguous record per element).
+#[derive(Clone, Copy, Debug)]
+pub struct ContinuumCell {
+    pub kind: CellKind,
+    pub nodes: [u32; 8],
+    pub coords: [[f64; 2]; 8],
+    /// Index of the body (into [`Model::bodies`]).
+    pub body: u32,
+    /// Index of the cell in [`Mesh::cells`].
+    pub mesh_cell: u32,
+}
+
+/// All continuum cells of the model, with one material per body.
+#[derive(Debug)]
+pub struct ContinuumSet {
+    pub analysis: Analysis,
+    pub cells: Vec<ContinuumCell>,
+    pub materials: Vec<Box<dyn Material>>,
+}
+
+impl ElementSet for ContinuumSet {
+    type State = PointState;
+
+    fn len(&self) -> usize {
+        self.cells.len()
+    }
+
+    fn nodes(&self, e: usize) -> &[u32] {
+        let c = &self.cells[e];
+        &c.nodes[..c.kind.node_count()]
+    }
+
+    fn points_per_element(&self) -> usize {
+        MAX_CELL_POINTS
+    }
+
+    fn evaluate(
+        &self,
+        e: usize,
+        u: &ElementVector,
+        committed: &[PointState],
+        trial: &mut [PointState],
+        k: Option<&mut ElementMatrix>,
+        f: &mut ElementVector,
+    ) {
+        let c = &self.cells[e];
+        evaluate_cell(
+            &self.analysis,
+            c.kind,
+            &c.coords,
+            u,
+            self.materials[c.body as usize].as_ref(),
+            committed,
+            trial,
+            k,
+            f,
+        );
+    }
+}
+
+/// A named set of prescribed dofs whose reaction force is reported.
+#[derive(Clone, Debug)]
+pub struct Support {
+    pub name: String,
+    /// Global dofs (2·node + component) this support prescribes.
+    pub dofs: Vec<usize>,
+}
+
+/// Everything the solver needs, built from a mesh and a case.
+#[derive(Debug)]
+pub struct Model {
+    pub mesh: Mesh,
+    pub analysis: Analysis,
+    /// Body names (physical surface names), indexed by [`ContinuumCell::body`].
+    pub bodies: Vec<String>,
+    pub continuum: ContinuumSet,
+    pub continuum_coloring: Coloring,
+    /// Supports in case-file order, then the automatic axis support ("axis": u_r = 0 on r = 0) in
+    /// axisymmetry.
+    pub supports: Vec<Support>,
+    /// Prescribed dofs and their values at load factor 1.
+    pub prescribed: Vec<(usize, f64)>,
+    /// External nodal forces at load factor 1, over all dofs.
+    pub reference_load: Vec<f64>,
+    pub dofs: DofMap,
+    pub pattern: SparsityPattern,
+}
+
+/// Name of the automatic support of axisymmetric models.
+pub const AXIS_SUPPORT: &str = "axis";
+
+impl Model {
+    /// Builds the model of `case` on `mesh`.
+    pub fn build(mesh: Mesh, case: &Case) -> Result<Self> {
+        let analysis = case.analysis;
+        let (bodies, continuum) = build_continuum(&mesh, case)?;
+        let node_count = mesh.nodes.len();
+        let mut in_body = vec![false; node_count];
+        for c in &continuum.cells {
+            for &n in &c.nodes[..c.kind.node_count()] {
+                in_body[n as usize] = true;
+            }
+        }
+        let scale = model_scale(&mesh);
+
+        let mut prescribed: Vec<Option<(f64, usize)>> = vec![None; 2 * node_count];
+        let mut supports = Vec::new();
+        for (i, spec) in case.supports.iter().enumerate() {
+            let nodes = support_nodes(&mesh, spec, &in_body)?;
+            let mut dofs = Vec::new();
+            for n in nodes {
+                for (c, value) in [spec.ux, spec.uy].into_iter().enumerate() {
+                    let Some(value) = value else { continue };
+                    let dof = 2 * n as usize + c;
+                    match prescribed[dof] {
+                        Some((v, j))
+                            if (v - value).abs() > 1e-12 * v.abs().max(value.abs()).max(1e-300) =>
+                        {
+                            return Err(Error::Model(format!(
+                                "supports '{}' and '{}' prescribe different {} displacements ({v} and {value}) at node {} \
+                                 ({:?})",
+                                case.supports[j].group,
+                                spec.group,
+                                ["x", "y"][c],
+                                mesh.node_tags[n as usize],
+                                mesh.nodes[n as usize]
+                            )));
+                        }
+                        Some(_) => {}
+                        None => {
+                            prescribed[dof] = Some((value, i));
+                            dofs.push(dof);
+                        }
+                    }
+                }
+            }
+            supports.push(Support {
+                name: spec.group.clone(),
+                dofs,
+            });
+        }
+        if analysis.is_axisymmetric() {
+            supports.push(axis_support(
+                &mesh,
+                &in_body,
+                scale,
+                &mut prescribed,
+                supports.len(),
+            )?);
+        }
+        // Nodes outside every body carry no stiffness: hold them so the system stays regular.
+        let mut fixed: Vec<bool> = prescribed.iter().map(Option::is_some).collect();
+        for (n, &used) in in_body.iter().enumerate() {
+            if !used {
+                fixed[2 * n] = true;
+                fixed[2 * n + 1] = true;
+            }
+        }
+        let prescribed = prescribed
+            .iter()
+            .enumerate()
+            .filter_map(|(d, p)| p.map(|(v, _)| (d, v)))
+            .collect();
+
+        let mut reference_load = vec![0.0; 2 * node_count];
+        let edges = EdgeIndex::new(&continuum);
+        for spec in &case.loads {
+            add_load(
+                &mesh,
+                &analysis,
+                &edges,
+                spec,
+                &in_body,
+                &mut reference_load,
+            )?;
+        }
+
+        let dofs = DofMap::new(&fixed);
+        if dofs.free_count() == 0 {
+            return Err(Error::Model(
+                "every degree of freedom is prescribed: nothing to solve".into(),
+            ));
+        }
+        let pattern = SparsityPattern::new(
+            node_count,
+            &dofs,
+            (0..continuum.len()).map(|e| continuum.nodes(e)),
+        );
+        let continuum_coloring = Coloring::new(&continuum, node_count);
+        Ok(Self {
+            mesh,
+            analysis,
+            bodies,
+            continuum,
+            continuum_coloring,
+            supports,
+            prescribed,
+            reference_load,
+            dofs,
+            pattern,
+        })
+    }
+}
+
+/// Largest coordinate extent of the mesh (for relative tolerances).
+fn model_scale(mesh: &Mesh) -> f64 {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in &mesh.nodes {
+        for c in 0..2 {
+            lo[c] = lo[c].min(p[c]);
+            hi[c] = hi[c].max(p[c]);
+        }
+    }
+    (hi[0] - lo[0]).max(hi[1] - lo[1]).max(f64::MIN_POSITIVE)
+}
+
+fn group_names(mesh: &Mesh, dim: u8) -> String {
+    let names: Vec<&str> = mesh
+        .groups
+        .iter()
+        .filter(|g| g.dim == dim)
+        .map(|g| g.name.as_str())
+        .collect();
+    if names.is_empty() {
+        "none".into()
+    } else {
+        names.join(", ")
+    }
+}
+
+/// The physical curve or point called `name` (a name used for both is ambiguous).
+fn boundary_group<'m>(mesh: &'m Mesh, name: &str, what: &str) -> Result<&'m PhysicalGroup> {
+    match (mesh.group(1, name), mesh.group(0, name)) {
+        (Some(g), None) | (None, Some(g)) => Ok(g),
+        (Some(_), Some(_)) => Err(Error::Model(format!(
+            "{what} '{name}': the name is used by a physical curve and a physical point in {}; rename one",
+            mesh.path.display()
+        ))),
+        (None, None) => Err(Error::Model(format!(
+            "{what} '{name}': no physical curve or point of that name in {} (curves: {}; points: {})",
+            mesh.path.display(),
+            group_names(mesh, 1),
+            group_names(mesh, 0)
+        ))),
+    }
+}
+
+fn build_continuum(mesh: &Mesh, case: &Case) -> Result<(Vec<String>, ContinuumSet)> {
+    let mut owner: Vec<Option<u32>> = vec![None; mesh.cells.len()];
+    let mut bodies = Vec::new();
+    let mut materials: Vec<Box<dyn Material>> = Vec::new();
+    let mut cells = Vec::new();
+    for (b, spec) in case.bodies.iter().enumerate() {
+        let group = mesh.group(2, &spec.group).ok_or_else(|| {
+            Error::Model(format!(
+                "body '{}': no physical surface of that name in {} (surfaces: {})",
+                spec.group,
+                mesh.path.display(),
+                group_names(mesh, 2)
+            ))
+        })?;
+        let material = LinearElastic::new(spec.material.e, spec.material.nu)
+            .map_err(|m| Error::Model(format!("body '{}': {m}", spec.group)))?;
+        let before = cells.len();
+        for (i, cell) in mesh.cells_in(group) {
+            if let Some(other) = owner[i] {
+                return Err(Error::Model(format!(
+                    "element {} belongs to bodies '{}' and '{}': physical surfaces of bodies must not overlap",
+                    cell.tag, case.bodies[other as usize].group, spec.group
+                )));
+            }
+            owner[i] = Some(b as u32);
+            let mut coords = [[0.0; 2]; 8];
+            for (k, &n) in cell.nodes().iter().enumerate() {
+                coords[k] = mesh.nodes[n as usize];
+            }
+            let det = min_jacobian(cell.kind, &coords);
+            if !(det > 0.0) {
+                return Err(Error::Model(format!(
+                    "element {} of body '{}' is distorted or degenerate (Jacobian determinant {det:.3e} ≤ 0; corners \
+                     {:?}); check mid-side nodes and the mesh quality",
+                    cell.tag,
+                    spec.group,
+                    &coords[..if cell.kind == CellKind::Quad8 { 4 } else { 3 }]
+                )));
+            }
+            cells.push(ContinuumCell {
+                kind: cell.kind,
+                nodes: cell.nodes,
+                coords,
+                body: b as u32,
+                mesh_cell: i as u32,
+            });
+        }
+        if cells.len() == before {
+            return Err(Error::Model(format!(
+                "body '{}': the physical surface has no elements",
+                spec.group
+            )));
+        }
+        bodies.push(spec.group.clone());
+        materials.push(Box::new(material));
+    }
+    for g in mesh
+        .groups
+        .iter()
+        .filter(|g| g.dim == 2 && !bodies.contains(&g.name))
+    {
+        tracing::warn!(
+            "physical surface '{}' is not a body in the case file; its elements are ignored",
+            g.name
+        );
+    }
+    Ok((
+        bodies,
+        ContinuumSet {
+            analysis: case.analysis,
+            cells,
+            materials,
+        },
+    ))
+}
+
+fn support_nodes(mesh: &Mesh, spec: &SupportSpec, in_body: &[bool]) -> Result<Vec<u32>> {
+    let group = boundary_group(mesh, &spec.group, "support")?;
+    let mut nodes: Vec<u32> = if group.dim == 1 {
+        mesh.lines_in(group).flat_map(|l| l.nodes).collect()
+    } else {
+        mesh.points_in(group).collect()
+    };
+    nodes.sort_unstable();
+    nodes.dedup();
+    if nodes.is_empty() {
+        return Err(Error::Model(format!(
+            "support '{}': the group has no elements",
+            spec.group
+        )));
+    }
+    if let Some(&n) = nodes.iter().find(|&&n| !in_body[n as usize]) {
+        return Err(Error::Model(format!(
+            "support '{}': node {} at {:?} belongs to no body",
+            spec.group, mesh.node_tags[n as usize], mesh.nodes[n as usize]
+        )));
+    }
+    Ok(nodes)
+}
+
+/// In axisymmetry nodes on the axis (r = 0 within a relative tolerance) have u_r = 0; nodes
+/// at negative r are an input error.
+fn axis_support(
+    mesh: &Mesh,
+    in_body: &[bool],
+    scale: f64,
+    prescribed: &mut [Option<(f64, usize)>],
+    index: usize,
+) -> Result<Support> {
+    let tol = 1e-9 * scale;
+    let mut dofs = Vec::new();
+    for (n, p) in mesh.nodes.iter().enumerate().filter(|&(n, _)| in_body[n]) {
+        if p[0] < -tol {
+            return Err(Error::Model(format!(
+                "axisymmetric model: node {} lies at negative radius r = {} (the axis is x = r = 0)",
+                mesh.node_tags[n], p[0]
+            )));
+        }
+        if p[0] <= tol {
+            let dof = 2 * n;
+            if let Some((v, _)) = prescribed[dof] {
+                if v != 0.0 {
+                    return Err(Error::Model(format!(
+                        "node {} on the axis has a prescribed radial displacement {v}; it must be 0",
+                        mesh.node_tags[n]
+                    )));
+                }
+            } else {
+                prescribed[dof] = Some((0.0, index));
+                dofs.push(dof);
+            }
+        }
+    }
+    Ok(Support {
+        name: AXIS_SUPPORT.into(),
+        dofs,
+    })
+}
+
+/// Finds, for a boundary line, the model cell it bounds, to orient its outward normal.
+struct EdgeIndex {
+    /// (smaller end node, larger end node) → whether a cell traverses the edge from the
+    /// smaller to the larger node counter-clockwise.
+    edges: HashMap<(u32, u32), bool>,
+}
+
+impl EdgeIndex {
+    fn new(continuum: &ContinuumSet) -> Self {
+        let mut edges = HashMap::new();
+        for c in &continuum.cells {
+            let corners = if c.kind == CellKind::Quad8 { 4 } else { 3 };
+            for i in 0..corners {
+                let (a, b) = (c.nodes[i], c.nodes[(i + 1) % corners]);
+                edges.insert((a.min(b), a.max(b)), a < b);
+            }
+        }
+        Self { edges }
+    }
+
+    /// The line's nodes ordered so the body lies to the left (counter-clockwise boundary
+    /// traversal), or `None` if no body cell has this edge.
+    fn oriented(&self, line: &Line3) -> Option<[u32; 3]> {
+        let [a, b, m] = line.nodes;
+        let forward = *self.edges.get(&(a.min(b), a.max(b)))?;
+        Some(if forward == (a < b) {
+            [a, b, m]
+        } else {
+            [b, a, m]
+        })
+    }
+}
+
+/// Adds the consistent nodal forces of a load at load factor 1.
+fn add_load(
+    mesh: &Mesh,
+    analysis: &Analysis,
+    edges: &EdgeIndex,
+    spec: &LoadSpec,
+    in_body: &[bool],
+    load: &mut [f64],
+) -> Result<()> {
+    let group = boundary_group(mesh, &spec.group, "load")?;
+    if let Some(force) = spec.force {
+        if group.dim != 0 {
+            return Err(Error::Model(format!(
+                "load '{}': a force needs a physical point group",
+                spec.group
+            )));
+        }
+        for n in mesh.points_in(group) {
+            if !in_body[n as usize] {
+                return Err(Error::Model(format!(
+                    "load '{}': point node {} belongs to no body",
+                    spec.group, mesh.node_tags[n as usize]
+                )));
+            }
+            load[2 * n as usize] += force[0];
+            load[2 * n as usize + 1] += force[1];
+        }
+        return Ok(());
+    }
+    if group.dim != 1 {
+        return Err(Error::Model(format!(
+            "load '{}': pressure and traction need a physical curve",
+            spec.group
+        )));
+    }
+    let mut count = 0;
+    for line in mesh.lines_in(group) {
+        let nodes = edges.oriented(line).ok_or_else(|| {
+            let p = mesh.nodes[line.nodes[0] as usize];
+            Error::Model(format!(
+                "load '{}': boundary element {} (from {p:?}) is not an edge of any body's element",
+                spec.group, line.tag
+            ))
+        })?;
+        add_line_load(mesh, analysis, nodes, spec, load);
+        count += 1;
+    }
+    if count == 0 {
+        return Err(Error::Model(format!(
+            "load '{}': the curve group has no elements",
+            spec.group
+        )));
+    }
+    Ok(())
+}
+
+/// Consistent nodal forces f_i = ∫ N_i t dA on one line, with dA = (thickness or 2πr) ds,
+/// integrated by 3-point Gauss (exact for a pressure on a curved quadratic edge in
+/// axisymmetry: degree 5).
+fn add_line_load(
+    mesh: &Mesh,
+    analysis: &Analysis,
+    nodes: [u32; 3],
+    spec: &LoadSpec,
+    load: &mut [f64],
+) {
+    let x: Vec<[f64; 2]> = nodes.iter().map(|&n| mesh.nodes[n as usize]).collect();
+    for &(xi, w) in &GAUSS3 {
+        let (n, dn) = line3(xi);
+        let (mut px, mut dx, mut dy) = (0.0, 0.0, 0.0);
+        for i in 0..3 {
+            px += n[i] * x[i][0];
+            dx += dn[i] * x[i][0];
+            dy += dn[i] * x[i][1];
+        }
+        // Tangent (dx, dy) runs counter-clockwise around the body, so (dy, −dx) is the
+        // outward normal scaled by ds/dξ.
+        let t = match (spec.pressure, spec.traction) {
+            (Some(p), _) => [-p * dy, p * dx],
+            (None, Some([tx, ty])) => {
+                let ds = (dx * dx + dy * dy).sqrt();
+                [tx * ds, ty * ds]
+            }
+            (None, None) => unreachable!("validated: a line load has pressure or traction"),
+        };
+        let m = w * analysis.measure(px);
+        for i in 0..3 {
+            load[2 * nodes[i] as usize] += n[i] * t[0] * m;
+            load[2 * nodes[i] as usize + 1] += n[i] * t[1] * m;
+        }
+    }
+}

@@ -1,0 +1,142 @@
+//! CSV tables (load-displacement history, interface stresses along a contact line, ...).
+//!
+//! The format is the plain one that `pandas.read_csv`, `numpy.loadtxt(delimiter=",",
+//! skiprows=1)` and spreadsheets read without options: one header line of column names,
+//! then one line per row, values separated by commas, no index column, no quoting of
+//! numbers. Numbers are written in Rust's shortest round-trip form, so reading a file back
+//! gives bit-identical `f64`s.
+
+use std::path::Path;
+
+use super::atomic::{invalid_data, write_atomically};
+use crate::Result;
+
+/// A table of floating-point columns with names.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CsvTable {
+    /// Column names, written as the header line.
+    pub columns: Vec<String>,
+    /// Rows, each with exactly `columns.len()` values.
+    pub rows: Vec<Vec<f64>>,
+}
+
+impl CsvTable {
+    /// An empty table with the given column names.
+    pub fn new(columns: impl IntoIterator<Item = impl Into<String>>) -> Self {
+        CsvTable {
+            columns: columns.into_iter().map(Into::into).collect(),
+            rows: Vec::new(),
+        }
+    }
+}
+
+/// Writes `table` to `path` (atomically, creating the parent directory).
+///
+/// Fails without touching `path` if a row does not have one value per column or a value is
+/// NaN or infinite: such a value in a result table means the computation went wrong, and
+/// writing it would only move the surprise into the plotting script.
+pub fn write_csv(path: &Path, table: &CsvTable) -> Result<()> {
+    let ncols = table.columns.len();
+    for (r, row) in table.rows.iter().enumerate() {
+        if row.len() != ncols {
+            return Err(invalid_data(
+                path,
+                format!(
+                    "row {r} has {} values but the table has {ncols} columns",
+                    row.len()
+                ),
+            ));
+        }
+        if let Some((c, v)) = row.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(invalid_data(
+                path,
+                format!(
+                    "column `{}`, row {r}: value {v} is not finite",
+                    table.columns[c]
+                ),
+            ));
+        }
+    }
+
+    // Formatting into one buffer first keeps the per-value cost to a `write!` into memory;
+    // the atomic writer then streams it out in one go.
+    let mut text = String::with_capacity(16 * (ncols + 1) * (table.rows.len() + 1));
+    let header: Vec<String> = table.columns.iter().map(|c| quote_field(c)).collect();
+    text.push_str(&header.join(","));
+    text.push('\n');
+    for row in &table.rows {
+        for (c, &v) in row.iter().enumerate() {
+            if c > 0 {
+                text.push(',');
+            }
+            push_f64(&mut text, v);
+        }
+        text.push('\n');
+    }
+    write_atomically(path, |w| w.write_all(text.as_bytes()))
+}
+
+/// Quotes a column name if it contains a comma, quote or line break (RFC 4180), so that
+/// names like `p_N, MPa` do not shift the columns.
+fn quote_field(name: &str) -> String {
+    if name.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", name.replace('"', "\"\""))
+    } else {
+        name.to_string()
+    }
+}
+
+/// Appends `v` in a form that parses back to exactly `v` (Rust's `Display` and `LowerExp`
+/// both print the shortest round-trip digits). `Display` never uses an exponent, which
+/// would turn 1e-300 into 300 zeros, so values far from 1 use `{:e}` instead.
+pub(crate) fn push_f64(out: &mut String, v: f64) {
+    use std::fmt::Write as _;
+    let a = v.abs();
+    if a == 0.0 || (1e-5..1e16).contains(&a) {
+        let _ = write!(out, "{v}");
+    } else {
+        let _ = write!(out, "{v:e}");
+    }
+}
+
+/// [`push_f64`] into a new string.
+pub(crate) fn format_f64(v: f64) -> String {
+    let mut s = String::new();
+    push_f64(&mut s, v);
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_round_trip_and_stay_short() {
+        for v in [
+            0.0,
+            -0.0,
+            1.0,
+            -2.5,
+            0.1,
+            1.0 / 3.0,
+            1e-300,
+            6.02e23,
+            123456.789,
+            1e-5,
+            9.99e15,
+        ] {
+            let s = format_f64(v);
+            assert_eq!(s.parse::<f64>().unwrap().to_bits(), v.to_bits(), "{s}");
+            assert!(s.len() <= 24, "{s}");
+        }
+        assert_eq!(format_f64(0.25), "0.25");
+        assert_eq!(format_f64(1e-300), "1e-300");
+    }
+
+    #[test]
+    fn names_with_commas_are_quoted() {
+        assert_eq!(quote_field("p_N, MPa"), "\"p_N, MPa\"");
+        assert_eq!(quote_field("a\"b"), "\"a\"\"b\"");
+        assert_eq!(quote_field("u_y"), "u_y");
+    }
+}

@@ -1,0 +1,232 @@
+//! The whole run of a case: mesh (gmsh or an .msh file) → model → load steps → output files.
+//! Each phase is timed under its name; the numbers end up in the [`RunSummary`].
+//!
+//! Files written to the output folder:
+//! - `mesh.msh` when the case meshes a `.geo` script;
+//! - `bodies_NNNN.vtu` per converged step and `results.pvd` listing them (time = step
+//!   number, since load factors may go down again when unloading);
+//! - `history.csv`: per step the load factor, Newton iterations, final residual and the
+//!   reaction force of every support.
+//!
+//! Every file is rewritten after each converged step, so a run that stops early leaves the
+//! results of all converged steps on disk.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use crate::case::Case;
+use crate::mesh::{Mesh, gmsh, msh};
+use crate::model::Model;
+use crate::output::csv::{CsvTable, write_csv};
+use crate::output::pvd::{PvdEntry, write_pvd};
+use crate::output::vtu::write_vtu;
+use crate::post::{BodyPoints, body_grid, reactions};
+use crate::solver::stepping::{RunStatistics, StepResult, run_steps};
+use crate::{Error, Result};
+
+/// What a run did, for the closing summary.
+#[derive(Clone, Debug)]
+pub struct RunSummary {
+    pub out_dir: PathBuf,
+    pub nodes: usize,
+    pub cells: usize,
+    /// Unknowns (free degrees of freedom).
+    pub dofs: usize,
+    pub mesh_seconds: f64,
+    pub model_seconds: f64,
+    pub stats: RunStatistics,
+    /// Reaction of each support at the last step: (name, [F_x, F_y]).
+    pub reactions: Vec<(String, [f64; 2])>,
+}
+
+impl std::fmt::Display for RunSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let s = &self.stats;
+        writeln!(
+            f,
+            "model: {} nodes, {} elements, {} unknowns",
+            self.nodes, self.cells, self.dofs
+        )?;
+        writeln!(
+            f,
+            "steps: {} converged, {} Newton iterations; final relative residual {:.2e}",
+            s.steps, s.iterations, s.last_residual
+        )?;
+        writeln!(
+            f,
+            "time [s]: mesh {:.3}, model {:.3}, ordering+symbolic {:.3}, assembly {:.3}, factorisation {:.3}, solve {:.3}, output {:.3}",
+            self.mesh_seconds,
+            self.model_seconds,
+            s.symbolic_seconds,
+            s.assembly_seconds,
+            s.factorization_seconds,
+            s.solve_seconds,
+            s.output_seconds
+        )?;
+        for (name, r) in &self.reactions {
+            writeln!(
+                f,
+                "reaction '{name}': Fx = {:.6e} N, Fy = {:.6e} N",
+                r[0], r[1]
+            )?;
+        }
+        write!(f, "results: {}", self.out_dir.join("results.pvd").display())
+    }
+}
+
+/// Obtains the case's mesh: reads its `.msh` file, or meshes its `.geo` script with gmsh into
+/// `out_dir/mesh.msh` first.
+pub fn load_mesh(case: &Case, out_dir: &Path) -> Result<Mesh> {
+    let path = match (&case.mesh.file, &case.mesh.geo) {
+        (Some(file), _) => case.resolve(file),
+        (None, Some(geo)) => {
+            let params: Vec<(String, f64)> = case
+                .mesh
+                .parameters
+                .iter()
+                .map(|(k, v)| (k.clone(), *v))
+                .collect();
+            gmsh::mesh_geo(
+                &case.resolve(geo),
+                case.mesh.size,
+                &params,
+                &out_dir.join("mesh.msh"),
+            )?
+        }
+        (None, None) => {
+            return Err(Error::Case {
+                path: case.path.clone(),
+                message: "[mesh] has no source".into(),
+            });
+        }
+    };
+    msh::read_msh(&path)
+}
+
+/// Runs `case`, writing results to `out_dir`. `progress` shows a progress bar over the steps.
+pub fn run(case: &Case, out_dir: &Path, progress: bool) -> Result<RunSummary> {
+    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+    let t = Instant::now();
+    let mesh = load_mesh(case, out_dir)?;
+    let mesh_seconds = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let model = Model::build(mesh, case)?;
+    let model_seconds = t.elapsed().as_secs_f64();
+    tracing::info!(
+        nodes = model.mesh.nodes.len(),
+        elements = model.continuum.cells.len(),
+        unknowns = model.dofs.free_count(),
+        "model built ({})",
+        model.analysis.name()
+    );
+    let factors = case.steps.factors().map_err(|message| Error::Case {
+        path: case.path.clone(),
+        message,
+    })?;
+    let bar = progress_bar(progress, factors.len());
+    let mut writer = StepWriter::new(&model, out_dir, case.output.vtu);
+    let mut last_reactions = Vec::new();
+    let (_, stats) = run_steps(&model, &factors, &case.solver.into(), |step| {
+        let t = Instant::now();
+        last_reactions = writer.write(step)?;
+        bar.inc(1);
+        bar.set_message(format!("load factor {}", step.load_factor));
+        Ok(t.elapsed().as_secs_f64())
+    })?;
+    bar.finish_and_clear();
+    Ok(RunSummary {
+        out_dir: out_dir.to_path_buf(),
+        nodes: model.mesh.nodes.len(),
+        cells: model.continuum.cells.len(),
+        dofs: model.dofs.free_count(),
+        mesh_seconds,
+        model_seconds,
+        stats,
+        reactions: model
+            .supports
+            .iter()
+            .map(|s| s.name.clone())
+            .zip(last_reactions)
+            .collect(),
+    })
+}
+
+fn progress_bar(enabled: bool, steps: usize) -> indicatif::ProgressBar {
+    if !enabled {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(steps as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} step {pos}/{len} [{elapsed_precise}] {wide_bar} {msg}",
+        )
+        .expect("valid progress template"),
+    );
+    bar
+}
+
+/// Writes the files of each converged step and keeps the series and history up to date.
+struct StepWriter<'m> {
+    model: &'m Model,
+    points: BodyPoints,
+    out_dir: PathBuf,
+    vtu: bool,
+    series: Vec<PvdEntry>,
+    history: CsvTable,
+}
+
+impl<'m> StepWriter<'m> {
+    fn new(model: &'m Model, out_dir: &Path, vtu: bool) -> Self {
+        let mut columns: Vec<String> = ["step", "load_factor", "iterations", "residual"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        for s in &model.supports {
+            columns.push(format!("reaction_{}_x", s.name));
+            columns.push(format!("reaction_{}_y", s.name));
+        }
+        Self {
+            model,
+            points: BodyPoints::new(model),
+            out_dir: out_dir.to_path_buf(),
+            vtu,
+            series: Vec::new(),
+            history: CsvTable {
+                columns,
+                rows: Vec::new(),
+            },
+        }
+    }
+
+    /// Writes the step's files; returns the reactions of the supports.
+    fn write(&mut self, step: &StepResult) -> Result<Vec<[f64; 2]>> {
+        let reactions = reactions(self.model, step.internal_force, step.external_force);
+        if self.vtu {
+            let name = format!("bodies_{:04}.vtu", step.step);
+            let grid = body_grid(
+                self.model,
+                &self.points,
+                &step.solution.u,
+                &step.solution.committed,
+            );
+            write_vtu(&self.out_dir.join(&name), &grid)?;
+            self.series.push(PvdEntry {
+                time: step.step as f64,
+                part: 0,
+                name: "bodies".into(),
+                file: name.into(),
+            });
+            write_pvd(&self.out_dir.join("results.pvd"), &self.series)?;
+        }
+        let mut row = vec![
+            step.step as f64,
+            step.load_factor,
+            step.newton.iterations as f64,
+            *step.newton.residuals.last().unwrap_or(&0.0),
+        ];
+        row.extend(reactions.iter().flatten());
+        self.history.rows.push(row);
+        write_csv(&self.out_dir.join("history.csv"), &self.history)?;
+        Ok(reactions)
+    }
+}

@@ -1,0 +1,6 @@
+//! Solvers: the sparse linear solver ([`linear`]), Newton-Raphson for one increment
+//! ([`newton`]) and the load stepping that drives it ([`stepping`]).
+
+pub mod linear;
+pub mod newton;
+pub mod stepping;

@@ -1,0 +1,443 @@
+//! Output writers: VTU round trip through vtkio's reader, validation failures that must leave
+//! no file behind, the PVD collection and CSV tables.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use asperity::output::csv::{CsvTable, write_csv};
+use asperity::output::pvd::{PvdEntry, write_pvd};
+use asperity::output::vtu::{read_vtu, write_vtu};
+use asperity::output::{Field, FieldValues, Grid};
+
+/// One 8-node quad (VTK 23) on [0,2]×[0,1], a 6-node triangle (22) on top of it sharing the
+/// edge y = 1, and a quadratic edge (21) along y = 0: the three cell kinds asperity writes.
+fn mixed_grid() -> Grid {
+    let mut points = vec![
+        // quad8: corners then mid-sides, VTK/gmsh order
+        [0.0, 0.0],
+        [2.0, 0.0],
+        [2.0, 1.0],
+        [0.0, 1.0],
+        [1.0, 0.0],
+        [2.0, 0.5],
+        [1.0, 1.0],
+        [0.0, 0.5],
+    ];
+    // tri6 apex and its two new mid-side nodes
+    points.extend([[1.0, 2.0], [1.5, 1.5], [0.5, 1.5]]);
+    let n = points.len();
+    let mut grid = Grid {
+        points,
+        ..Grid::default()
+    };
+    grid.push_cell(23, 0..8);
+    grid.push_cell(22, [3, 2, 8, 6, 9, 10]);
+    grid.push_cell(21, [0, 1, 4]);
+
+    // Values that are not round in binary, to catch any precision loss.
+    let f = |i: usize, k: usize| (i as f64 + 0.1) * (k as f64 + 1.0 / 3.0) * 1e-3 - 0.7;
+    let displacement = (0..n).flat_map(|i| [f(i, 0), f(i, 1), 0.0]).collect();
+    let stress = (0..n)
+        .flat_map(|i| (0..6).map(move |k| f(i, k) * 1e3))
+        .collect();
+    let von_mises = (0..n).map(|i| f(i, 7).abs() * 1e2).collect();
+    grid.point_data = vec![
+        Field {
+            name: "displacement".into(),
+            components: 3,
+            values: FieldValues::F64(displacement),
+        },
+        Field {
+            name: "stress".into(),
+            components: 6,
+            values: FieldValues::F64(stress),
+        },
+        Field {
+            name: "von_mises".into(),
+            components: 1,
+            values: FieldValues::F64(von_mises),
+        },
+    ];
+    grid.cell_data = vec![
+        Field {
+            name: "body".into(),
+            components: 1,
+            values: FieldValues::I32(vec![1, 2, -1]),
+        },
+        Field {
+            name: "area".into(),
+            components: 1,
+            values: FieldValues::F64(vec![2.0, 0.5, 0.0]),
+        },
+    ];
+    grid
+}
+
+fn dir_names(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn vtu_round_trip_is_exact() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("sub/step_0001.vtu");
+    let grid = mixed_grid();
+    write_vtu(&path, &grid).unwrap();
+    assert_eq!(
+        dir_names(&path.parent().unwrap()),
+        vec!["step_0001.vtu"],
+        "no temporary left"
+    );
+
+    let text = fs::read_to_string(&path).unwrap();
+    assert!(text.contains("vtkZLibDataCompressor"), "data is compressed");
+    assert!(
+        text.contains("NumberOfComponents=\"6\""),
+        "stress keeps 6 components"
+    );
+
+    let back = read_vtu(&path).unwrap();
+    // Bit-exact: the file stores Float64, so equality is the right check.
+    assert_eq!(back, grid);
+    assert_eq!(back.cell_types, vec![23, 22, 21]);
+}
+
+#[test]
+fn vtu_overwrites_an_existing_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("a.vtu");
+    let mut grid = mixed_grid();
+    write_vtu(&path, &grid).unwrap();
+    grid.cell_data.clear();
+    write_vtu(&path, &grid).unwrap();
+    assert_eq!(read_vtu(&path).unwrap(), grid);
+}
+
+#[test]
+fn vtu_arrays_of_32k_multiple_size_round_trip() {
+    // vtkio compresses in 32 KiB blocks; arrays whose byte size is an exact multiple of the
+    // block size (4096 f64 scalars, 8192 i32) are the corner case of its block header.
+    let n = 4096;
+    let mut grid = Grid {
+        points: (0..n).map(|i| [i as f64, (i % 7) as f64]).collect(),
+        ..Grid::default()
+    };
+    for i in 0..n as u64 / 2 {
+        grid.push_cell(3, [2 * i, 2 * i + 1]);
+    }
+    grid.point_data.push(Field {
+        name: "s".into(),
+        components: 1,
+        values: FieldValues::F64((0..n).map(|i| i as f64 * 0.1).collect()),
+    });
+    grid.cell_data.push(Field {
+        name: "id".into(),
+        components: 4,
+        values: FieldValues::I32((0..2 * n as i32).collect()),
+    });
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("big.vtu");
+    write_vtu(&path, &grid).unwrap();
+    assert_eq!(read_vtu(&path).unwrap(), grid);
+}
+
+#[test]
+fn vtu_nan_is_an_error_naming_the_field_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.vtu");
+    let mut grid = mixed_grid();
+    if let FieldValues::F64(v) = &mut grid.point_data[1].values {
+        v[17] = f64::NAN;
+    }
+    let err = write_vtu(&path, &grid).unwrap_err().to_string();
+    assert!(err.contains("`stress`"), "{err}");
+    assert!(err.contains("index 17"), "{err}");
+    assert!(err.contains("bad.vtu"), "{err}");
+    assert!(
+        dir_names(dir.path()).is_empty(),
+        "{:?}",
+        dir_names(dir.path())
+    );
+
+    // An existing file is left as it was.
+    write_vtu(&path, &mixed_grid()).unwrap();
+    let before = fs::read(&path).unwrap();
+    assert!(write_vtu(&path, &grid).is_err());
+    assert_eq!(fs::read(&path).unwrap(), before);
+    assert_eq!(dir_names(dir.path()), vec!["bad.vtu"]);
+}
+
+#[test]
+fn vtu_infinite_coordinate_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut grid = mixed_grid();
+    grid.points[4][1] = f64::INFINITY;
+    let err = write_vtu(&dir.path().join("x.vtu"), &grid)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("points") && err.contains("point 4"), "{err}");
+    assert!(dir_names(dir.path()).is_empty());
+}
+
+#[test]
+fn vtu_inconsistent_grids_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("x.vtu");
+    let expect_err = |grid: &Grid, needle: &str| {
+        let err = write_vtu(&path, grid).unwrap_err().to_string();
+        assert!(err.contains(needle), "expected `{needle}` in: {err}");
+        assert!(dir_names(dir.path()).is_empty());
+    };
+
+    let mut g = mixed_grid();
+    if let FieldValues::F64(v) = &mut g.point_data[0].values {
+        v.pop();
+    }
+    expect_err(&g, "point field `displacement` has 32 values, expected 33");
+
+    let mut g = mixed_grid();
+    g.cell_data[0].values = FieldValues::I32(vec![1, 2]);
+    expect_err(&g, "cell field `body` has 2 values, expected 3");
+
+    let mut g = mixed_grid();
+    g.connectivity[9] = 11;
+    expect_err(&g, "connectivity: index 9 refers to point 11");
+
+    let mut g = mixed_grid();
+    g.cell_types[1] = 23;
+    expect_err(&g, "cell 1: type 23");
+
+    let mut g = mixed_grid();
+    g.cell_types[2] = 200;
+    expect_err(&g, "unknown VTK cell type 200");
+
+    let mut g = mixed_grid();
+    g.offsets.pop();
+    expect_err(&g, "offsets");
+
+    let mut g = mixed_grid();
+    g.point_data[2].name = "stress".into();
+    expect_err(&g, "`stress` appears twice");
+}
+
+/// Minimal XML reading for the test: the attributes of every `<DataSet .../>` element.
+fn datasets(xml: &str) -> Vec<Vec<(String, String)>> {
+    xml.split("<DataSet ")
+        .skip(1)
+        .map(|rest| {
+            let tag = &rest[..rest.find("/>").expect("DataSet is self-closing")];
+            tag.split('"')
+                .collect::<Vec<_>>()
+                .chunks(2)
+                .filter(|kv| kv.len() == 2)
+                .map(|kv| {
+                    (
+                        kv[0].trim().trim_end_matches('=').to_string(),
+                        kv[1].to_string(),
+                    )
+                })
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn pvd_lists_timesteps_and_parts() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("run.pvd");
+    let entries = vec![
+        PvdEntry {
+            time: 0.5,
+            part: 0,
+            name: "bodies".into(),
+            file: "vtu/bodies_1.vtu".into(),
+        },
+        PvdEntry {
+            time: 0.5,
+            part: 1,
+            name: "interface".into(),
+            file: dir.path().join("vtu/interface_1.vtu"),
+        },
+        PvdEntry {
+            time: 1.0 / 3.0 + 1.0,
+            part: 0,
+            name: "bodies".into(),
+            file: "vtu/bodies_2.vtu".into(),
+        },
+        PvdEntry {
+            time: 1.0 / 3.0 + 1.0,
+            part: 1,
+            name: "interface".into(),
+            file: "vtu/interface_2.vtu".into(),
+        },
+    ];
+    write_pvd(&path, &entries).unwrap();
+    assert_eq!(dir_names(dir.path()), vec!["run.pvd"]);
+
+    let xml = fs::read_to_string(&path).unwrap();
+    assert!(
+        xml.contains("<VTKFile type=\"Collection\" version=\"0.1\""),
+        "{xml}"
+    );
+    assert!(
+        xml.contains("<Collection>")
+            && xml.contains("</Collection>")
+            && xml.trim_end().ends_with("</VTKFile>")
+    );
+    let sets = datasets(&xml);
+    assert_eq!(sets.len(), 4, "{xml}");
+    let get = |i: usize, key: &str| {
+        sets[i]
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.clone())
+            .unwrap()
+    };
+    let files: Vec<String> = (0..4).map(|i| get(i, "file")).collect();
+    assert_eq!(
+        files,
+        [
+            "vtu/bodies_1.vtu",
+            "vtu/interface_1.vtu",
+            "vtu/bodies_2.vtu",
+            "vtu/interface_2.vtu"
+        ]
+    );
+    for (i, e) in entries.iter().enumerate() {
+        // Times round-trip exactly.
+        assert_eq!(get(i, "timestep").parse::<f64>().unwrap(), e.time);
+        assert_eq!(get(i, "part"), e.part.to_string());
+        assert_eq!(get(i, "name"), e.name);
+    }
+}
+
+#[test]
+fn pvd_rejects_nan_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let err = write_pvd(
+        &dir.path().join("r.pvd"),
+        &[PvdEntry::new(f64::NAN, PathBuf::from("a.vtu"))],
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("a.vtu"), "{err}");
+    assert!(dir_names(dir.path()).is_empty());
+}
+
+#[test]
+fn csv_writes_header_and_exact_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("history.csv");
+    let mut table = CsvTable::new(["step", "load, N", "u_y"]);
+    table.rows.push(vec![1.0, 0.1, -1.0 / 3.0]);
+    table.rows.push(vec![2.0, 1e-300, 6.02e23]);
+    write_csv(&path, &table).unwrap();
+    let text = fs::read_to_string(&path).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next().unwrap(), "step,\"load, N\",u_y");
+    for row in &table.rows {
+        let parsed: Vec<f64> = lines
+            .next()
+            .unwrap()
+            .split(',')
+            .map(|s| s.parse().unwrap())
+            .collect();
+        assert_eq!(&parsed, row);
+    }
+    assert!(lines.next().is_none());
+}
+
+#[test]
+fn csv_rejects_ragged_rows_and_non_finite_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("t.csv");
+    let mut table = CsvTable::new(["a", "b"]);
+    table.rows = vec![vec![1.0, 2.0], vec![3.0]];
+    let err = write_csv(&path, &table).unwrap_err().to_string();
+    assert!(
+        err.contains("row 1 has 1 values but the table has 2 columns"),
+        "{err}"
+    );
+    table.rows = vec![vec![1.0, 2.0], vec![3.0, f64::NEG_INFINITY]];
+    let err = write_csv(&path, &table).unwrap_err().to_string();
+    assert!(err.contains("column `b`, row 1"), "{err}");
+    assert!(dir_names(dir.path()).is_empty());
+}
+
+/// Times writing a 500k-point grid of quad8 cells with the fields of a real run. Run with
+/// `cargo test --release --test output -- --ignored --nocapture vtu_timing`.
+#[test]
+#[ignore]
+fn vtu_timing_500k_points() {
+    // Structured quad8 mesh: (2m+1)(2n+1) - mn nodes; m = n = 408 gives ~500k.
+    let (m, n) = (408usize, 408usize);
+    let mut grid = Grid::default();
+    let mut id = vec![vec![u64::MAX; 2 * n + 1]; 2 * m + 1];
+    for i in 0..=2 * m {
+        for j in 0..=2 * n {
+            if i % 2 == 1 && j % 2 == 1 {
+                continue;
+            }
+            id[i][j] = grid.points.len() as u64;
+            grid.points
+                .push([i as f64 * 0.01, j as f64 * 0.01 + (i as f64).sin() * 1e-3]);
+        }
+    }
+    for i in 0..m {
+        for j in 0..n {
+            let (a, b) = (2 * i, 2 * j);
+            grid.push_cell(
+                23,
+                [
+                    id[a][b],
+                    id[a + 2][b],
+                    id[a + 2][b + 2],
+                    id[a][b + 2],
+                    id[a + 1][b],
+                    id[a + 2][b + 1],
+                    id[a + 1][b + 2],
+                    id[a][b + 1],
+                ],
+            );
+        }
+    }
+    let np = grid.points.len();
+    let nc = grid.cell_count();
+    let wave = |k: usize, c: usize| ((k * 7 + c) as f64 * 0.001).sin() * 123.456;
+    let field = |name: &str, comps: usize| Field {
+        name: name.into(),
+        components: comps,
+        values: FieldValues::F64((0..np * comps).map(|k| wave(k, comps)).collect()),
+    };
+    grid.point_data = vec![
+        field("displacement", 3),
+        field("stress", 6),
+        field("von_mises", 1),
+        field("eq_plastic_strain", 1),
+    ];
+    grid.cell_data = vec![Field {
+        name: "body".into(),
+        components: 1,
+        values: FieldValues::I32(vec![1; nc]),
+    }];
+
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("big.vtu");
+    let t = std::time::Instant::now();
+    write_vtu(&path, &grid).unwrap();
+    let dt = t.elapsed();
+    let size = fs::metadata(&path).unwrap().len();
+    println!(
+        "write_vtu: {np} points, {nc} cells, {:.1} MB in {:.3} s",
+        size as f64 / 1e6,
+        dt.as_secs_f64()
+    );
+    let t = std::time::Instant::now();
+    let back = read_vtu(&path).unwrap();
+    println!("read_vtu: {:.3} s", t.elapsed().as_secs_f64());
+    assert_eq!(back, grid);
+}
