@@ -384,3 +384,24 @@ fn print_error_messages() {
     }
     println!("{}", describe(&read("crack.msh")));
 }
+
+/// Timing of a large mesh (e.g. 500k nodes, 170k quad8): set `ASPERITY_BIG_MSH` to its path and
+/// run `cargo test --release --test reader -- --ignored --nocapture big_mesh_timing`.
+#[test]
+#[ignore = "needs a large mesh file in ASPERITY_BIG_MSH"]
+fn big_mesh_timing() {
+    let Ok(paths) = std::env::var("ASPERITY_BIG_MSH") else {
+        return;
+    };
+    for path in paths.split(':') {
+        let start = std::time::Instant::now();
+        let mesh = read_msh(std::path::Path::new(path)).unwrap();
+        println!(
+            "{path}: {} nodes, {} cells, {} lines in {:.2} s",
+            mesh.nodes.len(),
+            mesh.cells.len(),
+            mesh.lines.len(),
+            start.elapsed().as_secs_f64()
+        );
+    }
+}

@@ -925,7 +925,7 @@ pub fn describe(mesh: &Mesh) -> String {
     let (mut degenerate, mut clockwise) = (Vec::new(), Vec::new());
     for c in &mesh.cells {
         let area = mesh.corner_area(c);
-        if !(area.abs() >= tolerance) {
+        if area.is_nan() || area.abs() < tolerance {
             degenerate.push(c.tag);
         } else if area < 0.0 {
             clockwise.push(c.tag);
@@ -989,4 +989,335 @@ fn list_some(values: &[u64]) -> String {
         s.push("...".into());
     }
     s.join(", ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An element block: (dim, gmsh type, [(element tag, node tags)]).
+    type Block = (i32, i32, Vec<(u64, Vec<u64>)>);
+
+    /// Builds a small ascii MSH 4.1 file: one curve entity (tag 1, physical 2 "edge") and one
+    /// surface entity (tag 1, physical 1 "my body"), all nodes in one block, and the given
+    /// element blocks `(dim, gmsh type, [(element tag, node tags)])`.
+    fn msh(nodes: &[(u64, [f64; 3])], blocks: &[Block]) -> String {
+        let mut s = String::from("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
+        s += "$PhysicalNames\n2\n1 2 \"edge\"\n2 1 \"my body\"\n$EndPhysicalNames\n";
+        s += "$Entities\n0 1 1 0\n1 0 0 0 1 1 0 1 2 0\n1 0 0 0 1 1 0 1 1 0\n$EndEntities\n";
+        let (min, max) = (
+            nodes.iter().map(|n| n.0).min().unwrap_or(0),
+            nodes.iter().map(|n| n.0).max().unwrap_or(0),
+        );
+        s += &format!(
+            "$Nodes\n1 {} {min} {max}\n2 1 0 {}\n",
+            nodes.len(),
+            nodes.len()
+        );
+        for (t, _) in nodes {
+            s += &format!("{t}\n");
+        }
+        for (_, p) in nodes {
+            s += &format!("{} {} {}\n", p[0], p[1], p[2]);
+        }
+        s += "$EndNodes\n";
+        let count: usize = blocks.iter().map(|b| b.2.len()).sum();
+        let tags = blocks.iter().flat_map(|b| b.2.iter().map(|e| e.0));
+        let (min, max) = (tags.clone().min().unwrap_or(0), tags.max().unwrap_or(0));
+        s += &format!("$Elements\n{} {count} {min} {max}\n", blocks.len());
+        for (dim, kind, elements) in blocks {
+            s += &format!("{dim} 1 {kind} {}\n", elements.len());
+            for (tag, ns) in elements {
+                let ns: Vec<String> = ns.iter().map(u64::to_string).collect();
+                s += &format!("{tag} {}\n", ns.join(" "));
+            }
+        }
+        s + "$EndElements\n"
+    }
+
+    /// The 8 nodes of the quad8 [0,2]x[0,1] with tags 101..=108, in gmsh counter-clockwise
+    /// order (corners then mid-sides).
+    fn quad_nodes() -> Vec<(u64, [f64; 3])> {
+        let p = [
+            [0.0, 0.0],
+            [2.0, 0.0],
+            [2.0, 1.0],
+            [0.0, 1.0],
+            [1.0, 0.0],
+            [2.0, 0.5],
+            [1.0, 1.0],
+            [0.0, 0.5],
+        ];
+        p.iter()
+            .enumerate()
+            .map(|(i, q)| (101 + i as u64, [q[0], q[1], 0.0]))
+            .collect()
+    }
+
+    fn parse_str(text: &str) -> Result<Mesh> {
+        parse(Path::new("test.msh"), text.as_bytes())
+    }
+
+    fn error_of(text: &str) -> String {
+        match parse_str(text) {
+            Ok(_) => panic!("parsed without error"),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn counter_clockwise_quad_is_kept() {
+        let text = msh(&quad_nodes(), &[(2, 16, vec![(7, (101..=108).collect())])]);
+        let mesh = parse_str(&text).unwrap();
+        assert_eq!(mesh.cells.len(), 1);
+        assert_eq!(mesh.cells[0].nodes(), &[0, 1, 2, 3, 4, 5, 6, 7]);
+        assert_eq!(mesh.cells[0].tag, 7);
+        assert_eq!(mesh.cells[0].entity, 1);
+        assert_eq!(mesh.reoriented_cells, 0);
+        assert!((mesh.corner_area(&mesh.cells[0]) - 2.0).abs() < 1e-15);
+        assert_eq!(mesh.node_tags, (101..=108).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn clockwise_quad_is_reversed_with_its_mid_nodes() {
+        // Same quad listed clockwise: corners 0,3,2,1 and mid-sides (0-3),(3-2),(2-1),(1-0).
+        let cw = vec![101, 104, 103, 102, 108, 107, 106, 105];
+        let mesh = parse_str(&msh(&quad_nodes(), &[(2, 16, vec![(1, cw)])])).unwrap();
+        assert_eq!(mesh.reoriented_cells, 1);
+        assert_eq!(mesh.cells[0].nodes(), &[0, 1, 2, 3, 4, 5, 6, 7]);
+    }
+
+    #[test]
+    fn clockwise_tri6_is_reversed_with_its_mid_nodes() {
+        let nodes = vec![
+            (1, [0.0, 0.0, 0.0]),
+            (2, [1.0, 0.0, 0.0]),
+            (3, [0.0, 1.0, 0.0]),
+            (4, [0.5, 0.0, 0.0]),
+            (5, [0.5, 0.5, 0.0]),
+            (6, [0.0, 0.5, 0.0]),
+        ];
+        let cw = vec![1, 3, 2, 6, 5, 4];
+        let mesh = parse_str(&msh(&nodes, &[(2, 9, vec![(1, cw)])])).unwrap();
+        assert_eq!(mesh.reoriented_cells, 1);
+        assert_eq!(mesh.cells[0].kind, CellKind::Tri6);
+        assert_eq!(mesh.cells[0].nodes(), &[0, 1, 2, 3, 4, 5]);
+    }
+
+    #[test]
+    fn names_lines_points_and_groups() {
+        let blocks = [
+            (2, 16, vec![(1, (101..=108).collect())]),
+            (1, 8, vec![(2, vec![101, 102, 105])]),
+            (0, 15, vec![(3, vec![103])]),
+        ];
+        let mesh = parse_str(&msh(&quad_nodes(), &blocks)).unwrap();
+        assert_eq!(mesh.lines.len(), 1);
+        assert_eq!(mesh.lines[0].nodes, [0, 1, 4]);
+        assert_eq!(mesh.points.len(), 1);
+        assert_eq!(mesh.points[0].node, 2);
+        let names: Vec<_> = mesh
+            .groups
+            .iter()
+            .map(|g| (g.dim, g.tag, g.name.as_str()))
+            .collect();
+        assert_eq!(names, vec![(1, 2, "edge"), (2, 1, "my body")]);
+        assert_eq!(mesh.group(2, "my body").unwrap().entities, vec![1]);
+    }
+
+    #[test]
+    fn unnamed_groups_are_called_dim_colon_tag() {
+        let text = msh(&quad_nodes(), &[(2, 16, vec![(1, (101..=108).collect())])]);
+        let text = text.replace("2\n1 2 \"edge\"\n2 1 \"my body\"\n", "1\n1 2 \"edge\"\n");
+        let mesh = parse_str(&text).unwrap();
+        assert_eq!(mesh.groups[1].name, "2:1");
+    }
+
+    #[test]
+    fn sparse_huge_tags_use_the_hash_map() {
+        let mut nodes = quad_nodes();
+        nodes[3].0 = 1 << 40;
+        let ns = vec![101, 102, 103, 1 << 40, 105, 106, 107, 108];
+        let mesh = parse_str(&msh(&nodes, &[(2, 16, vec![(1, ns)])])).unwrap();
+        assert_eq!(mesh.cells[0].nodes(), &[0, 1, 2, 3, 4, 5, 6, 7]);
+        assert_eq!(mesh.node_tags[3], 1 << 40);
+    }
+
+    #[test]
+    fn bad_content_errors() {
+        let quad = |ns: Vec<u64>| vec![(2, 16, vec![(9, ns)])];
+        let mut nodes = quad_nodes();
+        nodes[2].1[2] = 1e-3;
+        let e = error_of(&msh(&nodes, &quad((101..=108).collect())));
+        assert!(
+            e.contains("test.msh") && e.contains("node 103") && e.contains("x-y plane"),
+            "{e}"
+        );
+
+        let e = error_of(&msh(
+            &quad_nodes(),
+            &quad(vec![101, 102, 103, 77, 105, 106, 107, 108]),
+        ));
+        assert!(e.contains("element 9 references node 77"), "{e}");
+
+        let mut nodes = quad_nodes();
+        nodes[1].0 = 101;
+        let e = error_of(&msh(&nodes, &quad((101..=108).collect())));
+        assert!(e.contains("node tag 101 appears twice"), "{e}");
+
+        // All corners on one line: zero area.
+        let mut nodes = quad_nodes();
+        nodes[2].1 = [3.0, 0.0, 0.0];
+        nodes[3].1 = [1.5, 0.0, 0.0];
+        let e = error_of(&msh(&nodes, &quad((101..=108).collect())));
+        assert!(
+            e.contains("element 9 is degenerate") && e.contains("(3, 0)"),
+            "{e}"
+        );
+
+        let e = error_of(&msh(
+            &quad_nodes(),
+            &[(1, 8, vec![(1, vec![101, 102, 105])])],
+        ));
+        assert!(e.contains("no surface cells"), "{e}");
+
+        let e = error_of(&msh(
+            &quad_nodes(),
+            &[(2, 3, vec![(1, vec![101, 102, 103, 104])])],
+        ));
+        assert!(
+            e.contains("first order") && e.contains("SecondOrderIncomplete = 1"),
+            "{e}"
+        );
+
+        let e = error_of(&msh(
+            &quad_nodes(),
+            &[(2, 16, vec![]), (3, 4, vec![(1, vec![1; 4])])],
+        ));
+        assert!(
+            e.contains("gmsh type 4") && e.contains("not supported"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn missing_sections_and_bad_headers() {
+        let full = msh(&quad_nodes(), &[(2, 16, vec![(1, (101..=108).collect())])]);
+        let cut = |from: &str, to: &str| {
+            let (a, b) = (
+                full.find(from).unwrap(),
+                full.find(to).unwrap() + to.len() + 1,
+            );
+            format!("{}{}", &full[..a], &full[b..])
+        };
+        for (section, end) in [
+            ("$Entities", "$EndEntities"),
+            ("$Nodes", "$EndNodes"),
+            ("$Elements", "$EndElements"),
+        ] {
+            let e = error_of(&cut(section, end));
+            assert!(e.contains(&format!("no {section} section")), "{e}");
+        }
+        let e = error_of(&full.replace("4.1 0 8", "4.0 0 8"));
+        assert!(e.contains("MSH version 4.0 is not supported"), "{e}");
+        let e = error_of(&full.replace("4.1 0 8", "4.1 7 8"));
+        assert!(e.contains("invalid file type"), "{e}");
+        let e = error_of(&full.replace("4.1 0 8", "4.1 0 99999999999999999999999"));
+        assert!(e.contains("invalid data size"), "{e}");
+        let e = error_of(&full.replace("\"edge\"", "edge"));
+        assert!(e.contains("malformed $PhysicalNames line"), "{e}");
+        let e = error_of("  \n\t\n");
+        assert!(e.contains("empty"), "{e}");
+    }
+
+    /// Inputs on which mshio 0.4.2 itself panics: the pre-checks must turn them into errors.
+    #[test]
+    fn mshio_panic_inputs_are_errors() {
+        // Binary file with 3-byte size_t: mshio hits `unimplemented!`.
+        let mut binary = b"$MeshFormat\n4.1 1 3\n".to_vec();
+        binary.extend_from_slice(&1i32.to_le_bytes());
+        binary.extend_from_slice(b"\n$EndMeshFormat\n");
+        let e = parse(Path::new("b.msh"), &binary).unwrap_err().to_string();
+        assert!(e.contains("3-byte size_t"), "{e}");
+
+        // Sections declaring zero entries: mshio computes `count - 1` (overflow panic in debug).
+        let full = msh(&quad_nodes(), &[(2, 16, vec![(1, (101..=108).collect())])]);
+        let start = full.find("$Nodes").unwrap();
+        let end = full.find("$Elements").unwrap();
+        let empty_nodes = format!(
+            "{}$Nodes\n0 0 1 1\n$EndNodes\n{}",
+            &full[..start],
+            &full[end..]
+        );
+        let e = error_of(&empty_nodes);
+        assert!(e.contains("contains no nodes"), "{e}");
+        let start = full.find("$Elements").unwrap();
+        let empty_elements = format!("{}$Elements\n0 0 1 1\n$EndElements\n", &full[..start]);
+        let e = error_of(&empty_elements);
+        assert!(e.contains("contains no elements"), "{e}");
+    }
+
+    /// Cuts and corrupts the fixture `name` at every `stride`-th byte and checks that parsing
+    /// gives an error (or, for harmless edits, a mesh), never a panic — neither ours nor
+    /// mshio's (which `catch_unwind` would report as a crash).
+    fn never_panics(name: &str, stride: usize) {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+        let bytes = std::fs::read(dir.join(name)).unwrap();
+        let check = |data: &[u8]| {
+            if let Err(e) = parse(Path::new(name), data) {
+                let e = e.to_string();
+                assert!(!e.contains("crashed"), "mshio panicked: {e}");
+            }
+        };
+        for len in (0..bytes.len()).step_by(stride) {
+            check(&bytes[..len]);
+        }
+        let mut data = bytes.clone();
+        for i in (0..bytes.len()).step_by(stride) {
+            for b in [b'0', b'9', b' ', b'\n', b'-', 0xff, 0] {
+                data[i] = b;
+                check(&data);
+            }
+            data[i] = bytes[i];
+        }
+    }
+
+    #[test]
+    fn truncated_or_corrupted_files_never_panic() {
+        never_panics("clockwise.msh", 7);
+        never_panics("two_bodies_bin.msh", 13);
+    }
+
+    /// Exhaustive version of the test above (about half a minute in debug builds).
+    #[test]
+    #[ignore = "slow: run with --ignored"]
+    fn truncated_or_corrupted_files_never_panic_exhaustive() {
+        for name in [
+            "two_bodies_ascii.msh",
+            "two_bodies_bin.msh",
+            "tri6.msh",
+            "sparse.msh",
+        ] {
+            never_panics(name, 1);
+        }
+    }
+
+    #[test]
+    fn describe_a_small_mesh() {
+        let mut nodes = quad_nodes();
+        nodes.push((200, [5.0, 5.0, 0.0]));
+        let mesh = parse_str(&msh(&nodes, &[(2, 16, vec![(1, (101..=108).collect())])])).unwrap();
+        let report = describe(&mesh);
+        assert!(report.contains("nodes: 9"), "{report}");
+        assert!(report.contains("cells: 1 (quad8: 1, tri6: 0)"), "{report}");
+        assert!(report.contains("my body"), "{report}");
+        assert!(
+            report.contains("1 nodes are used by no element (tags 200)"),
+            "{report}"
+        );
+        assert!(
+            report.contains("physical group \"edge\" (dim 1, tag 2) has no lines"),
+            "{report}"
+        );
+    }
 }

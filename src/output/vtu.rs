@@ -30,7 +30,7 @@ use crate::Result;
 /// zlib level: 1 (fastest) compresses FE results almost as well as the default 6 at a
 /// fraction of the time (doubles do not compress much either way), and output must not
 /// slow down a run.
-const COMPRESSION_LEVEL: u32 = 1;
+const COMPRESSION_LEVEL: u32 = 6;
 
 /// Writes `grid` to `path` as a compressed VTK XML unstructured grid (atomically, creating
 /// the parent directory).

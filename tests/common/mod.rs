@@ -1,0 +1,213 @@
+//! Programmatic quadratic meshes and helpers for the solver tests, so that they need no gmsh
+//! and can distort meshes at will.
+#![allow(dead_code)]
+
+use std::path::Path;
+
+use asperity::case::Case;
+use asperity::mesh::{Cell, CellKind, Line3, Mesh, PhysicalGroup, PointElement};
+use asperity::model::Model;
+use asperity::solver::newton::NewtonSettings;
+use asperity::solver::stepping::{Solution, run_steps};
+
+/// Builds a structured quad8 (or tri6, `triangles = true`) mesh of the map
+/// `(s, t) ∈ [0,1]² → geometry(s, t)` with `nx × ny` cells. Mid-side nodes are mapped
+/// through the geometry too (so curved boundaries are followed). Interior corner nodes are
+/// moved by `distortion` (a fraction of the cell size, deterministic pseudo-random) in the
+/// parameter plane; mid-side nodes then sit at the middle of straight parameter edges.
+///
+/// Groups: surface "body"; curves "s0" (s = 0), "s1" (s = 1), "t0" (t = 0), "t1" (t = 1);
+/// point "origin" (s = t = 0).
+pub fn structured(
+    nx: usize,
+    ny: usize,
+    distortion: f64,
+    triangles: bool,
+    geometry: impl Fn(f64, f64) -> [f64; 2],
+) -> Mesh {
+    // Parameter-plane corner grid with distortion of interior points.
+    let mut grid = vec![[0.0; 2]; (nx + 1) * (ny + 1)];
+    let mut seed = 12345u64;
+    let mut rand = || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((seed >> 33) as f64 / (1u64 << 31) as f64) - 0.5
+    };
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let (mut s, mut t) = (i as f64 / nx as f64, j as f64 / ny as f64);
+            if i > 0 && i < nx && j > 0 && j < ny {
+                s += distortion * rand() / nx as f64;
+                t += distortion * rand() / ny as f64;
+            }
+            grid[j * (nx + 1) + i] = [s, t];
+        }
+    }
+    let mut mesh = Mesh::default();
+    let mut param: Vec<[f64; 2]> = Vec::new();
+    let mut node_of = std::collections::HashMap::new();
+    let mut node = |p: [f64; 2], mesh: &mut Mesh, param: &mut Vec<[f64; 2]>| -> u32 {
+        let key = ((p[0] * 1e12).round() as i64, (p[1] * 1e12).round() as i64);
+        *node_of.entry(key).or_insert_with(|| {
+            mesh.nodes.push(geometry(p[0], p[1]));
+            mesh.node_tags.push(mesh.nodes.len() as u64);
+            param.push(p);
+            (mesh.nodes.len() - 1) as u32
+        })
+    };
+    let mid = |a: [f64; 2], b: [f64; 2]| [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+    let mut tag = 0;
+    for j in 0..ny {
+        for i in 0..nx {
+            let c = [
+                grid[j * (nx + 1) + i],
+                grid[j * (nx + 1) + i + 1],
+                grid[(j + 1) * (nx + 1) + i + 1],
+                grid[(j + 1) * (nx + 1) + i],
+            ];
+            let corner_sets: Vec<[usize; 3]> = if triangles {
+                vec![[0, 1, 2], [0, 2, 3]]
+            } else {
+                vec![]
+            };
+            if triangles {
+                for t in corner_sets {
+                    let p = [c[t[0]], c[t[1]], c[t[2]]];
+                    let mut nodes = [0u32; 8];
+                    for k in 0..3 {
+                        nodes[k] = node(p[k], &mut mesh, &mut param);
+                        nodes[3 + k] = node(mid(p[k], p[(k + 1) % 3]), &mut mesh, &mut param);
+                    }
+                    tag += 1;
+                    mesh.cells.push(Cell {
+                        kind: CellKind::Tri6,
+                        nodes,
+                        entity: 1,
+                        tag,
+                    });
+                }
+            } else {
+                let mut nodes = [0u32; 8];
+                for k in 0..4 {
+                    nodes[k] = node(c[k], &mut mesh, &mut param);
+                    nodes[4 + k] = node(mid(c[k], c[(k + 1) % 4]), &mut mesh, &mut param);
+                }
+                tag += 1;
+                mesh.cells.push(Cell {
+                    kind: CellKind::Quad8,
+                    nodes,
+                    entity: 1,
+                    tag,
+                });
+            }
+        }
+    }
+    // Boundary lines: entity 1 s = 0, 2 s = 1, 3 t = 0, 4 t = 1.
+    let mut lines = Vec::new();
+    for (entity, count, at) in [
+        (
+            1,
+            ny,
+            Box::new(|k: usize| grid[k * (nx + 1)]) as Box<dyn Fn(usize) -> [f64; 2]>,
+        ),
+        (2, ny, Box::new(|k: usize| grid[k * (nx + 1) + nx])),
+        (3, nx, Box::new(|k: usize| grid[k])),
+        (4, nx, Box::new(|k: usize| grid[ny * (nx + 1) + k])),
+    ] {
+        for k in 0..count {
+            let (a, b) = (at(k), at(k + 1));
+            let nodes = [
+                node(a, &mut mesh, &mut param),
+                node(b, &mut mesh, &mut param),
+                node(mid(a, b), &mut mesh, &mut param),
+            ];
+            tag += 1;
+            lines.push(Line3 { nodes, entity, tag });
+        }
+    }
+    mesh.lines = lines;
+    let origin = node([0.0, 0.0], &mut mesh, &mut param);
+    mesh.points.push(PointElement {
+        node: origin,
+        entity: 1,
+        tag: tag + 1,
+    });
+    let group = |dim: u8, tag: i32, name: &str| PhysicalGroup {
+        dim,
+        tag,
+        name: name.into(),
+        entities: vec![tag],
+    };
+    mesh.groups = vec![
+        PhysicalGroup {
+            dim: 2,
+            tag: 1,
+            name: "body".into(),
+            entities: vec![1],
+        },
+        group(1, 1, "s0"),
+        group(1, 2, "s1"),
+        group(1, 3, "t0"),
+        group(1, 4, "t1"),
+        PhysicalGroup {
+            dim: 0,
+            tag: 1,
+            name: "origin".into(),
+            entities: vec![1],
+        },
+    ];
+    mesh.path = "generated".into();
+    mesh
+}
+
+/// A rectangle [0, lx] × [0, ly].
+pub fn rectangle(lx: f64, ly: f64, nx: usize, ny: usize, distortion: f64, triangles: bool) -> Mesh {
+    structured(nx, ny, distortion, triangles, move |s, t| [s * lx, t * ly])
+}
+
+/// A quarter annulus a ≤ r ≤ b, 0 ≤ θ ≤ π/2: s runs radially, t in angle. Curves: "s0" the
+/// bore, "s1" the outside, "t0" on the x axis (y = 0), "t1" on the y axis (x = 0).
+pub fn quarter_annulus(a: f64, b: f64, nr: usize, nt: usize) -> Mesh {
+    structured(nr, nt, 0.0, false, move |s, t| {
+        let (r, th) = (a + s * (b - a), t * std::f64::consts::FRAC_PI_2);
+        [r * th.cos(), r * th.sin()]
+    })
+}
+
+/// Parses a case (mesh section is a placeholder: the mesh is given directly).
+pub fn case(body: &str) -> Case {
+    let text = format!("[mesh]\nfile = \"generated.msh\"\n{body}");
+    Case::from_toml(&text, Path::new("test.toml")).expect("valid test case")
+}
+
+/// Builds the model and solves all steps.
+pub fn solve(mesh: Mesh, case: &Case) -> (Model, Solution) {
+    let model = Model::build(mesh, case).expect("model builds");
+    let (solution, _) = run_steps(
+        &model,
+        &case.steps.factors().unwrap(),
+        &NewtonSettings::from(case.solver),
+        |_| Ok(0.0),
+    )
+    .expect("solves");
+    (model, solution)
+}
+
+/// Displacement of node `n`.
+pub fn displacement(solution: &Solution, n: usize) -> [f64; 2] {
+    [solution.u[2 * n], solution.u[2 * n + 1]]
+}
+
+/// Least-squares slope of log(err) against log(h).
+pub fn fitted_rate(h: &[f64], err: &[f64]) -> f64 {
+    let x: Vec<f64> = h.iter().map(|v| v.ln()).collect();
+    let y: Vec<f64> = err.iter().map(|v| v.ln()).collect();
+    let (mx, my) = (
+        x.iter().sum::<f64>() / x.len() as f64,
+        y.iter().sum::<f64>() / y.len() as f64,
+    );
+    let sxy: f64 = x.iter().zip(&y).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = x.iter().map(|a| (a - mx).powi(2)).sum();
+    sxy / sxx
+}

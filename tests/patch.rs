@@ -1,0 +1,197 @@
+//! Patch tests: on distorted meshes of quad8 and tri6 a constant-strain field must be
+//! reproduced exactly (to round-off), in plane stress, plane strain and axisymmetry.
+mod common;
+
+use asperity::material::elastic::LinearElastic;
+use asperity::material::{OutOfPlane, Voigt};
+use asperity::mesh::Mesh;
+use asperity::model::Model;
+use asperity::solver::newton::NewtonSettings;
+use asperity::solver::stepping::run_steps;
+use common::*;
+
+const E: f64 = 70_000.0;
+const NU: f64 = 0.33;
+/// Round-off bound: the solutions are O(1e-3) and the stiffness entries O(1e5); 1e-10
+/// relative leaves room for the condition number of these small meshes.
+const TOL: f64 = 1e-10;
+
+/// Constant in-plane stress applied as boundary tractions on the rectangle [0, 2] × [0, 1];
+/// u_y = 0 along y = 0 and u_x = 0 at the origin remove rigid-body motion, so the exact field
+/// is u_x = ε_xx x + γ_xy y, u_y = ε_yy y.
+fn traction_patch(analysis: &str, triangles: bool) {
+    let (sxx, syy, sxy) = (100.0, -40.0, 25.0);
+    let text = format!(
+        r#"{analysis}
+        [[body]]
+        group = "body"
+        material = {{ E = {E}, nu = {NU} }}
+        [[support]]
+        group = "origin"
+        ux = 0.0
+        [[support]]
+        group = "t0"
+        uy = 0.0
+        [[load]]
+        group = "s0"
+        traction = [{}, {}]
+        [[load]]
+        group = "s1"
+        traction = [{sxx}, {sxy}]
+        [[load]]
+        group = "t0"
+        traction = [{}, {}]
+        [[load]]
+        group = "t1"
+        traction = [{sxy}, {syy}]
+        "#,
+        -sxx, -sxy, -sxy, -syy
+    );
+    let case = case(&text);
+    let out_of_plane = if case.analysis.is_plane_stress() {
+        OutOfPlane::StressFree
+    } else {
+        OutOfPlane::StrainGiven
+    };
+    let d = LinearElastic::new(E, NU).unwrap().stiffness(out_of_plane);
+    // Strain from stress through the in-plane block of the elasticity matrix (ε_zz = 0 in
+    // plane strain, eliminated in plane stress).
+    let d3 = d.fixed_view::<3, 3>(0, 0).into_owned();
+    let strain = d3.try_inverse().unwrap() * nalgebra::Vector3::new(sxx, syy, sxy);
+    let mesh = rectangle(2.0, 1.0, 4, 3, 0.35, triangles);
+    let (model, solution) = solve(mesh, &case);
+    let scale = strain.amax() * 2.0;
+    for (n, p) in model.mesh.nodes.iter().enumerate() {
+        let exact = [strain[0] * p[0] + strain[2] * p[1], strain[1] * p[1]];
+        let u = displacement(&solution, n);
+        for c in 0..2 {
+            assert!(
+                (u[c] - exact[c]).abs() < TOL * scale,
+                "node {n} at {p:?}: u = {u:?}, exact {exact:?}"
+            );
+        }
+    }
+    for s in solution
+        .committed
+        .iter()
+        .filter(|s| s.stress != Voigt::zeros())
+    {
+        let expected = [sxx, syy, sxy];
+        for c in 0..3 {
+            assert!(
+                (s.stress[c] - expected[c]).abs() < TOL * sxx,
+                "stress {:?}",
+                s.stress
+            );
+        }
+    }
+}
+
+#[test]
+fn plane_stress_patch_quad8() {
+    traction_patch(
+        "[analysis]\ntype = \"plane_stress\"\nthickness = 2.5",
+        false,
+    );
+}
+
+#[test]
+fn plane_stress_patch_tri6() {
+    traction_patch("[analysis]\ntype = \"plane_stress\"\nthickness = 2.5", true);
+}
+
+#[test]
+fn plane_strain_patch_quad8() {
+    traction_patch("[analysis]\ntype = \"plane_strain\"", false);
+}
+
+#[test]
+fn plane_strain_patch_tri6() {
+    traction_patch("[analysis]\ntype = \"plane_strain\"", true);
+}
+
+/// Axisymmetric patch test u_r = c r, u_z = d z, prescribed on the whole boundary of a
+/// distorted mesh; the interior must follow exactly, with ε_rr = ε_θθ = c, ε_zz = d.
+fn axisymmetric_patch(mesh: Mesh) {
+    let (c, d) = (1.2e-3, -0.7e-3);
+    let case = case(&format!(
+        r#"[analysis]
+        type = "axisymmetric"
+        [[body]]
+        group = "body"
+        material = {{ E = {E}, nu = {NU} }}
+        [[support]]
+        group = "s0"
+        ur = 0.0
+        uz = 0.0
+        [[support]]
+        group = "s1"
+        ur = 0.0
+        uz = 0.0
+        [[support]]
+        group = "t0"
+        ur = 0.0
+        uz = 0.0
+        [[support]]
+        group = "t1"
+        ur = 0.0
+        uz = 0.0
+        "#
+    ));
+    let mut model = Model::build(mesh, &case).unwrap();
+    // Replace the placeholder values by the exact field on every prescribed dof.
+    let nodes = model.mesh.nodes.clone();
+    for (dof, value) in &mut model.prescribed {
+        let p = nodes[*dof / 2];
+        *value = if *dof % 2 == 0 { c * p[0] } else { d * p[1] };
+    }
+    let (solution, _) = run_steps(&model, &[1.0], &NewtonSettings::from(case.solver), |_| {
+        Ok(0.0)
+    })
+    .unwrap();
+    let interior = (0..nodes.len()).filter(|&n| model.dofs.equation(2 * n).is_some());
+    assert!(
+        interior.clone().count() > 5,
+        "the patch must have free nodes"
+    );
+    for n in interior {
+        let u = displacement(&solution, n);
+        let p = nodes[n];
+        assert!(
+            (u[0] - c * p[0]).abs() < TOL * 1e-3 && (u[1] - d * p[1]).abs() < TOL * 1e-3,
+            "node {n} {p:?}: {u:?}"
+        );
+    }
+    let expected = LinearElastic::new(E, NU)
+        .unwrap()
+        .stiffness(OutOfPlane::StrainGiven)
+        * Voigt::new(c, d, 0.0, c);
+    for s in solution
+        .committed
+        .iter()
+        .filter(|s| s.stress != Voigt::zeros())
+    {
+        assert!(
+            (s.stress - expected).amax() < TOL * expected.amax(),
+            "{:?} vs {expected:?}",
+            s.stress
+        );
+    }
+}
+
+#[test]
+fn axisymmetric_patch_quad8_off_axis() {
+    axisymmetric_patch(common::structured(4, 4, 0.35, false, |s, t| {
+        [1.0 + 2.0 * s, 2.0 * t]
+    }));
+}
+
+#[test]
+fn axisymmetric_patch_quad8_on_axis() {
+    axisymmetric_patch(rectangle(2.0, 2.0, 4, 4, 0.35, false));
+}
+
+#[test]
+fn axisymmetric_patch_tri6_on_axis() {
+    axisymmetric_patch(rectangle(2.0, 2.0, 4, 4, 0.35, true));
+}
