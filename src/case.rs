@@ -242,7 +242,7 @@ impl Case {
             }
             _ => {}
         }
-        if !(self.mesh.size.is_finite() && self.mesh.size > 0.0) {
+        if !self.mesh.size.is_finite() || self.mesh.size <= 0.0 {
             return Err(format!(
                 "[mesh]: size = {} must be positive",
                 self.mesh.size
@@ -250,7 +250,7 @@ impl Case {
         }
         match self.analysis {
             Analysis::PlaneStress { thickness } | Analysis::PlaneStrain { thickness }
-                if !(thickness > 0.0) =>
+                if thickness.is_nan() || thickness <= 0.0 =>
             {
                 return Err(format!(
                     "[analysis]: thickness = {thickness} must be positive"
@@ -299,7 +299,10 @@ impl Case {
         }
         self.steps.factors()?;
         let s = &self.solver;
-        if s.max_iterations == 0 || !(s.force_tolerance > 0.0) || !(s.displacement_tolerance > 0.0)
+        let positive = |x: f64| x > 0.0;
+        if s.max_iterations == 0
+            || !positive(s.force_tolerance)
+            || !positive(s.displacement_tolerance)
         {
             return Err("[solver]: max_iterations and tolerances must be positive".into());
         }

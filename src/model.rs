@@ -296,7 +296,7 @@ fn build_continuum(mesh: &Mesh, case: &Case) -> Result<(Vec<String>, ContinuumSe
                 coords[k] = mesh.nodes[n as usize];
             }
             let det = min_jacobian(cell.kind, &coords);
-            if !(det > 0.0) {
+            if det.is_nan() || det <= 0.0 {
                 return Err(Error::Model(format!(
                     "element {} of body '{}' is distorted or degenerate (Jacobian determinant {det:.3e} ≤ 0; corners \
                      {:?}); check mid-side nodes and the mesh quality",

@@ -89,7 +89,7 @@ fn vtu_round_trip_is_exact() {
     let grid = mixed_grid();
     write_vtu(&path, &grid).unwrap();
     assert_eq!(
-        dir_names(&path.parent().unwrap()),
+        dir_names(path.parent().unwrap()),
         vec!["step_0001.vtu"],
         "no temporary left"
     );
@@ -118,10 +118,10 @@ fn vtu_overwrites_an_existing_file() {
     assert_eq!(read_vtu(&path).unwrap(), grid);
 }
 
-#[test]
-fn vtu_arrays_of_32k_multiple_size_round_trip() {
-    // vtkio compresses in 32 KiB blocks; arrays whose byte size is an exact multiple of the
-    // block size (4096 f64 scalars, 8192 i32) are the corner case of its block header.
+/// vtkio compresses in 32 KiB blocks; arrays whose byte size is an exact multiple of the
+/// block size (here 4096 f64 scalars, 8192 i32) are the corner case of its block header:
+/// it writes an extra empty block with "last block size" 0.
+fn block_multiple_grid() -> Grid {
     let n = 4096;
     let mut grid = Grid {
         points: (0..n).map(|i| [i as f64, (i % 7) as f64]).collect(),
@@ -138,10 +138,33 @@ fn vtu_arrays_of_32k_multiple_size_round_trip() {
     grid.cell_data.push(Field {
         name: "id".into(),
         components: 4,
-        values: FieldValues::I32((0..2 * n as i32).collect()),
+        values: FieldValues::I32((0..2 * n).collect()),
     });
+    grid
+}
+
+#[test]
+fn vtu_arrays_of_32k_multiple_size_round_trip() {
+    let grid = block_multiple_grid();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("big.vtu");
+    write_vtu(&path, &grid).unwrap();
+    assert_eq!(read_vtu(&path).unwrap(), grid);
+}
+
+#[test]
+fn vtu_empty_grid_round_trips() {
+    // A model without contact pairs still writes its (empty) interface grid.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("empty.vtu");
+    let grid = Grid {
+        point_data: vec![Field {
+            name: "u".into(),
+            components: 3,
+            values: FieldValues::F64(vec![]),
+        }],
+        ..Grid::default()
+    };
     write_vtu(&path, &grid).unwrap();
     assert_eq!(read_vtu(&path).unwrap(), grid);
 }
@@ -377,12 +400,12 @@ fn vtu_timing_500k_points() {
     let (m, n) = (408usize, 408usize);
     let mut grid = Grid::default();
     let mut id = vec![vec![u64::MAX; 2 * n + 1]; 2 * m + 1];
-    for i in 0..=2 * m {
-        for j in 0..=2 * n {
+    for (i, row) in id.iter_mut().enumerate() {
+        for (j, slot) in row.iter_mut().enumerate() {
             if i % 2 == 1 && j % 2 == 1 {
                 continue;
             }
-            id[i][j] = grid.points.len() as u64;
+            *slot = grid.points.len() as u64;
             grid.points
                 .push([i as f64 * 0.01, j as f64 * 0.01 + (i as f64).sin() * 1e-3]);
         }
@@ -407,17 +430,31 @@ fn vtu_timing_500k_points() {
     }
     let np = grid.points.len();
     let nc = grid.cell_count();
-    let wave = |k: usize, c: usize| ((k * 7 + c) as f64 * 0.001).sin() * 123.456;
-    let field = |name: &str, comps: usize| Field {
+    // Like real plane results: smooth in-plane values (incompressible doubles), but
+    // displacement z and the out-of-plane shears are zero and the plastic strain is zero
+    // outside a small zone; `ASPERITY_TIMING_DENSE=1` makes every value non-zero instead.
+    let dense = std::env::var("ASPERITY_TIMING_DENSE").is_ok_and(|v| v == "1");
+    let wave = |k: usize| (k as f64 * 0.001).sin() * 123.456;
+    let field = |name: &str, comps: usize, zero: &dyn Fn(usize, usize) -> bool| Field {
         name: name.into(),
         components: comps,
-        values: FieldValues::F64((0..np * comps).map(|k| wave(k, comps)).collect()),
+        values: FieldValues::F64(
+            (0..np * comps)
+                .map(|k| {
+                    if !dense && zero(k / comps, k % comps) {
+                        0.0
+                    } else {
+                        wave(k)
+                    }
+                })
+                .collect(),
+        ),
     };
     grid.point_data = vec![
-        field("displacement", 3),
-        field("stress", 6),
-        field("von_mises", 1),
-        field("eq_plastic_strain", 1),
+        field("displacement", 3, &|_, c| c == 2),
+        field("stress", 6, &|_, c| c >= 4),
+        field("von_mises", 1, &|_, _| false),
+        field("eq_plastic_strain", 1, &|p, _| p > np / 20),
     ];
     grid.cell_data = vec![Field {
         name: "body".into(),
@@ -440,4 +477,58 @@ fn vtu_timing_500k_points() {
     let back = read_vtu(&path).unwrap();
     println!("read_vtu: {:.3} s", t.elapsed().as_secs_f64());
     assert_eq!(back, grid);
+}
+
+/// Writes sample files for checking by hand in ParaView or pyvista (`pyvista.read`,
+/// `pyvista.get_reader`): `ASPERITY_SAMPLE_DIR=/tmp/samples cargo test --test output --
+/// --ignored write_samples`.
+#[test]
+#[ignore]
+fn write_samples() {
+    let Some(dir) = std::env::var_os("ASPERITY_SAMPLE_DIR").map(PathBuf::from) else {
+        return;
+    };
+    let grid = mixed_grid();
+    let mut entries = Vec::new();
+    for step in 1..=2 {
+        let mut g = grid.clone();
+        for f in &mut g.point_data {
+            if let FieldValues::F64(v) = &mut f.values {
+                v.iter_mut().for_each(|x| *x *= step as f64);
+            }
+        }
+        let bodies = format!("vtu/bodies_{step}.vtu");
+        write_vtu(&dir.join(&bodies), &g).unwrap();
+        let mut edge = Grid {
+            points: g.points.clone(),
+            ..Grid::default()
+        };
+        edge.push_cell(21, [0, 1, 4]);
+        edge.cell_data.push(Field {
+            name: "p_N".into(),
+            components: 1,
+            values: FieldValues::F64(vec![-(step as f64)]),
+        });
+        let interface = format!("vtu/interface_{step}.vtu");
+        write_vtu(&dir.join(&interface), &edge).unwrap();
+        let time = step as f64 * 0.5;
+        entries.push(PvdEntry {
+            time,
+            part: 0,
+            name: "bodies".into(),
+            file: bodies.into(),
+        });
+        entries.push(PvdEntry {
+            time,
+            part: 1,
+            name: "interface".into(),
+            file: interface.into(),
+        });
+    }
+    write_pvd(&dir.join("run.pvd"), &entries).unwrap();
+    write_vtu(&dir.join("block_multiple.vtu"), &block_multiple_grid()).unwrap();
+    write_vtu(&dir.join("empty.vtu"), &Grid::default()).unwrap();
+    let mut table = CsvTable::new(["time", "load, N", "u_y"]);
+    table.rows = vec![vec![0.5, 1e-300, -1.0 / 3.0], vec![1.0, 6.02e23, 0.1]];
+    write_csv(&dir.join("history.csv"), &table).unwrap();
 }

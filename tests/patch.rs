@@ -76,10 +76,9 @@ fn traction_patch(analysis: &str, triangles: bool) {
         .iter()
         .filter(|s| s.stress != Voigt::zeros())
     {
-        let expected = [sxx, syy, sxy];
-        for c in 0..3 {
+        for (c, expected) in [sxx, syy, sxy].into_iter().enumerate() {
             assert!(
-                (s.stress[c] - expected[c]).abs() < TOL * sxx,
+                (s.stress[c] - expected).abs() < TOL * sxx,
                 "stress {:?}",
                 s.stress
             );

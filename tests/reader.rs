@@ -311,6 +311,7 @@ fn bad_files_give_clear_errors() {
     assert_error("empty.msh", &["empty"]);
     assert_error("does_not_exist.msh", &["not found"]);
     assert_error("two_bodies.geo", &["not a gmsh MSH file"]);
+    assert_error("parametric.msh", &["parametric", "Mesh.SaveParametric = 0"]);
 }
 
 #[test]
@@ -379,6 +380,7 @@ fn print_error_messages() {
         "empty.msh",
         "does_not_exist.msh",
         "two_bodies.geo",
+        "parametric.msh",
     ] {
         println!("{}", read_msh(&fixture(name)).unwrap_err());
     }

@@ -5,7 +5,7 @@
 use nalgebra::SMatrix;
 
 use super::quadrature::{QuadPoint, cell_rule};
-use super::shape::cell_shape;
+use super::shape::{ShapeValues, cell_shape};
 use super::{Analysis, ElementMatrix, ElementVector};
 use crate::material::{Material, OutOfPlane, PointState, Voigt, ZZ};
 use crate::mesh::CellKind;
@@ -35,18 +35,12 @@ pub fn point_kinematics(
 ) -> Result<PointKinematics, f64> {
     let s = cell_shape(kind, p.xi, p.eta);
     let nn = kind.node_count();
-    let (mut j11, mut j12, mut j21, mut j22, mut x, mut y) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-    for i in 0..nn {
-        let [xi, yi] = coords[i];
-        j11 += s.dxi[i] * xi;
-        j12 += s.dxi[i] * yi;
-        j21 += s.deta[i] * xi;
-        j22 += s.deta[i] * yi;
-        x += s.n[i] * xi;
-        y += s.n[i] * yi;
-    }
-    let det = j11 * j22 - j12 * j21;
-    if !(det > 0.0) {
+    let Mapping {
+        j: [j11, j12, j21, j22],
+        det,
+        x: [x, y],
+    } = mapping(&s, &coords[..nn]);
+    if det.is_nan() || det <= 0.0 {
         return Err(det);
     }
     let mut b = StrainDisplacement::zeros();
@@ -68,6 +62,31 @@ pub fn point_kinematics(
     })
 }
 
+/// The isoparametric map at one point: Jacobian (∂x/∂ξ, ∂y/∂ξ, ∂x/∂η, ∂y/∂η), its
+/// determinant and the mapped position.
+struct Mapping {
+    j: [f64; 4],
+    det: f64,
+    x: [f64; 2],
+}
+
+fn mapping(s: &ShapeValues, coords: &[[f64; 2]]) -> Mapping {
+    let (mut j, mut x) = ([0.0; 4], [0.0; 2]);
+    for (i, &[xi, yi]) in coords.iter().enumerate() {
+        j[0] += s.dxi[i] * xi;
+        j[1] += s.dxi[i] * yi;
+        j[2] += s.deta[i] * xi;
+        j[3] += s.deta[i] * yi;
+        x[0] += s.n[i] * xi;
+        x[1] += s.n[i] * yi;
+    }
+    Mapping {
+        j,
+        det: j[0] * j[3] - j[1] * j[2],
+        x,
+    }
+}
+
 /// Smallest Jacobian determinant of a cell over its integration points and nodes; a
 /// non-positive value means the cell is inverted or degenerate.
 pub fn min_jacobian(kind: CellKind, coords: &[[f64; 2]; 8]) -> f64 {
@@ -82,17 +101,7 @@ pub fn min_jacobian(kind: CellKind, coords: &[[f64; 2]; 8]) -> f64 {
         .iter()
         .copied()
         .chain(nodes)
-        .map(|p| {
-            let s = cell_shape(kind, p.xi, p.eta);
-            let (mut j11, mut j12, mut j21, mut j22) = (0.0, 0.0, 0.0, 0.0);
-            for i in 0..kind.node_count() {
-                j11 += s.dxi[i] * coords[i][0];
-                j12 += s.dxi[i] * coords[i][1];
-                j21 += s.deta[i] * coords[i][0];
-                j22 += s.deta[i] * coords[i][1];
-            }
-            j11 * j22 - j12 * j21
-        })
+        .map(|p| mapping(&cell_shape(kind, p.xi, p.eta), &coords[..kind.node_count()]).det)
         .fold(f64::INFINITY, f64::min)
 }
 

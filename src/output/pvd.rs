@@ -102,7 +102,7 @@ fn relative_file(dir: &Path, file: &Path) -> String {
 }
 
 /// Escapes the characters that would end or break an XML attribute value.
-fn escape_attr(s: &str) -> String {
+pub(crate) fn escape_attr(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for ch in s.chars() {
         match ch {

@@ -1,0 +1,150 @@
+//! `make bench`: times mesh reading, model set-up, assembly, ordering + symbolic
+//! factorisation, numeric factorisation and solve of a plane-strain elastic block at about
+//! 10k, 100k and 1M unknowns, and appends the figures (machine and date) to BENCHMARKS.md.
+//! Pass `--quick` to stop after the smallest size.
+
+use std::io::Write;
+use std::path::Path;
+use std::time::Instant;
+
+use asperity::assembly::GlobalSystem;
+use asperity::case::Case;
+use asperity::material::PointState;
+use asperity::mesh::{gmsh, msh};
+use asperity::model::Model;
+use asperity::solver::linear::CholeskySolver;
+
+const CASE: &str = r#"
+[mesh]
+file = "unused.msh"
+[analysis]
+type = "plane_strain"
+[[body]]
+group = "block"
+material = { E = 210000.0, nu = 0.3 }
+[[support]]
+group = "bottom"
+uy = 0.0
+[[support]]
+group = "left"
+ux = 0.0
+[[load]]
+group = "top"
+pressure = 10.0
+"#;
+
+fn main() {
+    let quick = std::env::args().any(|a| a == "--quick");
+    let dir = Path::new("build/bench");
+    let case = Case::from_toml(CASE, Path::new("bench.toml")).expect("bench case");
+    let mut rows = Vec::new();
+    for n in [41usize, 129, 408] {
+        let mesh_path = dir.join(format!("block-{n}.msh"));
+        let t = Instant::now();
+        gmsh::mesh_geo(
+            Path::new("geo/block.geo"),
+            1.0,
+            &[("n".into(), n as f64)],
+            &mesh_path,
+        )
+        .expect("gmsh");
+        let t_gmsh = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let mesh = msh::read_msh(&mesh_path).expect("read");
+        let t_read = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let model = Model::build(mesh, &case).expect("model");
+        let t_model = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let mut linear = CholeskySolver::new(&model.pattern).expect("symbolic");
+        let t_symbolic = t.elapsed().as_secs_f64();
+        let states = model.continuum.cells.len() * 9;
+        let committed = vec![PointState::default(); states];
+        let mut trial = committed.clone();
+        let u = vec![0.0; model.dofs.dof_count()];
+        let mut system = GlobalSystem::new(model.pattern.clone(), model.dofs.dof_count());
+        let t = Instant::now();
+        system.assemble(
+            &model.continuum,
+            &model.continuum_coloring,
+            &model.dofs,
+            &u,
+            &committed,
+            &mut trial,
+            true,
+        );
+        let t_assembly = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        linear.factorize(system.matrix()).expect("factorise");
+        let t_factor = t.elapsed().as_secs_f64();
+        // Second numeric factorisation: the cost of every later Newton iteration.
+        let t = Instant::now();
+        linear.factorize(system.matrix()).expect("refactorise");
+        let t_refactor = t.elapsed().as_secs_f64();
+        let mut rhs = vec![0.0; model.dofs.free_count()];
+        model.dofs.gather_free(&model.reference_load, &mut rhs);
+        let t = Instant::now();
+        linear.solve_in_place(&mut rhs);
+        let t_solve = t.elapsed().as_secs_f64();
+        let row = format!(
+            "| {} | {} | {} | {:.2} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.1} |",
+            model.dofs.free_count(),
+            model.continuum.cells.len(),
+            model.pattern.nnz(),
+            t_gmsh,
+            t_read,
+            t_model,
+            t_assembly,
+            t_symbolic,
+            t_factor,
+            t_refactor,
+            t_solve,
+            linear.factor_nnz() as f64 * 8.0 / 1e6,
+        );
+        println!("{row}");
+        rows.push(row);
+        if quick {
+            break;
+        }
+    }
+    append_to_benchmarks(&rows);
+}
+
+fn append_to_benchmarks(rows: &[String]) {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
+    let date = std::process::Command::new("date")
+        .arg("-u")
+        .arg("+%Y-%m-%d %H:%M UTC")
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_default();
+    let mut file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open("BENCHMARKS.md")
+        .expect("BENCHMARKS.md");
+    writeln!(
+        file,
+        "\n### Elastic block (plane strain, quad8), {date}, {cpu}, {cores} cores\n"
+    )
+    .unwrap();
+    writeln!(
+        file,
+        "| unknowns | elements | matrix nnz | gmsh [s] | read [s] | model [s] | assembly [s] | AMD+symbolic [s] | factorise [s] | refactorise [s] | solve [s] | factor [MB] |"
+    )
+    .unwrap();
+    writeln!(file, "|---|---|---|---|---|---|---|---|---|---|---|---|").unwrap();
+    for r in rows {
+        writeln!(file, "{r}").unwrap();
+    }
+}
