@@ -1,0 +1,169 @@
+//! The command line as a user meets it: `mesh-info` on a real gmsh fixture, and clear errors
+//! (naming the file, the entity and the problem, with a non-zero exit status) for bad cases.
+use std::path::Path;
+use std::process::Command;
+
+fn asperity(args: &[&str]) -> (bool, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args(args)
+        .output()
+        .expect("runs");
+    let text =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    (out.status.success(), text)
+}
+
+fn fixture(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+/// Writes a case next to a temporary copy-free reference to the two-body fixture.
+fn run_case(body: &str) -> (bool, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let case = dir.path().join("case.toml");
+    std::fs::write(
+        &case,
+        format!(
+            "[mesh]\nfile = \"{}\"\n{body}",
+            fixture("two_bodies_ascii.msh")
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    asperity(&[
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
+#[test]
+fn mesh_info_lists_groups_and_element_counts() {
+    let (ok, text) = asperity(&["mesh-info", &fixture("two_bodies_ascii.msh")]);
+    assert!(ok, "{text}");
+    for expected in [
+        "body_a",
+        "body_b",
+        "contact",
+        "corner",
+        "quad8: 22",
+        "problems: none",
+    ] {
+        assert!(text.contains(expected), "missing '{expected}' in:\n{text}");
+    }
+}
+
+#[test]
+fn mesh_info_on_a_linear_mesh_explains_the_fix() {
+    let (ok, text) = asperity(&["mesh-info", &fixture("linear.msh")]);
+    assert!(!ok);
+    assert!(
+        text.contains("linear.msh") && text.to_lowercase().contains("order"),
+        "{text}"
+    );
+}
+
+const ANALYSIS: &str = "[analysis]\ntype = \"plane_strain\"\n";
+
+#[test]
+fn a_body_that_is_not_in_the_mesh_is_named_with_the_alternatives() {
+    let (ok, text) = run_case(&format!(
+        "{ANALYSIS}[[body]]\ngroup = \"shaft\"\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n"
+    ));
+    assert!(!ok);
+    assert!(
+        text.contains("'shaft'")
+            && text.contains("body_a")
+            && text.contains("two_bodies_ascii.msh"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_support_group_that_does_not_exist_is_named() {
+    let (ok, text) = run_case(&format!(
+        "{ANALYSIS}[[body]]\ngroup = \"body_a\"\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n[[support]]\ngroup = \"base\"\nux = 0.0\n"
+    ));
+    assert!(!ok);
+    assert!(text.contains("'base'") && text.contains("bottom"), "{text}");
+}
+
+#[test]
+fn an_unsupported_body_is_reported_as_such() {
+    // body_b shares no node with body_a and has no support of its own.
+    let (ok, text) = run_case(&format!(
+        "{ANALYSIS}[[body]]\ngroup = \"body_a\"\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n[[body]]\ngroup = \"body_b\"\n\
+         material = {{ E = 1000.0, nu = 0.3 }}\n[[support]]\ngroup = \"bottom\"\nux = 0.0\nuy = 0.0\n[[load]]\n\
+         group = \"top\"\npressure = 1.0\n"
+    ));
+    assert!(!ok);
+    assert!(
+        text.contains("not positive definite") && text.contains("supports"),
+        "{text}"
+    );
+}
+
+#[test]
+fn an_unknown_key_is_named() {
+    let (ok, text) = run_case(&format!(
+        "{ANALYSIS}[[body]]\ngroup = \"body_a\"\nmaterial = {{ E = 1000.0, nu = 0.3, G = 1.0 }}\n"
+    ));
+    assert!(!ok);
+    assert!(text.contains("`G`") && text.contains("case.toml"), "{text}");
+}
+
+#[test]
+fn a_load_on_a_curve_of_no_body_is_reported() {
+    let (ok, text) = run_case(&format!(
+        "{ANALYSIS}[[body]]\ngroup = \"body_a\"\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n[[support]]\ngroup = \"bottom\"\n\
+         ux = 0.0\nuy = 0.0\n[[load]]\ngroup = \"top\"\npressure = 1.0\n"
+    ));
+    assert!(!ok);
+    assert!(
+        text.contains("load 'top'") && text.contains("not an edge of any body"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_successful_run_writes_the_series_and_history() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = dir.path().join("case.toml");
+    std::fs::write(
+        &case,
+        format!(
+            "[mesh]\nfile = \"{}\"\n{ANALYSIS}[[body]]\ngroup = \"body_a\"\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n\
+             [[support]]\ngroup = \"bottom\"\nux = 0.0\nuy = 0.0\n[[support]]\ngroup = \"corner\"\nux = 0.0\n\
+             [steps]\nfactors = [0.5, 1.0]\n",
+            fixture("two_bodies_ascii.msh")
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let (ok, text) = asperity(&[
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{text}");
+    for f in [
+        "bodies_0001.vtu",
+        "bodies_0002.vtu",
+        "results.pvd",
+        "history.csv",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    assert!(
+        text.contains("unknowns") && text.contains("reaction 'bottom'"),
+        "{text}"
+    );
+    let history = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    assert_eq!(history.lines().count(), 3, "{history}");
+}
