@@ -82,7 +82,9 @@ fn main() {
         linear.factorize(system.matrix()).expect("refactorise");
         let t_refactor = t.elapsed().as_secs_f64();
         let mut rhs = vec![0.0; model.dofs.free_count()];
-        model.dofs.gather_free(&model.reference_load, &mut rhs);
+        let mut load = vec![0.0; model.dofs.dof_count()];
+        model.external_force(1.0, &mut load);
+        model.dofs.gather_free(&load, &mut rhs);
         let t = Instant::now();
         linear.solve_in_place(&mut rhs);
         let t_solve = t.elapsed().as_secs_f64();

@@ -10,6 +10,8 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::element::Analysis;
+use crate::element::interface6::InterfaceRule;
+use crate::mesh::interface::Pairing;
 use crate::{Error, Result};
 
 /// A parsed case file.
@@ -25,6 +27,9 @@ pub struct Case {
     pub supports: Vec<SupportSpec>,
     #[serde(default, rename = "load")]
     pub loads: Vec<LoadSpec>,
+    /// Contact pairs carried by interface elements.
+    #[serde(default, rename = "contact")]
+    pub contacts: Vec<ContactSpec>,
     #[serde(default)]
     pub steps: Steps,
     #[serde(default)]
@@ -92,6 +97,8 @@ pub struct SupportSpec {
     /// y (or z) displacement.
     #[serde(alias = "uz")]
     pub uy: Option<f64>,
+    /// This support's own history: one factor per step (default: the `[steps]` factors).
+    pub factors: Option<Vec<f64>>,
 }
 
 /// A load at load factor 1 (it scales with the load factor).
@@ -107,6 +114,129 @@ pub struct LoadSpec {
     /// Force (F_x, F_y) in N applied at each node of a physical point group (in axisymmetry
     /// the total over the ring).
     pub force: Option<[f64; 2]>,
+    /// This load's own history: one factor per step (default: the `[steps]` factors).
+    pub factors: Option<Vec<f64>>,
+}
+
+/// A contact pair: which curves face each other, how their nodes are paired, the interface
+/// law and its integration rule.
+///
+/// Give either `side_a` and `side_b` (two physical curves: coincident but distinct nodes, or,
+/// with `pairing = "ordered"`, non-coincident curves with equal node counts), or `curve`,
+/// `body_a` and `body_b` (one curve of a conforming mesh, split here).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// Name used in output files and messages (default: "<side_a>-<side_b>" or the curve).
+    pub name: Option<String>,
+    pub side_a: Option<String>,
+    pub side_b: Option<String>,
+    /// `"coincident"` (default with side_a/side_b) or `"ordered"`.
+    pub pairing: Option<PairingKind>,
+    /// The shared curve of a conforming mesh to split.
+    pub curve: Option<String>,
+    pub body_a: Option<String>,
+    pub body_b: Option<String>,
+    /// Integration rule: `"newton_cotes"` (default, lumped) or `"gauss"`.
+    #[serde(default)]
+    pub integration: InterfaceRule,
+    /// Initial interference δ in mm (positive: the faces overlap by δ at the start, as in a
+    /// shrink fit; negative: an initial gap). Added to the gap measured from the geometry.
+    #[serde(default)]
+    pub interference: f64,
+    pub law: LawSpec,
+}
+
+/// How the nodes of `side_a` and `side_b` are paired.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PairingKind {
+    Coincident,
+    Ordered,
+}
+
+/// The interface law of a contact pair and its parameters.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum LawSpec {
+    /// Linear normal stiffness (compression only), linear tangential stiffness and ideal
+    /// Coulomb friction.
+    LinearCoulomb {
+        /// k_N in MPa/mm.
+        normal_stiffness: f64,
+        /// k_T in MPa/mm.
+        tangential_stiffness: f64,
+        /// Coulomb coefficient μ (default 0: frictionless).
+        #[serde(default)]
+        friction: f64,
+    },
+}
+
+impl LawSpec {
+    /// The law object, or a message saying which parameter is wrong.
+    pub fn build(&self) -> std::result::Result<Box<dyn crate::contact::InterfaceLaw>, String> {
+        match *self {
+            LawSpec::LinearCoulomb {
+                normal_stiffness,
+                tangential_stiffness,
+                friction,
+            } => Ok(Box::new(crate::contact::linear::LinearCoulomb::new(
+                normal_stiffness,
+                tangential_stiffness,
+                friction,
+            )?)),
+        }
+    }
+}
+
+impl ContactSpec {
+    /// The pair's name.
+    pub fn name(&self) -> String {
+        if let Some(n) = &self.name {
+            return n.clone();
+        }
+        match (&self.side_a, &self.side_b, &self.curve) {
+            (Some(a), Some(b), _) => format!("{a}-{b}"),
+            (_, _, Some(c)) => c.clone(),
+            _ => "contact".into(),
+        }
+    }
+
+    /// The pairing recipe.
+    pub fn pairing(&self) -> std::result::Result<Pairing, String> {
+        let name = self.name();
+        match (
+            &self.side_a,
+            &self.side_b,
+            &self.curve,
+            &self.body_a,
+            &self.body_b,
+        ) {
+            (Some(a), Some(b), None, None, None) => {
+                Ok(match self.pairing.unwrap_or(PairingKind::Coincident) {
+                    PairingKind::Coincident => Pairing::Coincident {
+                        side_a: a.clone(),
+                        side_b: b.clone(),
+                    },
+                    PairingKind::Ordered => Pairing::Ordered {
+                        side_a: a.clone(),
+                        side_b: b.clone(),
+                    },
+                })
+            }
+            (None, None, Some(c), Some(a), Some(b)) if self.pairing.is_none() => {
+                Ok(Pairing::Split {
+                    curve: c.clone(),
+                    body_a: a.clone(),
+                    body_b: b.clone(),
+                })
+            }
+            _ => Err(format!(
+                "[[contact]] '{name}': give either side_a and side_b (with optional pairing), or curve, body_a and \
+                 body_b"
+            )),
+        }
+    }
 }
 
 /// The load schedule: load factors of the steps, in order.
@@ -158,6 +288,13 @@ pub struct SolverSpec {
     /// Relative tolerance on the displacement correction: ‖δu‖ ≤ tol · ‖u‖.
     #[serde(default = "default_tolerance")]
     pub displacement_tolerance: f64,
+    /// How often a step that fails to converge is halved and retried.
+    #[serde(default = "default_max_cutbacks")]
+    pub max_cutbacks: usize,
+}
+
+fn default_max_cutbacks() -> usize {
+    8
 }
 
 fn default_max_iterations() -> usize {
@@ -173,6 +310,7 @@ impl Default for SolverSpec {
             max_iterations: default_max_iterations(),
             force_tolerance: default_tolerance(),
             displacement_tolerance: default_tolerance(),
+            max_cutbacks: default_max_cutbacks(),
         }
     }
 }
@@ -297,7 +435,35 @@ impl Case {
                 return Err(format!("[[load]] '{}': values must be finite", l.group));
             }
         }
-        self.steps.factors()?;
+        for c in &self.contacts {
+            c.pairing()?;
+            c.law
+                .build()
+                .map_err(|m| format!("[[contact]] '{}': {m}", c.name()))?;
+            if !c.interference.is_finite() {
+                return Err(format!(
+                    "[[contact]] '{}': interference must be finite",
+                    c.name()
+                ));
+            }
+        }
+        let steps = self.steps.factors()?.len();
+        let own = self
+            .supports
+            .iter()
+            .map(|s| (&s.group, &s.factors, "support"));
+        for (group, factors, what) in
+            own.chain(self.loads.iter().map(|l| (&l.group, &l.factors, "load")))
+        {
+            if let Some(f) = factors
+                && (f.len() != steps || f.iter().any(|x| !x.is_finite()))
+            {
+                return Err(format!(
+                    "[[{what}]] '{group}': `factors` needs one finite value per step ({steps}), got {}",
+                    f.len()
+                ));
+            }
+        }
         let s = &self.solver;
         let positive = |x: f64| x > 0.0;
         if s.max_iterations == 0

@@ -9,12 +9,15 @@ use std::collections::HashMap;
 
 use crate::assembly::{Coloring, DofMap, ElementSet, SparsityPattern};
 use crate::case::{Case, LoadSpec, SupportSpec};
+use crate::contact::{InterfaceLaw, InterfaceState};
 use crate::element::continuum::{evaluate_cell, min_jacobian};
+use crate::element::interface6::{InterfaceElement, InterfaceRule, evaluate_interface};
 use crate::element::quadrature::{GAUSS3, MAX_CELL_POINTS};
 use crate::element::shape::line3;
 use crate::element::{Analysis, ElementMatrix, ElementVector};
 use crate::material::elastic::LinearElastic;
 use crate::material::{Material, PointState};
+use crate::mesh::interface::{InterfaceTopology, insert_interface};
 use crate::mesh::{CellKind, Line3, Mesh, PhysicalGroup};
 use crate::{Error, Result};
 
@@ -79,6 +82,68 @@ impl ElementSet for ContinuumSet {
     }
 }
 
+/// A contact pair: its law, interference and the range of its elements in
+/// [`InterfaceSet::elements`].
+#[derive(Debug)]
+pub struct ContactPair {
+    pub name: String,
+    pub law: Box<dyn InterfaceLaw>,
+    /// Initial interference δ in mm (positive: overlap).
+    pub interference: f64,
+    pub elements: std::ops::Range<usize>,
+}
+
+/// All interface elements of the model, pair after pair.
+#[derive(Debug)]
+pub struct InterfaceSet {
+    pub analysis: Analysis,
+    pub elements: Vec<InterfaceElement>,
+    pub pairs: Vec<ContactPair>,
+}
+
+/// Integration points per interface element.
+pub const INTERFACE_POINTS: usize = 3;
+
+impl ElementSet for InterfaceSet {
+    type State = InterfaceState;
+
+    fn len(&self) -> usize {
+        self.elements.len()
+    }
+
+    fn nodes(&self, e: usize) -> &[u32] {
+        &self.elements[e].nodes
+    }
+
+    fn points_per_element(&self) -> usize {
+        INTERFACE_POINTS
+    }
+
+    fn evaluate(
+        &self,
+        e: usize,
+        u: &ElementVector,
+        committed: &[InterfaceState],
+        trial: &mut [InterfaceState],
+        k: Option<&mut ElementMatrix>,
+        f: &mut ElementVector,
+    ) {
+        let element = &self.elements[e];
+        let pair = &self.pairs[element.pair as usize];
+        evaluate_interface(
+            &self.analysis,
+            element,
+            pair.interference,
+            pair.law.as_ref(),
+            u,
+            committed,
+            trial,
+            k,
+            f,
+        );
+    }
+}
+
 /// A named set of prescribed dofs whose reaction force is reported.
 #[derive(Clone, Debug)]
 pub struct Support {
@@ -96,15 +161,86 @@ pub struct Model {
     pub bodies: Vec<String>,
     pub continuum: ContinuumSet,
     pub continuum_coloring: Coloring,
+    /// Interface elements of the contact pairs.
+    pub interface: InterfaceSet,
+    pub interface_coloring: Coloring,
     /// Supports in case-file order, then the automatic axis support ("axis": u_r = 0 on r = 0) in
     /// axisymmetry.
     pub supports: Vec<Support>,
-    /// Prescribed dofs and their values at load factor 1.
-    pub prescribed: Vec<(usize, f64)>,
-    /// External nodal forces at load factor 1, over all dofs.
-    pub reference_load: Vec<f64>,
+    /// Prescribed dofs: (dof, value at factor 1, amplitude in [`Model::schedule`]).
+    pub prescribed: Vec<(usize, f64, usize)>,
+    /// External nodal forces: (dof, force at factor 1, amplitude).
+    pub nodal_loads: Vec<(usize, f64, usize)>,
+    /// Load histories.
+    pub schedule: Schedule,
     pub dofs: DofMap,
     pub pattern: SparsityPattern,
+}
+
+/// Load histories ("amplitudes"): amplitude 0 is the case's `[steps]` schedule, and every
+/// support or load with its own `factors` adds one. An amplitude is piecewise linear in the
+/// pseudo-time τ ∈ [0, steps]: 0 at τ = 0 and `factors[j − 1]` at τ = j, so that a step cut
+/// back into sub-increments moves every load along its own straight line.
+#[derive(Clone, Debug)]
+pub struct Schedule {
+    amplitudes: Vec<Vec<f64>>,
+}
+
+impl Schedule {
+    /// Schedule with the global factors only.
+    pub fn new(factors: Vec<f64>) -> Self {
+        Self {
+            amplitudes: vec![factors],
+        }
+    }
+
+    /// Adds an amplitude (or returns 0, the global one, for `None`).
+    fn add(&mut self, factors: &Option<Vec<f64>>) -> usize {
+        match factors {
+            Some(f) => {
+                self.amplitudes.push(f.clone());
+                self.amplitudes.len() - 1
+            }
+            None => 0,
+        }
+    }
+
+    /// Number of steps.
+    pub fn steps(&self) -> usize {
+        self.amplitudes[0].len()
+    }
+
+    /// The global load factor at the end of step `step` (1-based).
+    pub fn load_factor(&self, step: usize) -> f64 {
+        self.amplitudes[0][step - 1]
+    }
+
+    /// Value of amplitude `k` at pseudo-time `time`.
+    pub fn value(&self, k: usize, time: f64) -> f64 {
+        let a = &self.amplitudes[k];
+        let knot = |j: usize| if j == 0 { 0.0 } else { a[j - 1] };
+        let time = time.clamp(0.0, a.len() as f64);
+        let j = (time.ceil() as usize).max(1);
+        let theta = time - (j - 1) as f64;
+        knot(j - 1) + theta * (knot(j) - knot(j - 1))
+    }
+}
+
+impl Model {
+    /// Sets the prescribed components of `u` to their values at pseudo-time `time`.
+    pub fn apply_prescribed(&self, time: f64, u: &mut [f64]) {
+        for &(dof, value, k) in &self.prescribed {
+            u[dof] = value * self.schedule.value(k, time);
+        }
+    }
+
+    /// External nodal forces over all dofs at pseudo-time `time`.
+    pub fn external_force(&self, time: f64, f: &mut [f64]) {
+        f.fill(0.0);
+        for &(dof, value, k) in &self.nodal_loads {
+            f[dof] += value * self.schedule.value(k, time);
+        }
+    }
 }
 
 /// Name of the automatic support of axisymmetric models.
@@ -112,8 +248,20 @@ pub const AXIS_SUPPORT: &str = "axis";
 
 impl Model {
     /// Builds the model of `case` on `mesh`.
-    pub fn build(mesh: Mesh, case: &Case) -> Result<Self> {
+    pub fn build(mut mesh: Mesh, case: &Case) -> Result<Self> {
         let analysis = case.analysis;
+        // Interfaces first: splitting a conforming curve re-points body B's cells.
+        let body_names: Vec<&str> = case.bodies.iter().map(|b| b.group.as_str()).collect();
+        let mut topologies = Vec::new();
+        for spec in &case.contacts {
+            let pairing = spec.pairing().map_err(Error::Model)?;
+            topologies.push(insert_interface(
+                &mut mesh,
+                &pairing,
+                &spec.name(),
+                &body_names,
+            )?);
+        }
         let (bodies, continuum) = build_continuum(&mesh, case)?;
         let node_count = mesh.nodes.len();
         let mut in_body = vec![false; node_count];
@@ -123,10 +271,15 @@ impl Model {
             }
         }
         let scale = model_scale(&mesh);
+        let interface = build_interface(&mesh, case, topologies, scale)?;
 
-        let mut prescribed: Vec<Option<(f64, usize)>> = vec![None; 2 * node_count];
+        let factors = case.steps.factors().map_err(Error::Model)?;
+        let mut schedule = Schedule::new(factors);
+        // Per dof: (value, amplitude, index of the support that set it).
+        let mut prescribed: Vec<Option<(f64, usize, usize)>> = vec![None; 2 * node_count];
         let mut supports = Vec::new();
         for (i, spec) in case.supports.iter().enumerate() {
+            let amplitude = schedule.add(&spec.factors);
             let nodes = support_nodes(&mesh, spec, &in_body)?;
             let mut dofs = Vec::new();
             for n in nodes {
@@ -134,12 +287,14 @@ impl Model {
                     let Some(value) = value else { continue };
                     let dof = 2 * n as usize + c;
                     match prescribed[dof] {
-                        Some((v, j))
-                            if (v - value).abs() > 1e-12 * v.abs().max(value.abs()).max(1e-300) =>
+                        Some((v, k, j))
+                            if (v != 0.0 || value != 0.0)
+                                && (k != amplitude
+                                    || (v - value).abs() > 1e-12 * v.abs().max(value.abs())) =>
                         {
                             return Err(Error::Model(format!(
-                                "supports '{}' and '{}' prescribe different {} displacements ({v} and {value}) at node {} \
-                                 ({:?})",
+                                "supports '{}' and '{}' prescribe different {} displacement histories ({v} and \
+                                 {value} at factor 1) at node {} ({:?})",
                                 case.supports[j].group,
                                 spec.group,
                                 ["x", "y"][c],
@@ -149,7 +304,7 @@ impl Model {
                         }
                         Some(_) => {}
                         None => {
-                            prescribed[dof] = Some((value, i));
+                            prescribed[dof] = Some((value, amplitude, i));
                             dofs.push(dof);
                         }
                     }
@@ -180,20 +335,22 @@ impl Model {
         let prescribed = prescribed
             .iter()
             .enumerate()
-            .filter_map(|(d, p)| p.map(|(v, _)| (d, v)))
+            .filter_map(|(d, p)| p.map(|(v, k, _)| (d, v, k)))
             .collect();
 
-        let mut reference_load = vec![0.0; 2 * node_count];
+        let mut nodal_loads = Vec::new();
+        let mut load = vec![0.0; 2 * node_count];
         let edges = EdgeIndex::new(&continuum);
         for spec in &case.loads {
-            add_load(
-                &mesh,
-                &analysis,
-                &edges,
-                spec,
-                &in_body,
-                &mut reference_load,
-            )?;
+            load.fill(0.0);
+            add_load(&mesh, &analysis, &edges, spec, &in_body, &mut load)?;
+            let amplitude = schedule.add(&spec.factors);
+            nodal_loads.extend(
+                load.iter()
+                    .enumerate()
+                    .filter(|(_, f)| **f != 0.0)
+                    .map(|(d, f)| (d, *f, amplitude)),
+            );
         }
 
         let dofs = DofMap::new(&fixed);
@@ -202,25 +359,92 @@ impl Model {
                 "every degree of freedom is prescribed: nothing to solve".into(),
             ));
         }
-        let pattern = SparsityPattern::new(
-            node_count,
-            &dofs,
-            (0..continuum.len()).map(|e| continuum.nodes(e)),
-        );
+        let connectivity = (0..continuum.len())
+            .map(|e| continuum.nodes(e))
+            .chain((0..interface.len()).map(|e| interface.nodes(e)));
+        let pattern = SparsityPattern::new(node_count, &dofs, connectivity);
         let continuum_coloring = Coloring::new(&continuum, node_count);
+        let interface_coloring = Coloring::new(&interface, node_count);
         Ok(Self {
             mesh,
             analysis,
             bodies,
             continuum,
             continuum_coloring,
+            interface,
+            interface_coloring,
             supports,
             prescribed,
-            reference_load,
+            nodal_loads,
+            schedule,
             dofs,
             pattern,
         })
     }
+}
+
+/// The interface elements of all contact pairs.
+///
+/// Axis (paper §3.3.1): with Newton-Cotes integration a point on the axis r = 0 has zero
+/// area, so the pair on the axis would carry no stiffness. The paper moves the first
+/// interface element off the axis; the equivalent used here integrates every element that
+/// touches the axis with 3-point Gauss instead, whose points lie off the axis: the axis pair
+/// is then coupled to its neighbours with positive stiffness (∫ N₀² 2πr ds > 0), and the rest
+/// of the interface keeps the lumped rule.
+fn build_interface(
+    mesh: &Mesh,
+    case: &Case,
+    topologies: Vec<InterfaceTopology>,
+    scale: f64,
+) -> Result<InterfaceSet> {
+    let mut elements = Vec::new();
+    let mut pairs = Vec::new();
+    for (p, (spec, topology)) in case.contacts.iter().zip(topologies).enumerate() {
+        let name = spec.name();
+        let law = spec
+            .law
+            .build()
+            .map_err(|m| Error::Model(format!("contact '{name}': {m}")))?;
+        let start = elements.len();
+        for (nodes, offsets) in topology.elements.iter().zip(&topology.offsets) {
+            let b_coords = [3, 4, 5].map(|i| mesh.nodes[nodes[i] as usize]);
+            let on_axis = case.analysis.is_axisymmetric()
+                && b_coords.iter().any(|x| x[0].abs() <= 1e-9 * scale);
+            let rule = if on_axis {
+                InterfaceRule::Gauss
+            } else {
+                spec.integration
+            };
+            elements.push(InterfaceElement {
+                nodes: *nodes,
+                b_coords,
+                offsets: *offsets,
+                pair: p as u32,
+                rule,
+            });
+        }
+        if elements.len() == start {
+            return Err(Error::Model(format!(
+                "contact '{name}': no interface elements were found"
+            )));
+        }
+        tracing::info!(
+            "contact '{name}': {} interface elements, {}",
+            elements.len() - start,
+            law.describe()
+        );
+        pairs.push(ContactPair {
+            name,
+            law,
+            interference: spec.interference,
+            elements: start..elements.len(),
+        });
+    }
+    Ok(InterfaceSet {
+        analysis: case.analysis,
+        elements,
+        pairs,
+    })
 }
 
 /// Largest coordinate extent of the mesh (for relative tolerances).
@@ -372,7 +596,7 @@ fn axis_support(
     mesh: &Mesh,
     in_body: &[bool],
     scale: f64,
-    prescribed: &mut [Option<(f64, usize)>],
+    prescribed: &mut [Option<(f64, usize, usize)>],
     index: usize,
 ) -> Result<Support> {
     let tol = 1e-9 * scale;
@@ -386,7 +610,7 @@ fn axis_support(
         }
         if p[0] <= tol {
             let dof = 2 * n;
-            if let Some((v, _)) = prescribed[dof] {
+            if let Some((v, _, _)) = prescribed[dof] {
                 if v != 0.0 {
                     return Err(Error::Model(format!(
                         "node {} on the axis has a prescribed radial displacement {v}; it must be 0",
@@ -394,7 +618,7 @@ fn axis_support(
                     )));
                 }
             } else {
-                prescribed[dof] = Some((0.0, index));
+                prescribed[dof] = Some((0.0, 0, index));
                 dofs.push(dof);
             }
         }

@@ -5,8 +5,11 @@
 //! - `mesh.msh` when the case meshes a `.geo` script;
 //! - `bodies_NNNN.vtu` per converged step and `results.pvd` listing them (time = step
 //!   number, since load factors may go down again when unloading);
-//! - `history.csv`: per step the load factor, Newton iterations, final residual and the
-//!   reaction force of every support.
+//! - `interface_NNNN.vtu` (when the case has contact pairs): the contact fields on the
+//!   interface, listed in `results.pvd` as a second part;
+//! - `contact_<pair>_NNNN.csv`: the contact fields along each pair's curve;
+//! - `history.csv`: per step the load factor, increments, Newton iterations, final residual,
+//!   the reaction force of every support and the resultant forces of every contact pair.
 //!
 //! Every file is rewritten after each converged step, so a run that stops early leaves the
 //! results of all converged steps on disk.
@@ -20,6 +23,7 @@ use crate::model::Model;
 use crate::output::csv::{CsvTable, write_csv};
 use crate::output::pvd::{PvdEntry, write_pvd};
 use crate::output::vtu::write_vtu;
+use crate::post::interface::{InterfaceOutput, resultants};
 use crate::post::{BodyPoints, body_grid, reactions};
 use crate::solver::stepping::{RunStatistics, StepResult, run_steps};
 use crate::{Error, Result};
@@ -49,8 +53,15 @@ impl std::fmt::Display for RunSummary {
         )?;
         writeln!(
             f,
-            "steps: {} converged, {} Newton iterations; final relative residual {:.2e}",
-            s.steps, s.iterations, s.last_residual
+            "steps: {} converged in {} increments ({} cut-backs), {} Newton iterations ({} unsymmetric \
+             solves, {} BiCGSTAB iterations); final relative residual {:.2e}",
+            s.steps,
+            s.increments,
+            s.cutbacks,
+            s.iterations,
+            s.unsymmetric_solves,
+            s.krylov_iterations,
+            s.last_residual
         )?;
         writeln!(
             f,
@@ -119,14 +130,10 @@ pub fn run(case: &Case, out_dir: &Path, progress: bool) -> Result<RunSummary> {
         "model built ({})",
         model.analysis.name()
     );
-    let factors = case.steps.factors().map_err(|message| Error::Case {
-        path: case.path.clone(),
-        message,
-    })?;
-    let bar = progress_bar(progress, factors.len());
+    let bar = progress_bar(progress, model.schedule.steps());
     let mut writer = StepWriter::new(&model, out_dir, case.output.vtu);
     let mut last_reactions = Vec::new();
-    let (_, stats) = run_steps(&model, &factors, &case.solver.into(), |step| {
+    let (_, stats) = run_steps(&model, &case.solver.into(), |step| {
         let t = Instant::now();
         last_reactions = writer.write(step)?;
         bar.inc(1);
@@ -169,6 +176,7 @@ fn progress_bar(enabled: bool, steps: usize) -> indicatif::ProgressBar {
 struct StepWriter<'m> {
     model: &'m Model,
     points: BodyPoints,
+    interface: InterfaceOutput,
     out_dir: PathBuf,
     vtu: bool,
     series: Vec<PvdEntry>,
@@ -177,17 +185,34 @@ struct StepWriter<'m> {
 
 impl<'m> StepWriter<'m> {
     fn new(model: &'m Model, out_dir: &Path, vtu: bool) -> Self {
-        let mut columns: Vec<String> = ["step", "load_factor", "iterations", "residual"]
-            .iter()
-            .map(|s| s.to_string())
-            .collect();
+        let mut columns: Vec<String> = [
+            "step",
+            "load_factor",
+            "increments",
+            "iterations",
+            "residual",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
         for s in &model.supports {
             columns.push(format!("reaction_{}_x", s.name));
             columns.push(format!("reaction_{}_y", s.name));
         }
+        for p in &model.interface.pairs {
+            for quantity in [
+                "normal_force",
+                "tangential_force",
+                "force_on_b_x",
+                "force_on_b_y",
+            ] {
+                columns.push(format!("{}_{quantity}", p.name));
+            }
+        }
         Self {
             model,
             points: BodyPoints::new(model),
+            interface: InterfaceOutput::new(model),
             out_dir: out_dir.to_path_buf(),
             vtu,
             series: Vec::new(),
@@ -201,6 +226,7 @@ impl<'m> StepWriter<'m> {
     /// Writes the step's files; returns the reactions of the supports.
     fn write(&mut self, step: &StepResult) -> Result<Vec<[f64; 2]>> {
         let reactions = reactions(self.model, step.internal_force, step.external_force);
+        let states = &step.solution.interface_committed;
         if self.vtu {
             let name = format!("bodies_{:04}.vtu", step.step);
             let grid = body_grid(
@@ -216,15 +242,39 @@ impl<'m> StepWriter<'m> {
                 name: "bodies".into(),
                 file: name.into(),
             });
+            if !self.model.interface.elements.is_empty() {
+                let name = format!("interface_{:04}.vtu", step.step);
+                write_vtu(
+                    &self.out_dir.join(&name),
+                    &self.interface.grid(self.model, states),
+                )?;
+                self.series.push(PvdEntry {
+                    time: step.step as f64,
+                    part: 1,
+                    name: "interface".into(),
+                    file: name.into(),
+                });
+            }
             write_pvd(&self.out_dir.join("results.pvd"), &self.series)?;
+        }
+        let tables = self.interface.tables(self.model, states);
+        for (pair, table) in self.model.interface.pairs.iter().zip(&tables) {
+            write_csv(
+                &self
+                    .out_dir
+                    .join(format!("contact_{}_{:04}.csv", pair.name, step.step)),
+                table,
+            )?;
         }
         let mut row = vec![
             step.step as f64,
             step.load_factor,
+            step.increments as f64,
             step.newton.iterations as f64,
             *step.newton.residuals.last().unwrap_or(&0.0),
         ];
         row.extend(reactions.iter().flatten());
+        row.extend(resultants(self.model, states).iter().flatten());
         self.history.rows.push(row);
         write_csv(&self.out_dir.join("history.csv"), &self.history)?;
         Ok(reactions)

@@ -140,14 +140,11 @@ fn axisymmetric_patch(mesh: Mesh) {
     let mut model = Model::build(mesh, &case).unwrap();
     // Replace the placeholder values by the exact field on every prescribed dof.
     let nodes = model.mesh.nodes.clone();
-    for (dof, value) in &mut model.prescribed {
+    for (dof, value, _) in &mut model.prescribed {
         let p = nodes[*dof / 2];
         *value = if *dof % 2 == 0 { c * p[0] } else { d * p[1] };
     }
-    let (solution, _) = run_steps(&model, &[1.0], &NewtonSettings::from(case.solver), |_| {
-        Ok(0.0)
-    })
-    .unwrap();
+    let (solution, _) = run_steps(&model, &NewtonSettings::from(case.solver), |_| Ok(0.0)).unwrap();
     let interior = (0..nodes.len()).filter(|&n| model.dofs.equation(2 * n).is_some());
     assert!(
         interior.clone().count() > 5,

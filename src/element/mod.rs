@@ -7,6 +7,7 @@
 //! allocates nothing per element.
 
 pub mod continuum;
+pub mod interface6;
 pub mod quadrature;
 pub mod shape;
 

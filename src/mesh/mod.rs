@@ -10,6 +10,7 @@
 //! - line3 (gmsh type 8, VTK 21): end nodes 0, 1, then the mid node 2.
 
 pub mod gmsh;
+pub mod interface;
 pub mod msh;
 
 use std::path::PathBuf;

@@ -5,14 +5,22 @@
 //! into the same factor storage with the same workspace ([`CholeskySolver::factorize`]).
 //! faer's high-level API would allocate a fresh workspace on every call (about 1.3 GB at a
 //! million unknowns, see DESIGN.md), so the low-level API is used with a buffer kept here.
+//!
+//! Friction makes the tangent unsymmetric (paper Eq. 21). faer's sparse LU fills badly on FE
+//! matrices (DESIGN.md), so the unsymmetric path keeps the Cholesky machinery: it factors
+//! the symmetric part ½(K + Kᵀ) with the same symbolic factorisation and uses it as the
+//! preconditioner of BiCGSTAB on the true tangent. The unsymmetric part lives only at
+//! slipping interface points, so few Krylov iterations are needed.
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::matrix_free::bicgstab::{BicgParams, bicgstab, bicgstab_scratch};
+use faer::matrix_free::{IdentityPrecond, InitialGuessStatus, LinOp, Precond};
 use faer::sparse::SparseColMatRef;
 use faer::sparse::linalg::cholesky::{
     LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
 };
-use faer::{Conj, MatMut, Par, Side};
+use faer::{Conj, Mat, MatMut, MatRef, Par, Side};
 
 use crate::assembly::SparsityPattern;
 use crate::{Error, Result};
@@ -24,6 +32,10 @@ pub struct CholeskySolver {
     workspace: MemBuffer,
     par: Par,
     factorized: bool,
+    /// For each stored entry (i, j), the position of (j, i); built on the first unsymmetric
+    /// solve (the pattern is structurally symmetric).
+    transpose: Vec<u32>,
+    symmetric_part: Vec<f64>,
 }
 
 impl std::fmt::Debug for CholeskySolver {
@@ -60,6 +72,8 @@ impl CholeskySolver {
             workspace,
             par,
             factorized: false,
+            transpose: Vec::new(),
+            symmetric_part: Vec::new(),
         })
     }
 
@@ -95,6 +109,67 @@ impl CholeskySolver {
         Ok(())
     }
 
+    /// Solves `A x = rhs` in place for an unsymmetric `matrix` (full pattern stored):
+    /// factors its symmetric part and runs preconditioned BiCGSTAB to a relative residual of
+    /// 1e-12. Returns the number of Krylov iterations.
+    pub fn solve_unsymmetric(
+        &mut self,
+        matrix: SparseColMatRef<'_, u32, f64>,
+        rhs: &mut [f64],
+    ) -> Result<usize> {
+        if self.transpose.is_empty() {
+            self.transpose = transpose_positions(matrix);
+        }
+        let values = matrix.val();
+        self.symmetric_part.clear();
+        self.symmetric_part.extend(
+            values
+                .iter()
+                .zip(&self.transpose)
+                .map(|(v, &t)| 0.5 * (v + values[t as usize])),
+        );
+        let symmetric_part = std::mem::take(&mut self.symmetric_part);
+        let result = self.factorize(SparseColMatRef::new(matrix.symbolic(), &symmetric_part));
+        self.symmetric_part = symmetric_part;
+        result?;
+        let n = rhs.len();
+        let precond = CholeskyPreconditioner {
+            llt: LltRef::new(&self.symbolic, &self.factor),
+            n,
+        };
+        let identity = IdentityPrecond { dim: n };
+        let mut x = Mat::<f64>::zeros(n, 1);
+        let b = MatRef::from_column_major_slice(rhs, n, 1);
+        let mut buffer =
+            MemBuffer::try_new(bicgstab_scratch(identity, precond, matrix, 1, self.par))
+                .map_err(|_| Error::Linear("out of memory for the Krylov workspace".into()))?;
+        let params = BicgParams {
+            initial_guess: InitialGuessStatus::Zero,
+            abs_tolerance: 0.0,
+            rel_tolerance: 1e-12,
+            max_iters: 1000,
+            ..Default::default()
+        };
+        let info = bicgstab(
+            x.as_mut(),
+            identity,
+            precond,
+            matrix,
+            b,
+            params,
+            |_| {},
+            self.par,
+            MemStack::new(&mut buffer),
+        )
+        .map_err(|e| {
+            Error::Linear(format!(
+                "BiCGSTAB on the unsymmetric tangent did not converge: {e:?}"
+            ))
+        })?;
+        rhs.copy_from_slice(x.col(0).try_as_col_major().expect("contiguous").as_slice());
+        Ok(info.iter_count)
+    }
+
     /// Solves `A x = rhs` in place with the last factorisation.
     pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
         assert!(self.factorized, "solve before factorize");
@@ -109,3 +184,68 @@ impl CholeskySolver {
         );
     }
 }
+
+/// Position of the transposed entry of every stored entry of a structurally symmetric
+/// pattern.
+fn transpose_positions(matrix: SparseColMatRef<'_, u32, f64>) -> Vec<u32> {
+    let col_ptr = matrix.symbolic().col_ptr();
+    let rows = matrix.symbolic().row_idx();
+    let mut out = vec![0u32; rows.len()];
+    for j in 0..matrix.ncols() {
+        for k in col_ptr[j] as usize..col_ptr[j + 1] as usize {
+            let i = rows[k] as usize;
+            let (a, b) = (col_ptr[i] as usize, col_ptr[i + 1] as usize);
+            let t = rows[a..b]
+                .binary_search(&(j as u32))
+                .expect("element patterns are structurally symmetric");
+            out[k] = (a + t) as u32;
+        }
+    }
+    out
+}
+
+/// The Cholesky factor of the symmetric part, applied as a preconditioner.
+#[derive(Clone, Copy, Debug)]
+struct CholeskyPreconditioner<'a> {
+    llt: LltRef<'a, u32, f64>,
+    n: usize,
+}
+
+impl LinOp<f64> for CholeskyPreconditioner<'_> {
+    fn apply_scratch(&self, rhs_ncols: usize, par: Par) -> StackReq {
+        self.llt
+            .symbolic()
+            .solve_in_place_scratch::<f64>(rhs_ncols, par)
+    }
+
+    fn nrows(&self) -> usize {
+        self.n
+    }
+
+    fn ncols(&self) -> usize {
+        self.n
+    }
+
+    fn apply(
+        &self,
+        mut out: MatMut<'_, f64>,
+        rhs: MatRef<'_, f64>,
+        par: Par,
+        stack: &mut MemStack,
+    ) {
+        out.copy_from(rhs);
+        self.llt.solve_in_place_with_conj(Conj::No, out, par, stack);
+    }
+
+    fn conj_apply(
+        &self,
+        out: MatMut<'_, f64>,
+        rhs: MatRef<'_, f64>,
+        par: Par,
+        stack: &mut MemStack,
+    ) {
+        self.apply(out, rhs, par, stack);
+    }
+}
+
+impl Precond<f64> for CholeskyPreconditioner<'_> {}

@@ -18,6 +18,8 @@ pub struct NewtonSettings {
     pub max_iterations: usize,
     pub force_tolerance: f64,
     pub displacement_tolerance: f64,
+    /// How often a failed increment is halved and retried.
+    pub max_cutbacks: usize,
 }
 
 impl From<crate::case::SolverSpec> for NewtonSettings {
@@ -26,6 +28,7 @@ impl From<crate::case::SolverSpec> for NewtonSettings {
             max_iterations: s.max_iterations,
             force_tolerance: s.force_tolerance,
             displacement_tolerance: s.displacement_tolerance,
+            max_cutbacks: s.max_cutbacks,
         }
     }
 }
@@ -33,8 +36,9 @@ impl From<crate::case::SolverSpec> for NewtonSettings {
 /// A problem the Newton loop can solve: it assembles internal forces and the tangent.
 pub trait Problem {
     /// Assembles the internal force over all dofs (and the tangent over the free dofs if
-    /// `with_tangent`) into `system` at displacements `u`, updating trial states.
-    fn assemble(&mut self, u: &[f64], system: &mut GlobalSystem, with_tangent: bool);
+    /// `with_tangent`) into `system` at displacements `u`, updating trial states. Returns
+    /// whether the tangent is symmetric.
+    fn assemble(&mut self, u: &[f64], system: &mut GlobalSystem, with_tangent: bool) -> bool;
 }
 
 /// What happened in one increment.
@@ -46,6 +50,9 @@ pub struct NewtonLog {
     pub residuals: Vec<f64>,
     /// Relative size ‖δu‖/‖u‖ of each correction.
     pub corrections: Vec<f64>,
+    /// Linear solves with an unsymmetric tangent, and their BiCGSTAB iterations.
+    pub unsymmetric_solves: usize,
+    pub krylov_iterations: usize,
     pub converged: bool,
     /// Seconds spent assembling, factorising and solving.
     pub assembly_seconds: f64,
@@ -82,7 +89,7 @@ pub fn solve_increment(
     loop {
         let t = std::time::Instant::now();
         system.clear(true);
-        problem.assemble(u, system, true);
+        let symmetric = problem.assemble(u, system, true);
         log.assembly_seconds += t.elapsed().as_secs_f64();
         dofs.gather_free(&system.internal_force, &mut r);
         for (ri, ei) in r.iter_mut().zip(&ext) {
@@ -114,11 +121,17 @@ pub fn solve_increment(
             return Ok(log);
         }
         let t = std::time::Instant::now();
-        linear.factorize(system.matrix())?;
-        log.factorization_seconds += t.elapsed().as_secs_f64();
-        let t = std::time::Instant::now();
-        linear.solve_in_place(&mut r);
-        log.solve_seconds += t.elapsed().as_secs_f64();
+        if symmetric {
+            linear.factorize(system.matrix())?;
+            log.factorization_seconds += t.elapsed().as_secs_f64();
+            let t = std::time::Instant::now();
+            linear.solve_in_place(&mut r);
+            log.solve_seconds += t.elapsed().as_secs_f64();
+        } else {
+            log.krylov_iterations += linear.solve_unsymmetric(system.matrix(), &mut r)?;
+            log.unsymmetric_solves += 1;
+            log.solve_seconds += t.elapsed().as_secs_f64();
+        }
         let before = norm(u);
         dofs.add_free(&r, u);
         last_correction = norm(&r) / norm(u).max(before).max(f64::MIN_POSITIVE);

@@ -1,12 +1,15 @@
 //! Incremental loading: the load factors of the case are applied one after another; each
 //! increment is solved by Newton-Raphson and its integration-point states are committed only
-//! once it has converged.
+//! once it has converged. An increment that fails is halved and retried from the last
+//! converged state, up to `max_cutbacks` times; sub-increments are solved silently and only
+//! the scheduled steps are handed to the output.
 
 use crate::assembly::GlobalSystem;
+use crate::contact::InterfaceState;
 use crate::material::PointState;
-use crate::model::Model;
+use crate::model::{INTERFACE_POINTS, Model};
 use crate::solver::linear::CholeskySolver;
-use crate::solver::newton::{NewtonLog, NewtonSettings, Problem, solve_increment};
+use crate::solver::newton::{NewtonLog, NewtonSettings, Problem, norm, solve_increment};
 use crate::{Error, Result};
 
 /// The evolving solution: displacements and integration-point states.
@@ -18,17 +21,43 @@ pub struct Solution {
     pub committed: Vec<PointState>,
     /// Continuum states of the current iteration.
     pub trial: Vec<PointState>,
+    /// Interface states committed at the last converged step.
+    pub interface_committed: Vec<InterfaceState>,
+    /// Interface states of the current iteration.
+    pub interface_trial: Vec<InterfaceState>,
 }
 
-/// The mechanical problem of a model with its solution state.
+impl Solution {
+    fn new(model: &Model) -> Self {
+        let states = model.continuum.cells.len() * crate::element::quadrature::MAX_CELL_POINTS;
+        let interface = model.interface.elements.len() * INTERFACE_POINTS;
+        Self {
+            u: vec![0.0; model.dofs.dof_count()],
+            committed: vec![PointState::default(); states],
+            trial: vec![PointState::default(); states],
+            interface_committed: vec![InterfaceState::default(); interface],
+            interface_trial: vec![InterfaceState::default(); interface],
+        }
+    }
+
+    fn commit(&mut self) {
+        self.committed.copy_from_slice(&self.trial);
+        self.interface_committed
+            .copy_from_slice(&self.interface_trial);
+    }
+}
+
+/// The mechanical problem of a model: bodies and interfaces, with their states.
 struct Mechanics<'a> {
     model: &'a Model,
     committed: &'a [PointState],
     trial: &'a mut [PointState],
+    interface_committed: &'a [InterfaceState],
+    interface_trial: &'a mut [InterfaceState],
 }
 
 impl Problem for Mechanics<'_> {
-    fn assemble(&mut self, u: &[f64], system: &mut GlobalSystem, with_tangent: bool) {
+    fn assemble(&mut self, u: &[f64], system: &mut GlobalSystem, with_tangent: bool) -> bool {
         let m = self.model;
         system.assemble(
             &m.continuum,
@@ -39,6 +68,19 @@ impl Problem for Mechanics<'_> {
             self.trial,
             with_tangent,
         );
+        system.assemble(
+            &m.interface,
+            &m.interface_coloring,
+            &m.dofs,
+            u,
+            self.interface_committed,
+            self.interface_trial,
+            with_tangent,
+        );
+        !self
+            .interface_trial
+            .iter()
+            .any(InterfaceState::has_unsymmetric_tangent)
     }
 }
 
@@ -48,7 +90,10 @@ pub struct StepResult<'a> {
     /// 1-based step number.
     pub step: usize,
     pub load_factor: f64,
+    /// Newton log of the last (sub-)increment; `iterations` counts all sub-increments.
     pub newton: NewtonLog,
+    /// Number of increments the step took (1 unless it was cut back).
+    pub increments: usize,
     pub solution: &'a Solution,
     /// Internal forces over all dofs (reactions at prescribed dofs).
     pub internal_force: &'a [f64],
@@ -60,7 +105,11 @@ pub struct StepResult<'a> {
 #[derive(Clone, Debug, Default)]
 pub struct RunStatistics {
     pub steps: usize,
+    pub increments: usize,
     pub iterations: usize,
+    pub cutbacks: usize,
+    pub unsymmetric_solves: usize,
+    pub krylov_iterations: usize,
     pub symbolic_seconds: f64,
     pub assembly_seconds: f64,
     pub factorization_seconds: f64,
@@ -71,12 +120,24 @@ pub struct RunStatistics {
     pub last_residual: f64,
 }
 
-/// Runs all load steps of `factors`, calling `on_step` after each converged step. Stops with
-/// an error naming the step, its load factor and the residual history if a step does not
-/// converge; the steps before it have been handed to `on_step` already.
+impl RunStatistics {
+    fn add(&mut self, log: &NewtonLog) {
+        self.increments += 1;
+        self.iterations += log.iterations;
+        self.unsymmetric_solves += log.unsymmetric_solves;
+        self.krylov_iterations += log.krylov_iterations;
+        self.assembly_seconds += log.assembly_seconds;
+        self.factorization_seconds += log.factorization_seconds;
+        self.solve_seconds += log.solve_seconds;
+    }
+}
+
+/// Runs all load steps of the model's schedule, calling `on_step` after each converged step
+/// (it returns the seconds it spent writing). Stops with an error naming the step, its load
+/// factor and the residual history if a step cannot be made to converge by cutting it back;
+/// the steps before it have been handed to `on_step` already.
 pub fn run_steps(
     model: &Model,
-    factors: &[f64],
     settings: &NewtonSettings,
     mut on_step: impl FnMut(&StepResult) -> Result<f64>,
 ) -> Result<(Solution, RunStatistics)> {
@@ -86,65 +147,92 @@ pub fn run_steps(
     stats.symbolic_seconds = t.elapsed().as_secs_f64();
     stats.factor_nnz = linear.factor_nnz();
     let mut system = GlobalSystem::new(model.pattern.clone(), model.dofs.dof_count());
-    let states = model.continuum.cells.len() * crate::element::quadrature::MAX_CELL_POINTS;
-    let mut solution = Solution {
-        u: vec![0.0; model.dofs.dof_count()],
-        committed: vec![PointState::default(); states],
-        trial: vec![PointState::default(); states],
-    };
+    let mut solution = Solution::new(model);
+    let mut converged_u = solution.u.clone();
     let mut f_ext = vec![0.0; model.dofs.dof_count()];
     let mut force_floor: f64 = 0.0;
-    for (i, &factor) in factors.iter().enumerate() {
-        for &(dof, value) in &model.prescribed {
-            solution.u[dof] = factor * value;
-        }
-        for (f, r) in f_ext.iter_mut().zip(&model.reference_load) {
-            *f = factor * r;
-        }
-        let Solution {
-            u,
-            committed,
-            trial,
-        } = &mut solution;
-        let mut problem = Mechanics {
-            model,
-            committed,
-            trial,
+    // Pseudo-time: step j ends at time j (see `Schedule`).
+    let mut time = 0.0;
+    for step in 1..=model.schedule.steps() {
+        let target = step as f64;
+        let mut size = 1.0;
+        let mut cutbacks = 0;
+        let mut increments = 0;
+        let mut iterations = 0;
+        let mut failures: Vec<String> = Vec::new();
+        let log = loop {
+            let trial_time = if time + size >= target - 1e-12 {
+                target
+            } else {
+                time + size
+            };
+            let attempt = solve_at(
+                model,
+                &mut solution,
+                &mut system,
+                &mut linear,
+                &mut f_ext,
+                trial_time,
+                settings,
+                force_floor,
+            );
+            match attempt {
+                Ok(log) if log.converged => {
+                    stats.add(&log);
+                    iterations += log.iterations;
+                    increments += 1;
+                    solution.commit();
+                    converged_u.copy_from_slice(&solution.u);
+                    time = trial_time;
+                    if time == target {
+                        break log;
+                    }
+                    // Grow the sub-increment again after a success.
+                    size *= 2.0;
+                }
+                outcome => {
+                    let at = format!(
+                        "at time {trial_time:.6} (load factor {:.6})",
+                        model.schedule.value(0, trial_time)
+                    );
+                    failures.push(match &outcome {
+                        Ok(log) => format!(
+                            "{at}: relative residuals {}",
+                            log.residuals
+                                .iter()
+                                .map(|r| format!("{r:.2e}"))
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ),
+                        Err(e) => format!("{at}: {e}"),
+                    });
+                    if let Ok(log) = &outcome {
+                        stats.add(log);
+                    }
+                    if cutbacks == settings.max_cutbacks {
+                        return Err(Error::NoConvergence(format!(
+                            "step {step} (load factor {}) did not converge after {cutbacks} cut-backs; the last \
+                             converged state is at time {time:.6}. Attempts:\n  {}",
+                            model.schedule.load_factor(step),
+                            failures.join("\n  ")
+                        )));
+                    }
+                    cutbacks += 1;
+                    stats.cutbacks += 1;
+                    solution.u.copy_from_slice(&converged_u);
+                    size = 0.5 * (trial_time - time);
+                    tracing::info!("step {step}: cutting back to time {:.6}", time + size);
+                }
+            }
         };
-        let log = solve_increment(
-            &mut problem,
-            &model.dofs,
-            &mut system,
-            &mut linear,
-            u,
-            &f_ext,
-            settings,
-            force_floor,
-        )?;
-        stats.iterations += log.iterations;
-        stats.assembly_seconds += log.assembly_seconds;
-        stats.factorization_seconds += log.factorization_seconds;
-        stats.solve_seconds += log.solve_seconds;
-        stats.last_residual = *log.residuals.last().unwrap_or(&0.0);
-        if !log.converged {
-            return Err(Error::NoConvergence(format!(
-                "step {} (load factor {factor}) did not converge in {} iterations; relative residuals: {}",
-                i + 1,
-                log.iterations,
-                log.residuals
-                    .iter()
-                    .map(|r| format!("{r:.3e}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )));
-        }
-        solution.committed.copy_from_slice(&solution.trial);
-        force_floor = force_floor.max(1e-3 * crate::solver::newton::norm(&system.internal_force));
+        force_floor = force_floor.max(1e-3 * norm(&system.internal_force));
         stats.steps += 1;
+        stats.last_residual = *log.residuals.last().unwrap_or(&0.0);
         let result = StepResult {
-            step: i + 1,
-            load_factor: factor,
-            newton: log,
+            step,
+            load_factor: model.schedule.load_factor(step),
+            newton: NewtonLog { iterations, ..log },
+            increments,
             solution: &solution,
             internal_force: &system.internal_force,
             external_force: &f_ext,
@@ -152,4 +240,44 @@ pub fn run_steps(
         stats.output_seconds += on_step(&result)?;
     }
     Ok((solution, stats))
+}
+
+/// One Newton increment to pseudo-time `time` from the current solution.
+#[allow(clippy::too_many_arguments)]
+fn solve_at(
+    model: &Model,
+    solution: &mut Solution,
+    system: &mut GlobalSystem,
+    linear: &mut CholeskySolver,
+    f_ext: &mut [f64],
+    time: f64,
+    settings: &NewtonSettings,
+    force_floor: f64,
+) -> Result<NewtonLog> {
+    model.apply_prescribed(time, &mut solution.u);
+    model.external_force(time, f_ext);
+    let Solution {
+        u,
+        committed,
+        trial,
+        interface_committed,
+        interface_trial,
+    } = solution;
+    let mut problem = Mechanics {
+        model,
+        committed,
+        trial,
+        interface_committed,
+        interface_trial,
+    };
+    solve_increment(
+        &mut problem,
+        &model.dofs,
+        system,
+        linear,
+        u,
+        f_ext,
+        settings,
+        force_floor,
+    )
 }

@@ -184,13 +184,8 @@ pub fn case(body: &str) -> Case {
 /// Builds the model and solves all steps.
 pub fn solve(mesh: Mesh, case: &Case) -> (Model, Solution) {
     let model = Model::build(mesh, case).expect("model builds");
-    let (solution, _) = run_steps(
-        &model,
-        &case.steps.factors().unwrap(),
-        &NewtonSettings::from(case.solver),
-        |_| Ok(0.0),
-    )
-    .expect("solves");
+    let (solution, _) =
+        run_steps(&model, &NewtonSettings::from(case.solver), |_| Ok(0.0)).expect("solves");
     (model, solution)
 }
 
@@ -210,4 +205,155 @@ pub fn fitted_rate(h: &[f64], err: &[f64]) -> f64 {
     let sxy: f64 = x.iter().zip(&y).map(|(a, b)| (a - mx) * (b - my)).sum();
     let sxx: f64 = x.iter().map(|a| (a - mx).powi(2)).sum();
     sxy / sxx
+}
+
+/// Tensor-product quad8 mesh with corner coordinates `xs` × `ys` (mid-side nodes at the
+/// middle), surface group `surface`. Each boundary line is its own entity, so curve groups
+/// can be made afterwards with [`add_curve_group`].
+pub fn tensor(xs: &[f64], ys: &[f64], surface: &str) -> Mesh {
+    let (nx, ny) = (xs.len() - 1, ys.len() - 1);
+    let x0 = xs[0];
+    let y0 = ys[0];
+    let (lx, ly) = (xs[nx] - x0, ys[ny] - y0);
+    // Map the parameter grid onto the given coordinates (piecewise linear per cell).
+    let interp = |v: &[f64], s: f64| {
+        let n = v.len() - 1;
+        let k = ((s * n as f64).floor() as usize).min(n - 1);
+        let t = s * n as f64 - k as f64;
+        v[k] + t * (v[k + 1] - v[k])
+    };
+    let _ = (lx, ly);
+    let mut mesh = structured(nx, ny, 0.0, false, |s, t| [interp(xs, s), interp(ys, t)]);
+    // Re-number line entities one per line; keep the surface and rename it.
+    for (i, l) in mesh.lines.iter_mut().enumerate() {
+        l.entity = 1000 + i as i32;
+    }
+    mesh.points.clear();
+    mesh.groups = vec![PhysicalGroup {
+        dim: 2,
+        tag: 1,
+        name: surface.into(),
+        entities: vec![1],
+    }];
+    mesh
+}
+
+/// Adds a physical curve `name` of the boundary lines whose three nodes satisfy `on`.
+pub fn add_curve_group(mesh: &mut Mesh, name: &str, on: impl Fn([f64; 2]) -> bool) {
+    let entities: Vec<i32> = mesh
+        .lines
+        .iter()
+        .filter(|l| l.nodes.iter().all(|&n| on(mesh.nodes[n as usize])))
+        .map(|l| l.entity)
+        .collect();
+    assert!(!entities.is_empty(), "group {name} would be empty");
+    let tag = mesh.groups.iter().map(|g| g.tag).max().unwrap_or(0) + 1;
+    mesh.groups.push(PhysicalGroup {
+        dim: 1,
+        tag,
+        name: name.into(),
+        entities,
+    });
+}
+
+/// Adds a physical point `name` at the node nearest to `at`.
+pub fn add_point_group(mesh: &mut Mesh, name: &str, at: [f64; 2]) {
+    let d = |p: [f64; 2]| (p[0] - at[0]).powi(2) + (p[1] - at[1]).powi(2);
+    let node = (0..mesh.nodes.len())
+        .min_by(|&a, &b| d(mesh.nodes[a]).total_cmp(&d(mesh.nodes[b])))
+        .unwrap() as u32;
+    let entity = 900_000 + mesh.points.len() as i32;
+    mesh.points.push(PointElement {
+        node,
+        entity,
+        tag: 0,
+    });
+    let tag = mesh.groups.iter().map(|g| g.tag).max().unwrap_or(0) + 1;
+    mesh.groups.push(PhysicalGroup {
+        dim: 0,
+        tag,
+        name: name.into(),
+        entities: vec![entity],
+    });
+}
+
+/// Puts two meshes into one. With `conforming`, nodes of `b` that coincide with nodes of `a`
+/// are merged (one conforming mesh); otherwise they stay distinct (coincident contact nodes).
+pub fn merge(a: Mesh, b: Mesh, conforming: bool) -> Mesh {
+    let mut m = a;
+    let offset_entity = 10_000_000;
+    let mut map = Vec::with_capacity(b.nodes.len());
+    let lookup: std::collections::HashMap<(i64, i64), u32> = if conforming {
+        m.nodes
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                (
+                    ((p[0] * 1e9).round() as i64, (p[1] * 1e9).round() as i64),
+                    i as u32,
+                )
+            })
+            .collect()
+    } else {
+        Default::default()
+    };
+    for p in &b.nodes {
+        let key = ((p[0] * 1e9).round() as i64, (p[1] * 1e9).round() as i64);
+        map.push(*lookup.get(&key).unwrap_or(&{
+            m.nodes.push(*p);
+            m.node_tags.push(m.nodes.len() as u64);
+            (m.nodes.len() - 1) as u32
+        }));
+    }
+    let tag0 = m.cells.len() as u64 + m.lines.len() as u64 + 1;
+    for (k, c) in b.cells.iter().enumerate() {
+        let mut c = *c;
+        for n in c.nodes.iter_mut().take(c.kind.node_count()) {
+            *n = map[*n as usize];
+        }
+        c.entity += offset_entity;
+        c.tag = tag0 + k as u64;
+        m.cells.push(c);
+    }
+    for l in &b.lines {
+        m.lines.push(Line3 {
+            nodes: l.nodes.map(|n| map[n as usize]),
+            entity: l.entity + offset_entity,
+            tag: l.tag + tag0,
+        });
+    }
+    for p in &b.points {
+        m.points.push(PointElement {
+            node: map[p.node as usize],
+            entity: p.entity + offset_entity,
+            tag: p.tag + tag0,
+        });
+    }
+    let tag_offset = m.groups.iter().map(|g| g.tag).max().unwrap_or(0);
+    for g in b.groups {
+        m.groups.push(PhysicalGroup {
+            tag: g.tag + tag_offset,
+            entities: g.entities.iter().map(|e| e + offset_entity).collect(),
+            ..g
+        });
+    }
+    m
+}
+
+/// Points 0 = v[0] < ... < v[n] = `length` with `n` intervals whose sizes grow (ratio > 1)
+/// or shrink geometrically from `start` to the end.
+pub fn graded(start: f64, length: f64, n: usize, ratio: f64) -> Vec<f64> {
+    let weights: Vec<f64> = (0..n).map(|i| ratio.powi(i as i32)).collect();
+    let total: f64 = weights.iter().sum();
+    let mut v = vec![start];
+    for w in weights {
+        let last = *v.last().unwrap();
+        v.push(last + length * w / total);
+    }
+    v
+}
+
+/// Uniform points from `a` to `b` with `n` intervals.
+pub fn uniform(a: f64, b: f64, n: usize) -> Vec<f64> {
+    (0..=n).map(|i| a + (b - a) * i as f64 / n as f64).collect()
 }

@@ -18,6 +18,8 @@ use crate::mesh::CellKind;
 use crate::model::Model;
 use crate::output::{Field, FieldValues, Grid};
 
+pub mod interface;
+
 /// Extrapolation matrix (nodes × integration points) of a cell kind.
 fn extrapolation(kind: CellKind) -> &'static DMatrix<f64> {
     static QUAD8: OnceLock<DMatrix<f64>> = OnceLock::new();

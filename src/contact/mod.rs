@@ -1,0 +1,78 @@
+//! Interface (contact) constitutive laws, behind the [`InterfaceLaw`] trait: the relation
+//! between the relative displacement of the two faces of an interface element, paper
+//! Eq. (26), u = (u_T, u_N) = ((u^B − u^A)·t, (u^B − u^A)·n), and the contact stresses
+//! p = (p_T, p_N).
+//!
+//! Sign convention (paper): p_N < 0 in compression, u_N < 0 when the faces overlap (closure
+//! −u_N > 0); n points from body A into body B.
+//!
+//! Like bulk materials, laws are pure functions of the relative displacement and the state
+//! committed at the last converged step; the solver commits trial states only after a step
+//! converged.
+
+pub mod linear;
+
+use nalgebra::SMatrix;
+
+/// d(p_T, p_N)/d(u_T, u_N): the (generally unsymmetric, paper Eq. 21) interface tangent.
+pub type InterfaceTangent = SMatrix<f64, 2, 2>;
+
+/// State of one interface integration point.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum ContactStatus {
+    /// The faces are apart: no stress.
+    #[default]
+    Open = 0,
+    /// Closed, tangential behaviour elastic (F < 0, paper Eq. 11).
+    Stick = 1,
+    /// Closed and slipping (F = 0).
+    Slip = 2,
+}
+
+/// History and results at one interface integration point.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct InterfaceState {
+    /// Relative displacement (u_T, u_N), including the initial gap or interference.
+    pub relative: [f64; 2],
+    /// Contact stresses (p_T, p_N), p_N ≤ 0.
+    pub stress: [f64; 2],
+    /// Plastic (irreversible) slip u_T^p, paper Eq. (6), (10).
+    pub plastic_slip: f64,
+    /// Accumulated slip ū_T^p = Σ|Δu_T^p|, paper Eqs. (4), (17).
+    pub accumulated_slip: f64,
+    /// Largest closure reached so far (for unloading laws).
+    pub max_closure: f64,
+    /// Current friction coefficient μ_F.
+    pub friction: f64,
+    /// Current tangential and normal stiffness (k_T, k_N) in MPa/mm.
+    pub stiffness: [f64; 2],
+    pub status: ContactStatus,
+}
+
+impl InterfaceState {
+    /// Whether the point's tangent couples shear to normal approach unsymmetrically
+    /// (slipping with friction: the (1,2) entry of Eq. 21 with no (2,1) counterpart).
+    pub fn has_unsymmetric_tangent(&self) -> bool {
+        self.status == ContactStatus::Slip && self.friction > 0.0
+    }
+}
+
+/// An interface constitutive law.
+pub trait InterfaceLaw: Send + Sync + std::fmt::Debug {
+    /// Contact stresses, new state and consistent tangent for the relative displacement
+    /// `relative` = (u_T, u_N), starting from the `committed` state.
+    fn update(
+        &self,
+        relative: [f64; 2],
+        committed: &InterfaceState,
+    ) -> (InterfaceState, InterfaceTangent);
+
+    /// Short description for logs.
+    fn describe(&self) -> String;
+}
+
+/// Relative size of the stiffness an open point keeps in the tangent (never in the stress),
+/// so that a body touching others only through open contact still has a regular matrix in
+/// the first iteration; the residual uses the true zero stress, so the converged answer is
+/// unaffected.
+pub const OPEN_TANGENT_FRACTION: f64 = 1e-9;

@@ -1,0 +1,1192 @@
+//! Topology of the zero-thickness 6-node interface elements along a contact (paper §3.1).
+//!
+//! The paper joins two bodies A and B by quadratic interface elements whose nodes are three
+//! nodes on the face of A and three paired nodes on the face of B (Fig. 1, Eqs. 22–23). The
+//! element's geometry and local frame come from side B only: t = ∂x^B/∂ξ / |∂x^B/∂ξ| and
+//! n = (−t_y, t_x) (Eqs. 24–25, written there with the slope s = tan θ), and the kinematic
+//! variables are the relative displacements u_T = (u^B − u^A)·t, u_N = (u^B − u^A)·n
+//! (Eq. 26). This module finds those node pairs in a gmsh mesh and orders them so that the
+//! element code can apply the formulas blindly:
+//!
+//! - the B nodes of an element are one 3-node line of side B, ordered so that body B lies to
+//!   the left of b0 → b1; then n = rot90(t) points **into body B**, and u_N > 0 means
+//!   opening (closure is −u_N), whatever direction the gmsh curve was drawn in;
+//! - a_i is the side-A node paired with b_i, so (u^B − u^A) is taken between paired nodes.
+//!
+//! Three recipes ([`Pairing`]) cover the ways two faces can be prepared in gmsh:
+//!
+//! - **Coincident**: two bodies meshed separately (`Geometry.AutoCoherence = 0`), each face
+//!   its own physical curve; nodes coincide up to round-off and are paired by coordinates.
+//! - **Split**: one conforming mesh with one physical curve between two physical surfaces; the
+//!   curve's nodes are duplicated here (what gmsh's `Plugin(Crack)` would do) and body B is
+//!   moved onto the copies.
+//! - **Ordered**: two faces that do not touch initially (a Hertz-type gap) but carry the same
+//!   number of nodes; paired in order along the curves, the initial gap becomes the offset.
+//!
+//! Everything is checked before anything is changed, so an error leaves the mesh untouched,
+//! and every error names the contact pair, the curve and the offending coordinates and gmsh
+//! tags. Work is linear in the mesh size (hash maps keyed by node pairs or grid cells), so
+//! contacts with ~10⁵ nodes are cheap.
+
+use std::collections::{HashMap, HashSet};
+
+use super::{Cell, CellKind, Line3, Mesh, PhysicalGroup};
+use crate::{Error, Result};
+
+/// Tolerance of the Coincident pairing, relative to [`Mesh::typical_size`].
+///
+/// gmsh reproduces the coordinates of coincident points of separately meshed surfaces to
+/// ~1e-12 relative, far below this; the nodes of one curve are at least half an element
+/// apart (end and mid nodes), far above it, even where the contact zone is refined a
+/// thousandfold below the median element size. So a pair within the tolerance is certainly
+/// meant, and two candidates within it can only be genuinely duplicated nodes.
+pub const COINCIDENT_TOLERANCE: f64 = 1e-6;
+
+/// How the two faces of a contact pair are found in the mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Pairing {
+    /// (a) Two physical curves whose nodes coincide (distinct nodes, same coordinates within
+    /// [`COINCIDENT_TOLERANCE`] × [`Mesh::typical_size`]), drawn in any direction.
+    Coincident { side_a: String, side_b: String },
+    /// (b) One physical curve shared by the cells of two bodies (a conforming mesh): its nodes
+    /// are duplicated and body B's cells (and B's boundary lines) are moved onto the copies.
+    Split {
+        curve: String,
+        body_a: String,
+        body_b: String,
+    },
+    /// (c) Two curves that are not coincident but have the same number of nodes (Hertz-type
+    /// geometry with a small initial gap): paired in order along the curves.
+    Ordered { side_a: String, side_b: String },
+}
+
+/// Interface elements of one contact pair.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct InterfaceTopology {
+    /// Per element: [a0, a1, a_mid, b0, b1, b_mid] (line3 order: end, end, middle, as in
+    /// gmsh). The B nodes are the nodes of one 3-node line of side B, ordered so that walking
+    /// b0 → b1 goes counter-clockwise around body B (body B lies to the LEFT of the direction
+    /// b0→b1), so that the normal n = rot90(t) = (−t_y, t_x) of the paper's Eq. (24) points
+    /// INTO body B. a_i is the side-A node paired with b_i.
+    pub elements: Vec<[u32; 6]>,
+    /// Per element and node i (0..3, same order): the initial relative position
+    /// x_B,i − x_A,i (zero up to round-off for Coincident/Split; the geometric gap for
+    /// Ordered).
+    pub offsets: Vec<[[f64; 2]; 3]>,
+}
+
+impl InterfaceTopology {
+    /// Number of interface elements.
+    pub fn len(&self) -> usize {
+        self.elements.len()
+    }
+
+    /// True when there are no elements.
+    pub fn is_empty(&self) -> bool {
+        self.elements.is_empty()
+    }
+}
+
+/// Builds the interface topology of contact pair `name` (used in error messages) for
+/// `pairing`, modifying the mesh for `Split` (new nodes appended to `mesh.nodes` and
+/// `mesh.node_tags` with fresh tags above the current maximum; B cells and B boundary lines
+/// re-pointed to the copies). `bodies` are the names of the physical surfaces that are bodies
+/// in the case: every contact curve must be an edge of cells of these bodies.
+///
+/// Elements follow the order of side B's lines (Coincident, Split) or the order along the
+/// curves (Ordered). On error the mesh is unchanged. The function does not panic on bad
+/// input (inconsistent hand-made meshes included).
+pub fn insert_interface(
+    mesh: &mut Mesh,
+    pairing: &Pairing,
+    name: &str,
+    bodies: &[&str],
+) -> Result<InterfaceTopology> {
+    let ctx = Ctx { mesh: &*mesh, name };
+    ctx.check_indices()?;
+    let body_of = ctx.bodies(bodies)?;
+    match pairing {
+        Pairing::Coincident { side_a, side_b } => {
+            let sides = ctx.sides(side_a, side_b, &body_of)?;
+            coincident(&ctx, &sides)
+        }
+        Pairing::Ordered { side_a, side_b } => {
+            let sides = ctx.sides(side_a, side_b, &body_of)?;
+            ordered(&ctx, &sides)
+        }
+        Pairing::Split {
+            curve,
+            body_a,
+            body_b,
+        } => {
+            let plan = plan_split(&ctx, curve, body_a, body_b, bodies)?;
+            Ok(apply_split(mesh, plan))
+        }
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Shared machinery: messages, cell edges, curve sides.
+// ------------------------------------------------------------------------------------------
+
+/// The mesh and the pair name, for lookups and error messages.
+struct Ctx<'m> {
+    mesh: &'m Mesh,
+    name: &'m str,
+}
+
+impl Ctx<'_> {
+    fn err(&self, message: impl std::fmt::Display) -> Error {
+        Error::Model(format!("contact '{}': {message}", self.name))
+    }
+
+    /// "node 12 at (1, 0.5)".
+    fn node(&self, i: u32) -> String {
+        let p = self.mesh.nodes[i as usize];
+        format!(
+            "node {} at ({}, {})",
+            self.mesh.node_tags[i as usize], p[0], p[1]
+        )
+    }
+
+    /// "line element 7 from (0, 1) to (0.25, 1)".
+    fn line(&self, line: &Line3) -> String {
+        let (p, q) = (
+            self.mesh.nodes[line.nodes[0] as usize],
+            self.mesh.nodes[line.nodes[1] as usize],
+        );
+        format!(
+            "line element {} from ({}, {}) to ({}, {})",
+            line.tag, p[0], p[1], q[0], q[1]
+        )
+    }
+
+    fn names(&self, dim: u8) -> String {
+        let names: Vec<&str> = self
+            .mesh
+            .groups
+            .iter()
+            .filter(|g| g.dim == dim)
+            .map(|g| g.name.as_str())
+            .collect();
+        if names.is_empty() {
+            "none".into()
+        } else {
+            names.join(", ")
+        }
+    }
+
+    /// All node references in range and one tag per node, so that indexing cannot panic
+    /// (the reader guarantees this; hand-made meshes might not).
+    fn check_indices(&self) -> Result<()> {
+        let n = self.mesh.nodes.len();
+        if self.mesh.node_tags.len() != n {
+            return Err(self.err(format!(
+                "the mesh has {n} nodes but {} node tags",
+                self.mesh.node_tags.len()
+            )));
+        }
+        let bad = |nodes: &[u32]| nodes.iter().any(|&i| i as usize >= n);
+        if let Some(c) = self.mesh.cells.iter().find(|c| bad(c.nodes())) {
+            return Err(self.err(format!(
+                "element {} references a node index beyond the {n} nodes of the mesh",
+                c.tag
+            )));
+        }
+        if let Some(l) = self.mesh.lines.iter().find(|l| bad(&l.nodes)) {
+            return Err(self.err(format!(
+                "line element {} references a node index beyond the {n} nodes of the mesh",
+                l.tag
+            )));
+        }
+        Ok(())
+    }
+
+    /// Maps each surface entity of the case's bodies to the body's index in `bodies`.
+    fn bodies(&self, bodies: &[&str]) -> Result<HashMap<i32, usize>> {
+        if bodies.is_empty() {
+            return Err(self.err("the case defines no bodies for the contact to join"));
+        }
+        let mut body_of = HashMap::new();
+        for (b, &body) in bodies.iter().enumerate() {
+            let group = self.surface(body)?;
+            for &e in &group.entities {
+                body_of.entry(e).or_insert(b);
+            }
+        }
+        Ok(body_of)
+    }
+
+    fn surface(&self, name: &str) -> Result<&PhysicalGroup> {
+        self.mesh.group(2, name).ok_or_else(|| {
+            self.err(format!(
+                "body '{name}': no physical surface of that name in {} (surfaces: {})",
+                self.mesh.path.display(),
+                self.names(2)
+            ))
+        })
+    }
+
+    /// The lines of curve group `curve` (side `role`); error if the group is missing or empty.
+    fn curve_lines(&self, curve: &str, role: &str) -> Result<(&PhysicalGroup, Vec<Line3>)> {
+        let group = self.mesh.group(1, curve).ok_or_else(|| {
+            self.err(format!(
+                "{role} curve '{curve}': no physical curve of that name in {} (curves: {})",
+                self.mesh.path.display(),
+                self.names(1)
+            ))
+        })?;
+        let lines: Vec<Line3> = self.mesh.lines_in(group).copied().collect();
+        if lines.is_empty() {
+            return Err(self.err(format!(
+                "{role} curve '{curve}' has no line elements in {} (is the curve meshed, and \
+                 are its elements saved?)",
+                self.mesh.path.display()
+            )));
+        }
+        Ok((group, lines))
+    }
+
+    /// Both sides of a Coincident or Ordered pair, with their owner cells checked.
+    fn sides(&self, side_a: &str, side_b: &str, body_of: &HashMap<i32, usize>) -> Result<Sides> {
+        let (_, a_lines) = self.curve_lines(side_a, "side A")?;
+        let (_, b_lines) = self.curve_lines(side_b, "side B")?;
+        let split_hint = format!(
+            "use the Split recipe instead (in the case file: curve = \"{side_a}\", body_a = \
+             ..., body_b = ...)"
+        );
+        if side_a == side_b {
+            return Err(self.err(format!(
+                "side A and side B are the same curve '{side_a}'; for a curve between two \
+                 bodies of one conforming mesh {split_hint}"
+            )));
+        }
+        let a_nodes = unique_nodes(&a_lines);
+        let b_nodes = unique_nodes(&b_lines);
+        let mut on_a = vec![false; self.mesh.nodes.len()];
+        for &i in &a_nodes {
+            on_a[i as usize] = true;
+        }
+        if let Some(&shared) = b_nodes.iter().find(|&&i| on_a[i as usize]) {
+            return Err(self.err(format!(
+                "{} is on both side A curve '{side_a}' and side B curve '{side_b}': the two \
+                 faces share nodes, i.e. the mesh is conforming there; {split_hint}",
+                self.node(shared)
+            )));
+        }
+        let mut wanted = vec![false; self.mesh.nodes.len()];
+        for l in a_lines.iter().chain(&b_lines) {
+            wanted[l.nodes[0] as usize] = true;
+            wanted[l.nodes[1] as usize] = true;
+        }
+        let edges = EdgeIndex::new(self.mesh, body_of, &wanted);
+        // Side A's owners only need to exist (the elements are oriented by side B).
+        self.owners(&edges, &a_lines, side_a, "side A")?;
+        let b_owner = self.owners(&edges, &b_lines, side_b, "side B")?;
+        Ok(Sides {
+            a_name: side_a.to_string(),
+            b_name: side_b.to_string(),
+            a_lines,
+            b_lines,
+            a_nodes,
+            b_nodes,
+            edges,
+            b_owner,
+        })
+    }
+
+    /// The one body cell whose edge each line is.
+    fn owners(
+        &self,
+        edges: &EdgeIndex,
+        lines: &[Line3],
+        curve: &str,
+        role: &str,
+    ) -> Result<Vec<EdgeUse>> {
+        lines
+            .iter()
+            .map(|l| {
+                let uses = edges.find(l.nodes[0], l.nodes[1], l.nodes[2]);
+                match uses.as_slice() {
+                    [one] => Ok(*one),
+                    [] => Err(self.err(format!(
+                        "{role} curve '{curve}' belongs to no body ({} is an edge of no \
+                         element of the bodies)",
+                        self.line(l)
+                    ))),
+                    [first, second, ..] => Err(self.err(format!(
+                        "{role} curve '{curve}' runs inside the bodies, not on a face ({} is \
+                         shared by elements {} and {}); for a curve between two bodies of one \
+                         conforming mesh use the Split recipe",
+                        self.line(l),
+                        self.mesh.cells[first.cell].tag,
+                        self.mesh.cells[second.cell].tag
+                    ))),
+                }
+            })
+            .collect()
+    }
+
+    /// Orients one element by the cell that owns its B line (`b_owner`, whose walk goes
+    /// counter-clockwise around body B) and checks that the paired A nodes form a face edge
+    /// of a body cell lying on the other side. `a` and `b` are paired node by node in line
+    /// order (end, end, middle).
+    fn element(
+        &self,
+        edges: &EdgeIndex,
+        mut a: [u32; 3],
+        mut b: [u32; 3],
+        b_owner: &EdgeUse,
+        b_line: &Line3,
+    ) -> Result<([u32; 6], [[f64; 2]; 3])> {
+        if b_owner.from != b[0] {
+            a.swap(0, 1);
+            b.swap(0, 1);
+        }
+        let a_uses = edges.find(a[0], a[1], a[2]);
+        if a_uses.is_empty() {
+            return Err(self.err(format!(
+                "the side A nodes paired with side B {} ({}, {}, {}) are not the end and mid \
+                 nodes of one element edge of a body: the two curves are discretised \
+                 differently; mesh both faces with the same points (e.g. Transfinite Curve)",
+                self.line(b_line),
+                self.node(a[0]),
+                self.node(a[1]),
+                self.node(a[2])
+            )));
+        }
+        // Both cells counter-clockwise: across a face their walks along the edge are opposite.
+        // The same direction means both bodies lie on the same side, i.e. they overlap.
+        if a_uses.iter().any(|u| u.from == a[0]) {
+            return Err(self.err(format!(
+                "bodies A and B lie on the same side of the contact at side B {} (element {} \
+                 of side A and element {} of side B): the bodies overlap",
+                self.line(b_line),
+                self.mesh.cells[a_uses[0].cell].tag,
+                self.mesh.cells[b_owner.cell].tag
+            )));
+        }
+        let x = |i: u32| self.mesh.nodes[i as usize];
+        let offsets = std::array::from_fn(|k| [x(b[k])[0] - x(a[k])[0], x(b[k])[1] - x(a[k])[1]]);
+        Ok(([a[0], a[1], a[2], b[0], b[1], b[2]], offsets))
+    }
+}
+
+/// The two faces of a Coincident or Ordered pair.
+struct Sides {
+    a_name: String,
+    b_name: String,
+    a_lines: Vec<Line3>,
+    b_lines: Vec<Line3>,
+    /// Distinct nodes of each side, sorted.
+    a_nodes: Vec<u32>,
+    b_nodes: Vec<u32>,
+    edges: EdgeIndex,
+    /// Owner cell of each B line (same order as `b_lines`).
+    b_owner: Vec<EdgeUse>,
+}
+
+/// Distinct nodes of `lines`, sorted.
+fn unique_nodes(lines: &[Line3]) -> Vec<u32> {
+    let mut nodes: Vec<u32> = lines.iter().flat_map(|l| l.nodes).collect();
+    nodes.sort_unstable();
+    nodes.dedup();
+    nodes
+}
+
+/// One cell's use of an edge: the cell walks it from `from` to `to` (counter-clockwise
+/// around the cell), with mid-side node `mid`.
+#[derive(Clone, Copy, Debug)]
+struct EdgeUse {
+    cell: usize,
+    body: usize,
+    from: u32,
+    to: u32,
+    mid: u32,
+}
+
+/// The corner edges of body cells, keyed by their sorted end nodes. Only edges whose both
+/// ends are `wanted` (the contact curves' end nodes) are stored, which keeps the map the size
+/// of the contact rather than of the mesh.
+struct EdgeIndex {
+    map: HashMap<(u32, u32), Vec<EdgeUse>>,
+}
+
+impl EdgeIndex {
+    fn new(mesh: &Mesh, body_of: &HashMap<i32, usize>, wanted: &[bool]) -> Self {
+        let mut map: HashMap<(u32, u32), Vec<EdgeUse>> = HashMap::new();
+        for (cell, c) in mesh.cells.iter().enumerate() {
+            let Some(&body) = body_of.get(&c.entity) else {
+                continue;
+            };
+            for (from, to, mid) in cell_edges(c) {
+                if wanted[from as usize] && wanted[to as usize] {
+                    map.entry(key(from, to)).or_default().push(EdgeUse {
+                        cell,
+                        body,
+                        from,
+                        to,
+                        mid,
+                    });
+                }
+            }
+        }
+        EdgeIndex { map }
+    }
+
+    /// The cell uses of the edge with ends `p`, `q` (either order) and mid node `mid`.
+    fn find(&self, p: u32, q: u32, mid: u32) -> Vec<EdgeUse> {
+        self.map.get(&key(p, q)).map_or_else(Vec::new, |uses| {
+            uses.iter().filter(|u| u.mid == mid).copied().collect()
+        })
+    }
+}
+
+fn key(p: u32, q: u32) -> (u32, u32) {
+    (p.min(q), p.max(q))
+}
+
+/// Corner edges (from, to, mid) of a cell in its counter-clockwise order.
+fn cell_edges(cell: &Cell) -> impl Iterator<Item = (u32, u32, u32)> + '_ {
+    let n = match cell.kind {
+        CellKind::Quad8 => 4,
+        CellKind::Tri6 => 3,
+    };
+    (0..n).map(move |k| (cell.nodes[k], cell.nodes[(k + 1) % n], cell.nodes[n + k]))
+}
+
+// ------------------------------------------------------------------------------------------
+// (a) Coincident
+// ------------------------------------------------------------------------------------------
+
+/// Pairs every B node with the A node at the same place (hash grid, linear time), then makes
+/// one element per B line.
+fn coincident(ctx: &Ctx, s: &Sides) -> Result<InterfaceTopology> {
+    let tolerance = COINCIDENT_TOLERANCE * ctx.mesh.typical_size();
+    if !(tolerance > 0.0 && tolerance.is_finite()) {
+        return Err(ctx.err("the mesh has no cells of positive size to scale the tolerance"));
+    }
+    let partner = pair_by_coordinates(ctx, s, tolerance)?;
+    let mut topology = InterfaceTopology::default();
+    for (line, owner) in s.b_lines.iter().zip(&s.b_owner) {
+        let a = line.nodes.map(|b| partner[&b]);
+        let (element, offsets) = ctx.element(&s.edges, a, line.nodes, owner, line)?;
+        topology.elements.push(element);
+        topology.offsets.push(offsets);
+    }
+    Ok(topology)
+}
+
+/// Map B node → A node within `tolerance`; every node of both sides paired exactly once.
+fn pair_by_coordinates(ctx: &Ctx, s: &Sides, tolerance: f64) -> Result<HashMap<u32, u32>> {
+    let x = |i: u32| ctx.mesh.nodes[i as usize];
+    // Grid cells of the tolerance's size: a partner lies in the 3×3 block around a node.
+    // (`as i64` saturates, so far-away coordinates cannot overflow.)
+    let cell_of = |p: [f64; 2]| {
+        (
+            (p[0] / tolerance).floor() as i64,
+            (p[1] / tolerance).floor() as i64,
+        )
+    };
+    let mut grid: HashMap<(i64, i64), Vec<u32>> = HashMap::with_capacity(s.a_nodes.len());
+    for &a in &s.a_nodes {
+        grid.entry(cell_of(x(a))).or_default().push(a);
+    }
+    let counts = format!(
+        "side A '{}' has {} nodes, side B '{}' has {}",
+        s.a_name,
+        s.a_nodes.len(),
+        s.b_name,
+        s.b_nodes.len()
+    );
+    let mut partner = HashMap::with_capacity(s.b_nodes.len());
+    let mut partner_of_a: HashMap<u32, u32> = HashMap::with_capacity(s.a_nodes.len());
+    for &b in &s.b_nodes {
+        let p = x(b);
+        let (cx, cy) = cell_of(p);
+        let mut candidates = Vec::new();
+        for gx in cx.saturating_sub(1)..=cx.saturating_add(1) {
+            for gy in cy.saturating_sub(1)..=cy.saturating_add(1) {
+                for &a in grid.get(&(gx, gy)).into_iter().flatten() {
+                    let q = x(a);
+                    if (p[0] - q[0]).hypot(p[1] - q[1]) <= tolerance {
+                        candidates.push(a);
+                    }
+                }
+            }
+        }
+        match candidates.as_slice() {
+            [] => {
+                return Err(ctx.err(format!(
+                    "side B curve '{}': {} has no coincident node on side A curve '{}' \
+                     (tolerance {tolerance:.1e} mm; {counts}): the faces are not meshed alike; \
+                     give both curves the same points, or use the Ordered recipe for faces \
+                     with a gap",
+                    s.b_name,
+                    ctx.node(b),
+                    s.a_name
+                )));
+            }
+            [a] => {
+                if let Some(&other) = partner_of_a.get(a) {
+                    return Err(ctx.err(format!(
+                        "pairing is ambiguous: {} and {} of side B curve '{}' both coincide \
+                         with {} of side A curve '{}' (tolerance {tolerance:.1e} mm)",
+                        ctx.node(other),
+                        ctx.node(b),
+                        s.b_name,
+                        ctx.node(*a),
+                        s.a_name
+                    )));
+                }
+                partner_of_a.insert(*a, b);
+                partner.insert(b, *a);
+            }
+            [first, second, ..] => {
+                return Err(ctx.err(format!(
+                    "pairing is ambiguous: {} of side B curve '{}' coincides with {} and {} \
+                     of side A curve '{}' (tolerance {tolerance:.1e} mm)",
+                    ctx.node(b),
+                    s.b_name,
+                    ctx.node(*first),
+                    ctx.node(*second),
+                    s.a_name
+                )));
+            }
+        }
+    }
+    if let Some(&a) = s.a_nodes.iter().find(|a| !partner_of_a.contains_key(a)) {
+        return Err(ctx.err(format!(
+            "side A curve '{}': {} has no coincident node on side B curve '{}' (unpaired; \
+             tolerance {tolerance:e} mm; {counts}): the faces are not meshed alike",
+            s.a_name,
+            ctx.node(a),
+            s.b_name
+        )));
+    }
+    Ok(partner)
+}
+
+// ------------------------------------------------------------------------------------------
+// (c) Ordered
+// ------------------------------------------------------------------------------------------
+
+/// Chains both curves, pairs their nodes in order (reversing A if its ends are closer to B's
+/// ends that way) and makes one element per B line.
+fn ordered(ctx: &Ctx, s: &Sides) -> Result<InterfaceTopology> {
+    let mut a = chain(ctx, &s.a_lines, &s.a_name, "side A")?;
+    let b = chain(ctx, &s.b_lines, &s.b_name, "side B")?;
+    if a.nodes.len() != b.nodes.len() {
+        return Err(ctx.err(format!(
+            "the Ordered recipe pairs nodes one to one, but side A curve '{}' has {} nodes \
+             ({} elements) and side B curve '{}' has {} nodes ({} elements); mesh both with \
+             the same number of points (e.g. Transfinite Curve)",
+            s.a_name,
+            a.nodes.len(),
+            a.lines.len(),
+            s.b_name,
+            b.nodes.len(),
+            b.lines.len()
+        )));
+    }
+    let x = |i: u32| ctx.mesh.nodes[i as usize];
+    let d = |p: u32, q: u32| (x(p)[0] - x(q)[0]).hypot(x(p)[1] - x(q)[1]);
+    let (a_first, a_last) = (a.nodes[0], a.nodes[a.nodes.len() - 1]);
+    let (b_first, b_last) = (b.nodes[0], b.nodes[b.nodes.len() - 1]);
+    if d(a_last, b_first) + d(a_first, b_last) < d(a_first, b_first) + d(a_last, b_last) {
+        a.nodes.reverse();
+    }
+    let mut topology = InterfaceTopology::default();
+    for (k, &line) in b.lines.iter().enumerate() {
+        let bn = [b.nodes[2 * k], b.nodes[2 * k + 2], b.nodes[2 * k + 1]];
+        let an = [a.nodes[2 * k], a.nodes[2 * k + 2], a.nodes[2 * k + 1]];
+        let l = &s.b_lines[line];
+        let (element, offsets) = ctx.element(&s.edges, an, bn, &s.b_owner[line], l)?;
+        topology.elements.push(element);
+        topology.offsets.push(offsets);
+    }
+    Ok(topology)
+}
+
+/// A curve as one open polyline.
+struct Chain {
+    /// Nodes in order along the curve: end, mid, end, mid, ..., end (2 × lines + 1).
+    nodes: Vec<u32>,
+    /// Index (into the curve's lines) of the k-th line along the chain.
+    lines: Vec<usize>,
+}
+
+/// Chains the lines of one curve into a single open polyline, or says why they are not one.
+fn chain(ctx: &Ctx, lines: &[Line3], curve: &str, role: &str) -> Result<Chain> {
+    let mut at: HashMap<u32, Vec<usize>> = HashMap::new();
+    for (i, l) in lines.iter().enumerate() {
+        at.entry(l.nodes[0]).or_default().push(i);
+        at.entry(l.nodes[1]).or_default().push(i);
+    }
+    let mut ends: Vec<u32> = Vec::new();
+    for (&node, ls) in &at {
+        match ls.len() {
+            1 => ends.push(node),
+            2 => {}
+            n => {
+                return Err(ctx.err(format!(
+                    "{role} curve '{curve}' branches at {} ({n} line elements meet there); \
+                     the Ordered recipe needs one open chain of lines",
+                    ctx.node(node)
+                )));
+            }
+        }
+    }
+    ends.sort_unstable();
+    let Some(&start) = ends.first() else {
+        return Err(ctx.err(format!(
+            "{role} curve '{curve}' is closed (it has no end point); the Ordered recipe needs \
+             one open chain of lines"
+        )));
+    };
+    let mut used = vec![false; lines.len()];
+    let mut result = Chain {
+        nodes: vec![start],
+        lines: Vec::with_capacity(lines.len()),
+    };
+    let mut node = start;
+    while let Some(&i) = at[&node].iter().find(|&&i| !used[i]) {
+        used[i] = true;
+        let l = &lines[i];
+        let next = if l.nodes[0] == node {
+            l.nodes[1]
+        } else {
+            l.nodes[0]
+        };
+        result.nodes.extend([l.nodes[2], next]);
+        result.lines.push(i);
+        node = next;
+    }
+    if result.lines.len() != lines.len() {
+        let stray = &lines[used.iter().position(|u| !u).unwrap_or(0)];
+        return Err(ctx.err(format!(
+            "{role} curve '{curve}' is not one connected chain: it has {} end points ({}) \
+             and its {} is not connected to the chain starting at {}; the Ordered recipe \
+             needs one open chain of lines (make one physical curve per contact face)",
+            ends.len(),
+            ends.iter()
+                .map(|&e| ctx.node(e))
+                .collect::<Vec<_>>()
+                .join(", "),
+            ctx.line(stray),
+            ctx.node(start)
+        )));
+    }
+    Ok(result)
+}
+
+// ------------------------------------------------------------------------------------------
+// (b) Split
+// ------------------------------------------------------------------------------------------
+
+/// What [`apply_split`] will do, fully checked.
+struct SplitPlan {
+    /// Nodes to duplicate (order of first appearance in the curve's lines); copy k becomes
+    /// node `first_new + k` with tag `first_tag + k`.
+    duplicated: Vec<u32>,
+    first_tag: u64,
+    /// Surface entities of body B.
+    b_entities: HashSet<i32>,
+    /// Curve entities of the split curve (its lines stay with A).
+    curve_entities: HashSet<i32>,
+    /// Per element: the A line as walked counter-clockwise around body B, i.e. [from, to, mid]
+    /// of the body B cell's walk; the B side is its copy.
+    a_sides: Vec<[u32; 3]>,
+}
+
+/// Checks a Split pair: the curve exists, both bodies exist and are case bodies, and every
+/// line of the curve is the edge of exactly one body A cell and one body B cell.
+fn plan_split(
+    ctx: &Ctx,
+    curve: &str,
+    body_a: &str,
+    body_b: &str,
+    bodies: &[&str],
+) -> Result<SplitPlan> {
+    let (curve_group, lines) = ctx.curve_lines(curve, "split")?;
+    let group_a = ctx.surface(body_a)?;
+    let group_b = ctx.surface(body_b)?;
+    for body in [body_a, body_b] {
+        if !bodies.contains(&body) {
+            return Err(ctx.err(format!(
+                "body '{body}' of the split curve '{curve}' is not one of the case's bodies ({})",
+                bodies.join(", ")
+            )));
+        }
+    }
+    if body_a == body_b {
+        return Err(ctx.err(format!(
+            "body_a and body_b are the same surface '{body_a}'; the Split recipe separates two \
+             different physical surfaces"
+        )));
+    }
+    if let Some(e) = group_a
+        .entities
+        .iter()
+        .find(|e| group_b.entities.contains(e))
+    {
+        return Err(ctx.err(format!(
+            "bodies '{body_a}' and '{body_b}' share surface entity {e}; they must not overlap"
+        )));
+    }
+    // Body index 0 = A, 1 = B; cells of other surfaces are ignored.
+    let mut body_of = HashMap::new();
+    for (b, group) in [group_a, group_b].into_iter().enumerate() {
+        for &e in &group.entities {
+            body_of.insert(e, b);
+        }
+    }
+    let mut wanted = vec![false; ctx.mesh.nodes.len()];
+    for l in &lines {
+        wanted[l.nodes[0] as usize] = true;
+        wanted[l.nodes[1] as usize] = true;
+    }
+    let edges = EdgeIndex::new(ctx.mesh, &body_of, &wanted);
+    let mut a_sides = Vec::with_capacity(lines.len());
+    for l in &lines {
+        let uses = edges.find(l.nodes[0], l.nodes[1], l.nodes[2]);
+        let in_a: Vec<&EdgeUse> = uses.iter().filter(|u| u.body == 0).collect();
+        let in_b: Vec<&EdgeUse> = uses.iter().filter(|u| u.body == 1).collect();
+        let (ua, ub) = match (in_a.as_slice(), in_b.as_slice()) {
+            ([ua], [ub]) => (ua, ub),
+            _ => {
+                return Err(ctx.err(format!(
+                    "curve '{curve}' is not between bodies '{body_a}' and '{body_b}': its {} \
+                     is an edge of {} element(s) of '{body_a}' and {} of '{body_b}' (exactly \
+                     one of each is needed)",
+                    ctx.line(l),
+                    in_a.len(),
+                    in_b.len()
+                )));
+            }
+        };
+        if ua.from == ub.from {
+            return Err(ctx.err(format!(
+                "bodies '{body_a}' and '{body_b}' lie on the same side of curve '{curve}' at \
+                 its {} (elements {} and {}): the bodies overlap",
+                ctx.line(l),
+                ctx.mesh.cells[ua.cell].tag,
+                ctx.mesh.cells[ub.cell].tag
+            )));
+        }
+        a_sides.push([ub.from, ub.to, ub.mid]);
+    }
+    let duplicated = {
+        let mut seen = HashSet::new();
+        let mut nodes = Vec::new();
+        for l in &lines {
+            for n in l.nodes {
+                if seen.insert(n) {
+                    nodes.push(n);
+                }
+            }
+        }
+        nodes
+    };
+    let max_tag = ctx.mesh.node_tags.iter().copied().max().unwrap_or(0);
+    let first_tag = max_tag.checked_add(1);
+    let fits = first_tag
+        .and_then(|t| t.checked_add(duplicated.len() as u64))
+        .is_some()
+        && ctx.mesh.nodes.len() + duplicated.len() < u32::MAX as usize;
+    let (Some(first_tag), true) = (first_tag, fits) else {
+        return Err(ctx.err(format!(
+            "no room for {} more nodes (largest node tag {max_tag}, {} nodes)",
+            duplicated.len(),
+            ctx.mesh.nodes.len()
+        )));
+    };
+    Ok(SplitPlan {
+        duplicated,
+        first_tag,
+        b_entities: group_b.entities.iter().copied().collect(),
+        curve_entities: curve_group.entities.iter().copied().collect(),
+        a_sides,
+    })
+}
+
+/// Duplicates the curve's nodes and moves body B onto the copies (cannot fail: all checks
+/// were made in [`plan_split`]).
+///
+/// - Every node of the curve's lines is copied, **end points included**, always: where the
+///   curve reaches a free boundary the bodies must be able to separate there too (gmsh's
+///   `Plugin(Crack)` needs `OpenBoundaryPhysicalGroup` for the same effect). Where the curve
+///   instead ends at another A–B boundary that is not part of the curve, this opens a gap of
+///   one node there: make the curve cover the whole A–B boundary.
+/// - Every cell of body B using a copied node is re-pointed to the copy; cells of other
+///   bodies stay with the originals (with body A).
+/// - A line of any group (other than the split curve's own lines, which stay with A) is
+///   re-pointed when its re-pointed edge is an edge of a body B cell, i.e. when it bounds
+///   body B (e.g. B's outer side touching the curve's end, so that loads and supports on it
+///   act on B's copy).
+/// - Point elements stay with the original node (body A): put a point load or support meant
+///   for B on a point that is not on the curve.
+fn apply_split(mesh: &mut Mesh, plan: SplitPlan) -> InterfaceTopology {
+    let first_new = mesh.nodes.len() as u32;
+    let copy: HashMap<u32, u32> = plan
+        .duplicated
+        .iter()
+        .enumerate()
+        .map(|(k, &n)| (n, first_new + k as u32))
+        .collect();
+    for (k, &n) in plan.duplicated.iter().enumerate() {
+        let p = mesh.nodes[n as usize];
+        mesh.nodes.push(p);
+        mesh.node_tags.push(plan.first_tag + k as u64);
+    }
+    // Edges of the re-pointed B cells that touch a copy: (sorted ends, mid).
+    let mut b_edges: HashSet<((u32, u32), u32)> = HashSet::new();
+    for cell in mesh.cells.iter_mut() {
+        if !plan.b_entities.contains(&cell.entity) {
+            continue;
+        }
+        let n = cell.kind.node_count();
+        let mut touched = false;
+        for slot in &mut cell.nodes[..n] {
+            if let Some(&c) = copy.get(slot) {
+                *slot = c;
+                touched = true;
+            }
+        }
+        if touched {
+            for (from, to, mid) in cell_edges(cell) {
+                if from >= first_new || to >= first_new || mid >= first_new {
+                    b_edges.insert((key(from, to), mid));
+                }
+            }
+        }
+    }
+    for line in mesh.lines.iter_mut() {
+        if plan.curve_entities.contains(&line.entity)
+            || !line.nodes.iter().any(|n| copy.contains_key(n))
+        {
+            continue;
+        }
+        let moved = line.nodes.map(|n| copy.get(&n).copied().unwrap_or(n));
+        if b_edges.contains(&(key(moved[0], moved[1]), moved[2])) {
+            line.nodes = moved;
+        }
+    }
+    let mut topology = InterfaceTopology::default();
+    for a in plan.a_sides {
+        let b = a.map(|n| copy[&n]);
+        topology.elements.push([a[0], a[1], a[2], b[0], b[1], b[2]]);
+        topology.offsets.push([[0.0; 2]; 3]);
+    }
+    topology
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::PhysicalGroup;
+
+    /// A hand-made mesh: quad8 cells from corner coordinates, with nodes shared only within a
+    /// "scope" (one scope per separately meshed body).
+    #[derive(Default)]
+    struct Builder {
+        mesh: Mesh,
+        index: HashMap<(usize, i64, i64), u32>,
+    }
+
+    impl Builder {
+        fn node(&mut self, scope: usize, p: [f64; 2]) -> u32 {
+            let k = (
+                scope,
+                (p[0] * 1e6).round() as i64,
+                (p[1] * 1e6).round() as i64,
+            );
+            if let Some(&i) = self.index.get(&k) {
+                return i;
+            }
+            let i = self.mesh.nodes.len() as u32;
+            self.mesh.nodes.push(p);
+            self.mesh.node_tags.push(100 + i as u64);
+            self.index.insert(k, i);
+            i
+        }
+
+        /// Counter-clockwise axis-parallel quad [x0,x1]×[y0,y1].
+        fn quad(&mut self, scope: usize, entity: i32, x0: f64, x1: f64, y0: f64, y1: f64) {
+            let c = [[x0, y0], [x1, y0], [x1, y1], [x0, y1]];
+            let mut nodes = [0; 8];
+            for k in 0..4 {
+                nodes[k] = self.node(scope, c[k]);
+                let (p, q) = (c[k], c[(k + 1) % 4]);
+                nodes[4 + k] = self.node(scope, [(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0]);
+            }
+            let tag = self.mesh.cells.len() as u64 + 1;
+            self.mesh.cells.push(Cell {
+                kind: CellKind::Quad8,
+                nodes,
+                entity,
+                tag,
+            });
+        }
+
+        /// Straight line3 from p to q in `scope`, on curve entity `entity`.
+        fn line(&mut self, scope: usize, entity: i32, p: [f64; 2], q: [f64; 2]) {
+            let m = [(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0];
+            let nodes = [
+                self.node(scope, p),
+                self.node(scope, q),
+                self.node(scope, m),
+            ];
+            let tag = 1000 + self.mesh.lines.len() as u64;
+            self.mesh.lines.push(Line3 { nodes, entity, tag });
+        }
+
+        fn group(&mut self, dim: u8, tag: i32, name: &str, entities: &[i32]) {
+            self.mesh.groups.push(PhysicalGroup {
+                dim,
+                tag,
+                name: name.into(),
+                entities: entities.to_vec(),
+            });
+        }
+    }
+
+    /// Lower body [0,2]×[0,1] as two quads (entity 1), upper body [0,2]×[1,2] (entity 2) as
+    /// two quads in its own scope; curve 11 = lower top (drawn right to left), curve 12 =
+    /// upper bottom (left to right).
+    fn two_blocks() -> Builder {
+        let mut b = Builder::default();
+        b.quad(0, 1, 0.0, 1.0, 0.0, 1.0);
+        b.quad(0, 1, 1.0, 2.0, 0.0, 1.0);
+        b.quad(1, 2, 0.0, 1.0, 1.0, 2.0);
+        b.quad(1, 2, 1.0, 2.0, 1.0, 2.0);
+        b.line(0, 11, [2.0, 1.0], [1.0, 1.0]);
+        b.line(0, 11, [1.0, 1.0], [0.0, 1.0]);
+        b.line(1, 12, [0.0, 1.0], [1.0, 1.0]);
+        b.line(1, 12, [1.0, 1.0], [2.0, 1.0]);
+        b.group(2, 1, "lower", &[1]);
+        b.group(2, 2, "upper", &[2]);
+        b.group(1, 11, "top", &[11]);
+        b.group(1, 12, "bottom", &[12]);
+        b
+    }
+
+    fn coincident(a: &str, b: &str) -> Pairing {
+        Pairing::Coincident {
+            side_a: a.into(),
+            side_b: b.into(),
+        }
+    }
+
+    fn error(mesh: &mut Mesh, pairing: &Pairing, bodies: &[&str]) -> String {
+        match insert_interface(mesh, pairing, "p", bodies) {
+            Ok(t) => panic!("expected an error, got {t:?}"),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn coincident_blocks_are_oriented_into_b() {
+        let mut mesh = two_blocks().mesh;
+        let t = insert_interface(
+            &mut mesh,
+            &coincident("top", "bottom"),
+            "p",
+            &["lower", "upper"],
+        )
+        .unwrap();
+        assert_eq!(t.len(), 2);
+        for (e, o) in t.elements.iter().zip(&t.offsets) {
+            let (b0, b1) = (mesh.nodes[e[3] as usize], mesh.nodes[e[4] as usize]);
+            // Body B is above y = 1: B is left of b0 → b1 means walking in +x.
+            assert!(b1[0] > b0[0], "{e:?}");
+            for i in 0..3 {
+                assert_ne!(e[i], e[i + 3]);
+                assert_eq!(mesh.nodes[e[i] as usize], mesh.nodes[e[i + 3] as usize]);
+                assert_eq!(o[i], [0.0, 0.0]);
+            }
+        }
+        // Swapping the roles flips the walk: the lower body is then B.
+        let t = insert_interface(
+            &mut mesh,
+            &coincident("bottom", "top"),
+            "p",
+            &["lower", "upper"],
+        )
+        .unwrap();
+        for e in &t.elements {
+            assert!(mesh.nodes[e[4] as usize][0] < mesh.nodes[e[3] as usize][0]);
+        }
+    }
+
+    #[test]
+    fn ambiguous_candidates_are_reported() {
+        // Lower body made of two separately meshed halves: two A nodes at (1, 1).
+        let mut b = Builder::default();
+        b.quad(0, 1, 0.0, 1.0, 0.0, 1.0);
+        b.quad(2, 1, 1.0, 2.0, 0.0, 1.0);
+        b.quad(1, 2, 0.0, 2.0, 1.0, 2.0);
+        b.line(0, 11, [1.0, 1.0], [0.0, 1.0]);
+        b.line(2, 11, [2.0, 1.0], [1.0, 1.0]);
+        b.line(1, 12, [0.0, 1.0], [2.0, 1.0]);
+        b.group(2, 1, "lower", &[1]);
+        b.group(2, 2, "upper", &[2]);
+        b.group(1, 11, "top", &[11]);
+        b.group(1, 12, "bottom", &[12]);
+        let mut mesh = b.mesh;
+        let e = error(&mut mesh, &coincident("top", "bottom"), &["lower", "upper"]);
+        assert!(
+            e.contains("contact 'p'") && e.contains("ambiguous") && e.contains("(1, 1)"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn differently_discretised_faces_with_equal_node_sets_are_rejected() {
+        // Upper body: one quad whose bottom edge is split at x = 1 as end node, but whose
+        // line3 "mid" node is the node at x = 2 (a topologically inconsistent face).
+        let mut b = Builder::default();
+        b.quad(0, 1, 0.0, 2.0, 0.0, 1.0);
+        b.line(0, 11, [2.0, 1.0], [0.0, 1.0]);
+        b.group(2, 1, "lower", &[1]);
+        b.group(2, 2, "upper", &[2]);
+        b.group(1, 11, "top", &[11]);
+        b.group(1, 12, "bottom", &[12]);
+        b.quad(1, 2, 0.0, 2.0, 1.0, 2.0);
+        let cell = b.mesh.cells[1];
+        let (corner1, mid0) = (cell.nodes[1], cell.nodes[4]); // (2,1) and (1,1)
+        let cell = &mut b.mesh.cells[1];
+        cell.nodes[1] = mid0;
+        cell.nodes[4] = corner1;
+        b.mesh.lines.push(Line3 {
+            nodes: [cell.nodes[0], mid0, corner1],
+            entity: 12,
+            tag: 77,
+        });
+        let mut mesh = b.mesh;
+        let e = error(&mut mesh, &coincident("top", "bottom"), &["lower", "upper"]);
+        assert!(e.contains("discretised differently"), "{e}");
+        assert!(e.contains("line element 77"), "{e}");
+    }
+
+    #[test]
+    fn chains_and_their_errors() {
+        let mut b = two_blocks();
+        // A third line on "top" from (1,1) up to (1,1.5): a branch.
+        b.line(0, 11, [1.0, 1.0], [1.0, 1.5]);
+        let mesh = b.mesh;
+        let ctx = Ctx {
+            mesh: &mesh,
+            name: "p",
+        };
+        let group = mesh.group(1, "top").unwrap();
+        let lines: Vec<Line3> = mesh.lines_in(group).copied().collect();
+        let e = chain(&ctx, &lines, "top", "side A").err().unwrap();
+        assert!(e.to_string().contains("branches at node"), "{e}");
+        let c = chain(&ctx, &lines[..2], "top", "side A").unwrap();
+        assert_eq!(c.nodes.len(), 5);
+        let xs: Vec<f64> = c.nodes.iter().map(|&n| mesh.nodes[n as usize][0]).collect();
+        assert!(xs == [0.0, 0.5, 1.0, 1.5, 2.0] || xs == [2.0, 1.5, 1.0, 0.5, 0.0]);
+        // Two disjoint pieces.
+        let pieces = [lines[0], mesh.lines[2]];
+        let e = chain(&ctx, &pieces, "top", "side A").err().unwrap();
+        assert!(e.to_string().contains("not one connected chain"), "{e}");
+    }
+
+    #[test]
+    fn split_two_blocks_of_one_mesh() {
+        let mut b = Builder::default();
+        b.quad(0, 1, 0.0, 1.0, 0.0, 1.0);
+        b.quad(0, 2, 0.0, 1.0, 1.0, 2.0);
+        b.line(0, 11, [1.0, 1.0], [0.0, 1.0]);
+        b.line(0, 13, [1.0, 1.0], [1.0, 2.0]); // right side of the upper block
+        b.line(0, 14, [1.0, 0.0], [1.0, 1.0]); // right side of the lower block
+        b.group(2, 1, "lower", &[1]);
+        b.group(2, 2, "upper", &[2]);
+        b.group(1, 11, "cut", &[11]);
+        b.group(1, 13, "upper_right", &[13]);
+        b.group(1, 14, "lower_right", &[14]);
+        let mut mesh = b.mesh;
+        let before = mesh.nodes.len();
+        let pairing = Pairing::Split {
+            curve: "cut".into(),
+            body_a: "lower".into(),
+            body_b: "upper".into(),
+        };
+        let t = insert_interface(&mut mesh, &pairing, "p", &["lower", "upper"]).unwrap();
+        assert_eq!(mesh.nodes.len(), before + 3);
+        assert_eq!(mesh.node_tags.len(), before + 3);
+        let e = t.elements[0];
+        // B above: b0 → b1 walks in +x.
+        assert_eq!(mesh.nodes[e[3] as usize], [0.0, 1.0]);
+        assert_eq!(mesh.nodes[e[4] as usize], [1.0, 1.0]);
+        assert!(e[3..].iter().all(|&n| n as usize >= before));
+        assert!(e[..3].iter().all(|&n| (n as usize) < before));
+        let (lower, upper) = (mesh.cells[0], mesh.cells[1]);
+        assert!(lower.nodes().iter().all(|n| !upper.nodes().contains(n)));
+        assert!(mesh.lines[1].nodes.iter().any(|&n| n as usize >= before));
+        assert!(mesh.lines[2].nodes.iter().all(|&n| (n as usize) < before));
+        assert!(mesh.lines[0].nodes.iter().all(|&n| (n as usize) < before));
+        // Splitting again: the curve is no longer shared, and the mesh is left unchanged.
+        let copy = mesh.clone();
+        let e = error(&mut mesh, &pairing, &["lower", "upper"]);
+        assert!(e.contains("is not between bodies"), "{e}");
+        assert_eq!(mesh.nodes, copy.nodes);
+        assert_eq!(mesh.cells, copy.cells);
+    }
+
+    /// ~10⁵ nodes per face (50 000 quads on each side): pairing must stay linear in time.
+    #[test]
+    fn long_contact_scales() {
+        let n = 50_000;
+        let mut b = Builder::default();
+        for i in 0..n {
+            let x0 = i as f64;
+            b.quad(0, 1, x0, x0 + 1.0, 0.0, 1.0);
+            b.quad(1, 2, x0, x0 + 1.0, 1.0, 2.0);
+            b.line(0, 11, [x0 + 1.0, 1.0], [x0, 1.0]);
+            b.line(1, 12, [x0, 1.0], [x0 + 1.0, 1.0]);
+        }
+        b.group(2, 1, "lower", &[1]);
+        b.group(2, 2, "upper", &[2]);
+        b.group(1, 11, "top", &[11]);
+        b.group(1, 12, "bottom", &[12]);
+        let mut mesh = b.mesh;
+        let start = std::time::Instant::now();
+        for pairing in [
+            coincident("top", "bottom"),
+            Pairing::Ordered {
+                side_a: "top".into(),
+                side_b: "bottom".into(),
+            },
+        ] {
+            let t = insert_interface(&mut mesh, &pairing, "p", &["lower", "upper"]).unwrap();
+            assert_eq!(t.len(), n);
+            assert!(t.offsets.iter().flatten().all(|o| *o == [0.0, 0.0]));
+        }
+        // Generous bound (debug build): a quadratic search would take minutes.
+        assert!(
+            start.elapsed().as_secs_f64() < 20.0,
+            "{:?}",
+            start.elapsed()
+        );
+    }
+
+    #[test]
+    fn bad_meshes_do_not_panic() {
+        let mut mesh = two_blocks().mesh;
+        mesh.lines[0].nodes[2] = 10_000;
+        let e = error(&mut mesh, &coincident("top", "bottom"), &["lower", "upper"]);
+        assert!(e.contains("beyond"), "{e}");
+        let mut mesh = two_blocks().mesh;
+        mesh.node_tags.pop();
+        let e = error(&mut mesh, &coincident("top", "bottom"), &["lower", "upper"]);
+        assert!(e.contains("node tags"), "{e}");
+        let mut mesh = Mesh::default();
+        let e = error(&mut mesh, &coincident("top", "bottom"), &[]);
+        assert!(e.contains("no bodies"), "{e}");
+        let mut mesh = two_blocks().mesh;
+        let e = error(&mut mesh, &coincident("top", "top"), &["lower", "upper"]);
+        assert!(e.contains("same curve"), "{e}");
+    }
+}

@@ -1,0 +1,300 @@
+//! Interface output: contact fields at the side-B nodes of every pair, ordered along the
+//! contact curve, as a VTU grid of quadratic edges, as CSV tables, and as resultant forces.
+//!
+//! Integration-point values are mapped to the element's nodes by the exact quadratic fit
+//! through the three points (for Newton-Cotes the points are the nodes themselves), then
+//! averaged over the elements sharing a node.
+
+use nalgebra::Matrix3;
+
+use crate::contact::InterfaceState;
+use crate::element::interface6::interface_point;
+use crate::element::shape::line3;
+use crate::model::{INTERFACE_POINTS, Model};
+use crate::output::csv::CsvTable;
+use crate::output::{Field, FieldValues, Grid};
+
+/// Names of the scalar point fields, in the order of [`NodalContact::values`].
+pub const FIELDS: [&str; 10] = [
+    "contact_normal_stress",
+    "contact_pressure",
+    "contact_shear_stress",
+    "normal_gap",
+    "tangential_slip",
+    "plastic_slip",
+    "signed_plastic_slip",
+    "friction_coefficient",
+    "normal_stiffness",
+    "tangential_stiffness",
+];
+
+/// Contact results at one side-B node.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NodalContact {
+    /// In the order of [`FIELDS`]: p_N (paper sign), −p_N, p_T, u_N, u_T, accumulated slip ū,
+    /// signed plastic slip u_T^p, μ_F, k_N, k_T.
+    pub values: [f64; 10],
+    /// 0 open, 1 stick, 2 slip (the most advanced state among the contributing points).
+    pub status: i32,
+}
+
+impl NodalContact {
+    fn from_state(s: &InterfaceState) -> [f64; 10] {
+        [
+            s.stress[1],
+            -s.stress[1],
+            s.stress[0],
+            s.relative[1],
+            s.relative[0],
+            s.accumulated_slip,
+            s.plastic_slip,
+            s.friction,
+            s.stiffness[1],
+            s.stiffness[0],
+        ]
+    }
+}
+
+/// The side-B nodes of one pair in order along the curve.
+#[derive(Clone, Debug)]
+struct PairNodes {
+    /// Mesh node indices of side B, in curve order (end, mid, end, mid, ...).
+    nodes: Vec<u32>,
+    /// Arc length at each node.
+    arc: Vec<f64>,
+}
+
+/// Output of all contact pairs of a model.
+#[derive(Clone, Debug)]
+pub struct InterfaceOutput {
+    pairs: Vec<PairNodes>,
+    /// Per mesh node: position in its pair's node list (side-B nodes only).
+    slot: std::collections::HashMap<u32, usize>,
+    /// Point-to-node map of each element's rule: node value = Σ_g E[(i, g)] value_g.
+    extrapolation: [Matrix3<f64>; 2],
+}
+
+impl InterfaceOutput {
+    /// Orders the side-B nodes of every pair along its curve.
+    pub fn new(model: &Model) -> Self {
+        let mut slot = std::collections::HashMap::new();
+        let mut pairs = Vec::new();
+        for pair in &model.interface.pairs {
+            let elements = &model.interface.elements[pair.elements.clone()];
+            let chain = chain_order(
+                elements
+                    .iter()
+                    .map(|e| [e.nodes[3], e.nodes[4], e.nodes[5]])
+                    .collect(),
+            );
+            let mut arc = Vec::with_capacity(chain.len());
+            let mut s = 0.0;
+            for (k, &n) in chain.iter().enumerate() {
+                if k > 0 {
+                    let (a, b) = (
+                        model.mesh.nodes[chain[k - 1] as usize],
+                        model.mesh.nodes[n as usize],
+                    );
+                    s += ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
+                }
+                arc.push(s);
+            }
+            for (k, &n) in chain.iter().enumerate() {
+                slot.insert(n, k);
+            }
+            pairs.push(PairNodes { nodes: chain, arc });
+        }
+        let extrapolation = [
+            crate::element::interface6::InterfaceRule::NewtonCotes,
+            crate::element::interface6::InterfaceRule::Gauss,
+        ]
+        .map(|rule| {
+            let m = Matrix3::from_fn(|g, i| line3(rule.points()[g].0).0[i]);
+            m.try_inverse()
+                .expect("three distinct points determine a quadratic")
+        });
+        Self {
+            pairs,
+            slot,
+            extrapolation,
+        }
+    }
+
+    /// Nodal contact results of every pair (in curve order).
+    pub fn nodal(&self, model: &Model, states: &[InterfaceState]) -> Vec<Vec<NodalContact>> {
+        let mut out: Vec<Vec<NodalContact>> = self
+            .pairs
+            .iter()
+            .map(|p| vec![NodalContact::default(); p.nodes.len()])
+            .collect();
+        let mut count: Vec<Vec<u32>> = self.pairs.iter().map(|p| vec![0; p.nodes.len()]).collect();
+        for (e, element) in model.interface.elements.iter().enumerate() {
+            let p = element.pair as usize;
+            let points = &states[e * INTERFACE_POINTS..(e + 1) * INTERFACE_POINTS];
+            let ex = &self.extrapolation[element.rule as usize];
+            let values: Vec<[f64; 10]> = points.iter().map(NodalContact::from_state).collect();
+            for i in 0..3 {
+                let k = self.slot[&element.nodes[3 + i]];
+                let target = &mut out[p][k];
+                for (f, v) in target.values.iter_mut().enumerate() {
+                    *v += (0..3).map(|g| ex[(i, g)] * values[g][f]).sum::<f64>();
+                }
+                // Status of the point nearest to node i.
+                let nearest = (0..3)
+                    .min_by(|&a, &b| {
+                        let xi = [-1.0, 1.0, 0.0][i];
+                        let pa = element.rule.points()[a].0;
+                        let pb = element.rule.points()[b].0;
+                        (pa - xi).abs().total_cmp(&(pb - xi).abs())
+                    })
+                    .expect("three points");
+                target.status = target.status.max(points[nearest].status as i32);
+                count[p][k] += 1;
+            }
+        }
+        for (pair, counts) in out.iter_mut().zip(&count) {
+            for (n, &c) in pair.iter_mut().zip(counts) {
+                n.values.iter_mut().for_each(|v| *v /= c.max(1) as f64);
+            }
+        }
+        out
+    }
+
+    /// Interface grid: one quadratic edge (VTK 21) per element at the side-B positions, the
+    /// fields of [`FIELDS`] plus `contact_status` as point data, `pair` as cell data.
+    pub fn grid(&self, model: &Model, states: &[InterfaceState]) -> Grid {
+        let nodal = self.nodal(model, states);
+        let offsets: Vec<usize> = self
+            .pairs
+            .iter()
+            .scan(0, |acc, p| {
+                let start = *acc;
+                *acc += p.nodes.len();
+                Some(start)
+            })
+            .collect();
+        let mut grid = Grid::default();
+        for p in &self.pairs {
+            grid.points
+                .extend(p.nodes.iter().map(|&n| model.mesh.nodes[n as usize]));
+        }
+        for element in &model.interface.elements {
+            let base = offsets[element.pair as usize];
+            grid.push_cell(
+                21,
+                [3, 4, 5].map(|i| (base + self.slot[&element.nodes[i]]) as u64),
+            );
+        }
+        let all: Vec<&NodalContact> = nodal.iter().flatten().collect();
+        for (f, name) in FIELDS.iter().enumerate() {
+            let values = all.iter().map(|n| n.values[f]).collect();
+            grid.point_data.push(Field {
+                name: (*name).into(),
+                components: 1,
+                values: FieldValues::F64(values),
+            });
+        }
+        grid.point_data.push(Field {
+            name: "contact_status".into(),
+            components: 1,
+            values: FieldValues::I32(all.iter().map(|n| n.status).collect()),
+        });
+        grid.cell_data.push(Field {
+            name: "pair".into(),
+            components: 1,
+            values: FieldValues::I32(
+                model
+                    .interface
+                    .elements
+                    .iter()
+                    .map(|e| e.pair as i32)
+                    .collect(),
+            ),
+        });
+        grid
+    }
+
+    /// One table per pair along the curve: arc length, position, the fields and the status.
+    pub fn tables(&self, model: &Model, states: &[InterfaceState]) -> Vec<CsvTable> {
+        let nodal = self.nodal(model, states);
+        let mut columns: Vec<String> = ["arc_length", "x", "y"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        columns.extend(FIELDS.iter().map(|s| s.to_string()));
+        columns.push("contact_status".into());
+        self.pairs
+            .iter()
+            .zip(&nodal)
+            .map(|(p, values)| CsvTable {
+                columns: columns.clone(),
+                rows: p
+                    .nodes
+                    .iter()
+                    .zip(&p.arc)
+                    .zip(values)
+                    .map(|((&n, &s), v)| {
+                        let x = model.mesh.nodes[n as usize];
+                        let mut row = vec![s, x[0], x[1]];
+                        row.extend(v.values);
+                        row.push(v.status as f64);
+                        row
+                    })
+                    .collect(),
+            })
+            .collect()
+    }
+}
+
+/// Resultants of each pair: [Σ p_N dA, Σ p_T dA, F_x, F_y], where (F_x, F_y) is the force
+/// body A exerts on body B, −Σ (p_T t + p_N n) dA (in axisymmetry totals over the circle).
+pub fn resultants(model: &Model, states: &[InterfaceState]) -> Vec<[f64; 4]> {
+    let mut out = vec![[0.0; 4]; model.interface.pairs.len()];
+    for (e, element) in model.interface.elements.iter().enumerate() {
+        let r = &mut out[element.pair as usize];
+        for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
+            let p = interface_point(&model.analysis, &element.b_coords, xi, w);
+            let [pt, pn] = states[e * INTERFACE_POINTS + g].stress;
+            r[0] += pn * p.da;
+            r[1] += pt * p.da;
+            for c in 0..2 {
+                r[2 + c] -= (pt * p.tangent[c] + pn * p.normal[c]) * p.da;
+            }
+        }
+    }
+    out
+}
+
+/// Orders quadratic edges [b0, b1, mid] (walked b0 → b1) into chains along the curve:
+/// b0, mid, b1, mid, ... Several separate pieces are concatenated; a closed loop starts
+/// anywhere.
+fn chain_order(edges: Vec<[u32; 3]>) -> Vec<u32> {
+    use std::collections::HashMap;
+    let by_start: HashMap<u32, usize> = edges.iter().enumerate().map(|(i, e)| (e[0], i)).collect();
+    let ends: std::collections::HashSet<u32> = edges.iter().map(|e| e[1]).collect();
+    let mut used = vec![false; edges.len()];
+    let mut order = Vec::with_capacity(2 * edges.len() + 1);
+    // Open chains first (starting where no edge ends), then any remaining loops.
+    let starts: Vec<usize> = (0..edges.len())
+        .filter(|&i| !ends.contains(&edges[i][0]))
+        .chain(0..edges.len())
+        .collect();
+    for start in starts {
+        if used[start] {
+            continue;
+        }
+        let piece = order.len();
+        order.push(edges[start][0]);
+        let mut current = Some(start);
+        while let Some(i) = current.filter(|&i| !used[i]) {
+            used[i] = true;
+            order.push(edges[i][2]);
+            order.push(edges[i][1]);
+            current = by_start.get(&edges[i][1]).copied();
+        }
+        if order.len() - piece > 3 && order[piece] == order[order.len() - 1] {
+            order.pop(); // a closed loop lists its first node once
+        }
+    }
+    order
+}
