@@ -65,8 +65,9 @@ impl InterfaceLaw for LinearCoulomb {
             stiffness: [kt, kn],
             ..InterfaceState::default()
         };
-        if u_n >= 0.0 {
-            // Open: no stress. The tangential reference follows the face, so a point that
+        if u_n > 0.0 {
+            // Open: no stress. (Faces exactly touching, u_N = 0, count as closed with zero
+            // stress, so bodies resting on each other start with the contact stiffness.) The tangential reference follows the face, so a point that
             // closes again starts without tangential stress.
             s.plastic_slip = u_t;
             s.status = ContactStatus::Open;

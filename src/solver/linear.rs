@@ -144,7 +144,9 @@ impl CholeskySolver {
             MemBuffer::try_new(bicgstab_scratch(identity, precond, matrix, 1, self.par))
                 .map_err(|_| Error::Linear("out of memory for the Krylov workspace".into()))?;
         let params = BicgParams {
-            initial_guess: InitialGuessStatus::Zero,
+            // `Zero` would be right, but faer 0.24's BiCGSTAB then leaves its residual vector
+            // uninitialised; with `MaybeNonZero` it computes r = b − A·0 itself.
+            initial_guess: InitialGuessStatus::MaybeNonZero,
             abs_tolerance: 0.0,
             rel_tolerance: 1e-12,
             max_iters: 1000,

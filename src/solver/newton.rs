@@ -2,9 +2,10 @@
 //! K_T(u_i) δu = Q − F(u_i), u_{i+1} = u_i + δu, until both the out-of-balance force and the
 //! correction are small.
 //!
-//! Convergence is declared when ‖r‖ ≤ tol_f · max(‖f_ext‖, ‖f_int‖, f_floor) over the free
-//! dofs (‖f_int‖ over all dofs includes the reactions, so displacement-driven problems have a
-//! meaningful reference) and the last correction satisfied ‖δu‖ ≤ tol_u · ‖u‖. As in
+//! Convergence is declared when ‖r‖ ≤ tol_f · max(‖f_ext‖, ‖f_int‖, ‖r₀‖, f_floor) over the
+//! free dofs (‖f_int‖ over all dofs includes the reactions, so displacement-driven problems
+//! have a meaningful reference; ‖r₀‖, the out-of-balance force at the start of the
+//! increment, gives one when the solution is stress-free, e.g. a body lifted off a contact) and the last correction satisfied ‖δu‖ ≤ tol_u · ‖u‖. As in
 //! Abaqus' "linear increment" rule, a residual a thousand times below the force tolerance is
 //! accepted without the correction check: a linear problem then needs one solve, not two.
 
@@ -86,6 +87,7 @@ pub fn solve_increment(
     dofs.gather_free(f_ext, &mut ext);
     let f_ext_norm = norm(f_ext);
     let mut last_correction = f64::INFINITY;
+    let mut initial_residual = None;
     loop {
         let t = std::time::Instant::now();
         system.clear(true);
@@ -95,8 +97,10 @@ pub fn solve_increment(
         for (ri, ei) in r.iter_mut().zip(&ext) {
             *ri = ei - *ri;
         }
+        let r0 = *initial_residual.get_or_insert(norm(&r));
         let reference = f_ext_norm
             .max(norm(&system.internal_force))
+            .max(r0)
             .max(force_floor)
             .max(f64::MIN_POSITIVE);
         let residual = norm(&r) / reference;

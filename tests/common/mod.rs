@@ -281,7 +281,14 @@ pub fn add_point_group(mesh: &mut Mesh, name: &str, at: [f64; 2]) {
 /// are merged (one conforming mesh); otherwise they stay distinct (coincident contact nodes).
 pub fn merge(a: Mesh, b: Mesh, conforming: bool) -> Mesh {
     let mut m = a;
-    let offset_entity = 10_000_000;
+    // Entities of `b` are shifted past every entity of `a`, so merges can be nested.
+    let max_entity = m
+        .cells
+        .iter()
+        .map(|c| c.entity)
+        .chain(m.lines.iter().map(|l| l.entity))
+        .chain(m.points.iter().map(|p| p.entity));
+    let offset_entity = max_entity.max().unwrap_or(0) + 1;
     let mut map = Vec::with_capacity(b.nodes.len());
     let lookup: std::collections::HashMap<(i64, i64), u32> = if conforming {
         m.nodes
