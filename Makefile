@@ -1,6 +1,7 @@
 # asperity: build, examples, tests and benchmarks.
 # Every target installs what it needs (gmsh via apt-get, the Python venv via pip).
 #   make thick_cylinder          run the thick-cylinder example (gmsh -> solver -> plots)
+#   make shrink_fit              run the shrink-fit contact example
 #   make test                    all tests (Rust unit/integration tests + output checks)
 #   make mesh GEO=geo/X.geo SIZE=0.5   mesh a .geo script into build/mesh/
 #   make bench                   timings at ~10k, ~100k, ~1M unknowns, appended to BENCHMARKS.md
@@ -13,7 +14,7 @@ SUDO    := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 BIN     := target/release/asperity
 SIZE    ?= 1
 
-.PHONY: all deps gmsh venv build test mesh bench examples thick_cylinder clean
+.PHONY: all deps gmsh venv build test mesh bench examples thick_cylinder shrink_fit clean
 
 all: build
 
@@ -45,19 +46,27 @@ mesh: gmsh
 	@echo "mesh: build/mesh/$(basename $(notdir $(GEO)))-$(SIZE).msh"
 
 ## --- examples -----------------------------------------------------------------
-examples: thick_cylinder
+examples: thick_cylinder shrink_fit
 
 thick_cylinder: deps build
 	$(BIN) run pipelines/thick_cylinder.toml --out out/thick_cylinder
 	$(PYTHON) pipelines/plot_fields.py out/thick_cylinder --case pipelines/thick_cylinder.toml
 	@echo "results: out/thick_cylinder (results.pvd for ParaView, *.png, history.csv)"
 
+shrink_fit: deps build
+	$(BIN) run pipelines/shrink_fit.toml --out out/shrink_fit
+	$(PYTHON) pipelines/plot_fields.py out/shrink_fit --case pipelines/shrink_fit.toml
+	@echo "results: out/shrink_fit (results.pvd for ParaView, *.png, contact_fit_*.csv, history.csv)"
+
 ## --- tests --------------------------------------------------------------------
 test: deps
 	$(CARGO) test --release
 	$(CARGO) build --release
-	$(BIN) run pipelines/thick_cylinder.toml --out build/test/thick_cylinder
-	$(PYTHON) pipelines/check_output.py build/test/thick_cylinder
+	@for c in thick_cylinder shrink_fit shrink_fit_split; do \
+	  $(BIN) run pipelines/$$c.toml --out build/test/$$c >/dev/null && \
+	  $(PYTHON) pipelines/check_output.py build/test/$$c || exit 1; \
+	  $(PYTHON) pipelines/plot_fields.py build/test/$$c >/dev/null 2>&1 || { echo "plot_fields.py failed on $$c"; exit 1; }; \
+	done
 
 ## --- benchmarks ---------------------------------------------------------------
 bench: gmsh

@@ -7,7 +7,10 @@ Fails (exit 1) when an expected array is missing, a value is not finite, the .pv
 not list every converged step of history.csv, or - for the thick-cylinder example - the bore
 displacement differs from Lamé's closed form by more than 1e-4 (the mesh has 8 quadratic
 elements through the wall; the solver tests measure 4e-6 at that density, so 1e-4 leaves
-room only for a real defect such as wrong loads or a wrong axisymmetric weighting).
+room only for a real defect such as wrong loads or a wrong axisymmetric weighting); for the
+shrink fit, the contact pressure differs from delta / (C + 1/k_N) by more than 1e-3 (6
+elements through each wall; measured 6e-6 in the solver tests) or the interface arrays are
+incomplete.
 """
 import csv
 import math
@@ -19,6 +22,11 @@ import pyvista as pv
 
 POINT_ARRAYS = {"displacement": 3, "stress": 6, "von_mises": 1}
 CELL_ARRAYS = {"body": 1}
+INTERFACE_ARRAYS = [
+    "contact_normal_stress", "contact_pressure", "contact_shear_stress", "normal_gap",
+    "tangential_slip", "plastic_slip", "friction_coefficient", "contact_status",
+    "normal_stiffness", "tangential_stiffness",
+]
 
 
 def check_grid(path: Path) -> pv.UnstructuredGrid:
@@ -40,6 +48,40 @@ def check_grid(path: Path) -> pv.UnstructuredGrid:
     return grid
 
 
+def check_interface(path: Path) -> pv.UnstructuredGrid:
+    grid = pv.read(path)
+    for name in INTERFACE_ARRAYS:
+        if name not in grid.point_data:
+            sys.exit(f"{path}: interface array '{name}' missing (have {list(grid.point_data)})")
+        if not np.all(np.isfinite(grid.point_data[name])):
+            sys.exit(f"{path}: '{name}' has non-finite values")
+    if set(np.unique(grid.celltypes)) != {21}:
+        sys.exit(f"{path}: interface cells must be quadratic edges (21)")
+    status = np.asarray(grid.point_data["contact_status"])
+    if not set(np.unique(status)) <= {0, 1, 2}:
+        sys.exit(f"{path}: contact_status outside 0/1/2")
+    return grid
+
+
+def check_shrink_fit(out: Path, history: list) -> None:
+    """Contact pressure against p = delta / (C + 1/k_N) (plane strain, solid shaft)."""
+    b, c, e, nu, delta, k_n = 10.0, 20.0, 210000.0, 0.3, 0.01, 1e4
+    e1, nu1 = e / (1 - nu**2), nu / (1 - nu)
+    compliance = b * ((1 - nu1) / e1 + ((c * c + b * b) / (c * c - b * b) + nu1) / e1)
+    exact = delta / (compliance + 1 / k_n)
+    grid = check_interface(sorted(out.glob("interface_*.vtu"))[-1])
+    p = np.asarray(grid.point_data["contact_pressure"])
+    err = np.max(np.abs(p - exact)) / exact
+    print(f"contact pressure {p.min():.5f}..{p.max():.5f} MPa, closed form {exact:.5f} MPa, relative error {err:.2e}")
+    if not err < 1e-3:
+        sys.exit("contact pressure differs from the closed form")
+    fn = float(history[-1]["fit_normal_force"])
+    if not abs(fn + 2 * np.pi * b * 10.0 * exact) < 1e-3 * 2 * np.pi * b * 10.0 * exact:
+        sys.exit(f"normal resultant {fn} is not -2 pi b L p")
+    if not list(out.glob("contact_fit_*.csv")):
+        sys.exit("contact CSV missing")
+
+
 def main() -> None:
     out = Path(sys.argv[1])
     reader = pv.get_reader(out / "results.pvd")
@@ -48,6 +90,8 @@ def main() -> None:
     if len(reader.time_values) != len(history):
         sys.exit(f"results.pvd lists {len(reader.time_values)} steps, history.csv {len(history)}")
     grids = [check_grid(p) for p in sorted(out.glob("bodies_*.vtu"))]
+    for p in sorted(out.glob("interface_*.vtu")):
+        check_interface(p)
     last = grids[-1]
     if "thick_cylinder" in str(out):
         a, b, p, e, nu = 10.0, 20.0, 100.0, 200000.0, 0.3
@@ -61,6 +105,8 @@ def main() -> None:
         fy = float(history[-1]["reaction_bottom_y"])
         if not math.isfinite(fy):
             sys.exit("non-finite reaction")
+    if "shrink_fit" in str(out):
+        check_shrink_fit(out, history)
     print(f"{out}: {len(grids)} steps, arrays {sorted(last.array_names)}: ok")
 
 

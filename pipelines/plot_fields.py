@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
-"""Pictures of a finished run: von Mises stress on the deformed shape (last step) and the
-reaction forces of every support against the load factor.
+"""Pictures of a finished run: von Mises stress on the deformed shape (last step), the
+reaction forces of every support against the load factor, and, for runs with contact pairs,
+the contact stresses along each interface (last step).
 
 Usage: plot_fields.py OUT_DIR [--case CASE.toml] [--scale S]
 
-Writes OUT_DIR/von_mises.png and OUT_DIR/reactions.png. The deformation is magnified so the
+Writes OUT_DIR/von_mises.png, OUT_DIR/reactions.png and OUT_DIR/contact_<pair>.png. The deformation is magnified so the
 largest displacement is 5 % of the model size unless --scale is given.
 """
 import argparse
@@ -63,13 +64,36 @@ def reaction_plot(out: Path) -> Path:
     return path
 
 
+def contact_plots(out: Path) -> list[Path]:
+    """Contact pressure and shear stress along each pair's curve at the last step."""
+    paths = []
+    pairs = sorted({p.name.rsplit("_", 1)[0] for p in out.glob("contact_*_*.csv")})
+    for pair in pairs:
+        last = sorted(out.glob(f"{pair}_*.csv"))[-1]
+        data = np.genfromtxt(last, delimiter=",", names=True)
+        fig, ax = plt.subplots(figsize=(6, 4))
+        ax.plot(data["arc_length"], data["contact_pressure"], "o-", ms=3, label="contact pressure −p_N")
+        ax.plot(data["arc_length"], data["contact_shear_stress"], "s-", ms=3, label="shear stress p_T")
+        ax.set_xlabel("arc length along side B [mm]")
+        ax.set_ylabel("contact stress [MPa]")
+        ax.set_title(f"{pair.removeprefix('contact_')}, {last.stem.rsplit('_', 1)[1]}")
+        ax.grid(True, alpha=0.3)
+        ax.legend()
+        fig.tight_layout()
+        path = out / f"{pair}.png"
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+        paths.append(path)
+    return paths
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("out", type=Path)
     parser.add_argument("--case", type=Path, help="the case file (for the record)")
     parser.add_argument("--scale", type=float, default=None, help="deformation magnification")
     args = parser.parse_args()
-    for path in (von_mises_picture(args.out, args.scale), reaction_plot(args.out)):
+    for path in [von_mises_picture(args.out, args.scale), reaction_plot(args.out), *contact_plots(args.out)]:
         print(f"wrote {path}")
 
 
