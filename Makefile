@@ -71,6 +71,7 @@ test: deps
 ## --- benchmarks ---------------------------------------------------------------
 bench: gmsh
 	$(CARGO) bench --bench elastic
+	$(CARGO) bench --bench contact
 
 clean:
 	rm -rf target build out $(VENV)

@@ -263,6 +263,9 @@ pub struct GlobalSystem {
     pub pattern: SparsityPattern,
     pub values: Vec<f64>,
     pub internal_force: Vec<f64>,
+    /// Values of a symmetric positive-definite approximation of an unsymmetric tangent, used
+    /// to precondition its solution (filled by the problem when the tangent is unsymmetric).
+    pub preconditioner: Vec<f64>,
 }
 
 /// A raw pointer that may be shared between threads; writes through it are made disjoint by
@@ -291,7 +294,13 @@ impl GlobalSystem {
             pattern,
             values: vec![0.0; nnz],
             internal_force: vec![0.0; dof_count],
+            preconditioner: Vec::new(),
         }
+    }
+
+    /// The preconditioner values as a faer view over the same pattern.
+    pub fn preconditioner_matrix(&self) -> SparseColMatRef<'_, u32, f64> {
+        SparseColMatRef::new(self.pattern.symbolic().as_ref(), &self.preconditioner)
     }
 
     /// Zeroes the matrix values (if `with_tangent`) and the internal force.
@@ -320,62 +329,117 @@ impl GlobalSystem {
         trial: &mut [S::State],
         with_tangent: bool,
     ) {
-        let ppe = set.points_per_element();
-        assert_eq!(trial.len(), set.len() * ppe);
-        assert_eq!(committed.len(), trial.len());
-        let values = SharedMut(self.values.as_mut_ptr());
-        let force = SharedMut(self.internal_force.as_mut_ptr());
-        let states = SharedMut(trial.as_mut_ptr());
-        let pattern = &self.pattern;
-        let element = |e: usize| {
-            let nodes = set.nodes(e);
-            let mut ue = ElementVector::zeros();
-            for (a, &n) in nodes.iter().enumerate() {
-                ue[2 * a] = u[2 * n as usize];
-                ue[2 * a + 1] = u[2 * n as usize + 1];
-            }
-            let mut ke = ElementMatrix::zeros();
-            let mut fe = ElementVector::zeros();
-            // SAFETY: every element is evaluated exactly once, and its state slots are its own.
-            let trial_e = unsafe { std::slice::from_raw_parts_mut(states.get().add(e * ppe), ppe) };
-            set.evaluate(
-                e,
-                &ue,
-                &committed[e * ppe..(e + 1) * ppe],
-                trial_e,
-                with_tangent.then_some(&mut ke),
-                &mut fe,
-            );
-            let global = |a: usize| 2 * nodes[a / 2] as usize + a % 2;
+        let values = with_tangent.then_some(SharedMut(self.values.as_mut_ptr()));
+        let force = Some(SharedMut(self.internal_force.as_mut_ptr()));
+        scatter(
+            &self.pattern,
+            set,
+            coloring,
+            dofs,
+            u,
+            committed,
+            trial,
+            values,
+            force,
+        );
+    }
+
+    /// Adds only the element matrices of `set` into `target`, a value array over this
+    /// system's pattern (e.g. a preconditioner); internal forces are left alone.
+    #[allow(clippy::too_many_arguments)]
+    pub fn assemble_matrix_into<S: ElementSet>(
+        &self,
+        set: &S,
+        coloring: &Coloring,
+        dofs: &DofMap,
+        u: &[f64],
+        committed: &[S::State],
+        trial: &mut [S::State],
+        target: &mut [f64],
+    ) {
+        assert_eq!(target.len(), self.values.len());
+        let values = Some(SharedMut(target.as_mut_ptr()));
+        scatter(
+            &self.pattern,
+            set,
+            coloring,
+            dofs,
+            u,
+            committed,
+            trial,
+            values,
+            None,
+        );
+    }
+}
+
+/// Evaluates every element of `set` (colour by colour, in parallel within a colour) and adds
+/// its matrix into `values` and its force into `force`, where given.
+#[allow(clippy::too_many_arguments)]
+fn scatter<S: ElementSet>(
+    pattern: &SparsityPattern,
+    set: &S,
+    coloring: &Coloring,
+    dofs: &DofMap,
+    u: &[f64],
+    committed: &[S::State],
+    trial: &mut [S::State],
+    values: Option<SharedMut<f64>>,
+    force: Option<SharedMut<f64>>,
+) {
+    let ppe = set.points_per_element();
+    assert_eq!(trial.len(), set.len() * ppe);
+    assert_eq!(committed.len(), trial.len());
+    let states = SharedMut(trial.as_mut_ptr());
+    let element = |e: usize| {
+        let nodes = set.nodes(e);
+        let mut ue = ElementVector::zeros();
+        for (a, &n) in nodes.iter().enumerate() {
+            ue[2 * a] = u[2 * n as usize];
+            ue[2 * a + 1] = u[2 * n as usize + 1];
+        }
+        let mut ke = ElementMatrix::zeros();
+        let mut fe = ElementVector::zeros();
+        // SAFETY: every element is evaluated exactly once, and its state slots are its own.
+        let trial_e = unsafe { std::slice::from_raw_parts_mut(states.get().add(e * ppe), ppe) };
+        let tangent = values.is_some().then_some(&mut ke);
+        set.evaluate(
+            e,
+            &ue,
+            &committed[e * ppe..(e + 1) * ppe],
+            trial_e,
+            tangent,
+            &mut fe,
+        );
+        let global = |a: usize| 2 * nodes[a / 2] as usize + a % 2;
+        if let Some(force) = force {
             for a in 0..2 * nodes.len() {
                 // SAFETY: elements of one colour share no node, hence no dof.
                 unsafe { *force.get().add(global(a)) += fe[a] };
             }
-            if !with_tangent {
-                return;
-            }
-            for b in 0..2 * nodes.len() {
-                let Some(col) = dofs.equation(global(b)) else {
-                    continue;
-                };
-                for a in 0..2 * nodes.len() {
-                    if let Some(row) = dofs.equation(global(a)) {
-                        // SAFETY: as above; (row, col) belong to this element's dofs only.
-                        unsafe { *values.get().add(pattern.position(row, col)) += ke[(a, b)] };
-                    }
+        }
+        let Some(values) = values else { return };
+        for b in 0..2 * nodes.len() {
+            let Some(col) = dofs.equation(global(b)) else {
+                continue;
+            };
+            for a in 0..2 * nodes.len() {
+                if let Some(row) = dofs.equation(global(a)) {
+                    // SAFETY: as above; (row, col) belong to this element's dofs only.
+                    unsafe { *values.get().add(pattern.position(row, col)) += ke[(a, b)] };
                 }
             }
-        };
-        let last = coloring.groups.len().saturating_sub(1);
-        for (c, group) in coloring.groups.iter().enumerate() {
-            if c == last && coloring.groups.len() == 64 {
-                group.iter().for_each(|&e| element(e as usize));
-            } else {
-                group
-                    .par_iter()
-                    .with_min_len(64)
-                    .for_each(|&e| element(e as usize));
-            }
+        }
+    };
+    let last = coloring.groups.len().saturating_sub(1);
+    for (c, group) in coloring.groups.iter().enumerate() {
+        if c == last && coloring.groups.len() == 64 {
+            group.iter().for_each(|&e| element(e as usize));
+        } else {
+            group
+                .par_iter()
+                .with_min_len(64)
+                .for_each(|&e| element(e as usize));
         }
     }
 }

@@ -67,8 +67,38 @@ pub trait InterfaceLaw: Send + Sync + std::fmt::Debug {
         committed: &InterfaceState,
     ) -> (InterfaceState, InterfaceTangent);
 
+    /// The elastic (stick) tangent at `state`: diag(k_T, k_N) for a closed point, the
+    /// regularising stiffness for an open one. It is symmetric positive definite, and is
+    /// what the paper iterates with (conclusion 3, "elastic contact matrix"); asperity uses it
+    /// to precondition the unsymmetric consistent tangent.
+    fn elastic_tangent(&self, state: &InterfaceState) -> InterfaceTangent;
+
     /// Short description for logs.
     fn describe(&self) -> String;
+}
+
+/// A law seen through its elastic tangent: same stresses and states, tangent replaced by
+/// [`InterfaceLaw::elastic_tangent`].
+#[derive(Debug)]
+pub struct WithElasticTangent<'a>(pub &'a dyn InterfaceLaw);
+
+impl InterfaceLaw for WithElasticTangent<'_> {
+    fn update(
+        &self,
+        relative: [f64; 2],
+        committed: &InterfaceState,
+    ) -> (InterfaceState, InterfaceTangent) {
+        let (state, _) = self.0.update(relative, committed);
+        (state, self.0.elastic_tangent(&state))
+    }
+
+    fn elastic_tangent(&self, state: &InterfaceState) -> InterfaceTangent {
+        self.0.elastic_tangent(state)
+    }
+
+    fn describe(&self) -> String {
+        format!("{} (elastic tangent)", self.0.describe())
+    }
 }
 
 /// Relative size of the stiffness an open point keeps in the tangent (never in the stress),

@@ -7,10 +7,12 @@
 //! million unknowns, see DESIGN.md), so the low-level API is used with a buffer kept here.
 //!
 //! Friction makes the tangent unsymmetric (paper Eq. 21). faer's sparse LU fills badly on FE
-//! matrices (DESIGN.md), so the unsymmetric path keeps the Cholesky machinery: it factors
-//! the symmetric part ½(K + Kᵀ) with the same symbolic factorisation and uses it as the
-//! preconditioner of BiCGSTAB on the true tangent. The unsymmetric part lives only at
-//! slipping interface points, so few Krylov iterations are needed.
+//! matrices (DESIGN.md), so the unsymmetric path keeps the Cholesky machinery: it factors a
+//! symmetric positive-definite approximation of the tangent with the same symbolic
+//! factorisation and uses it as the preconditioner of BiCGSTAB on the true tangent. The
+//! approximation is the tangent with the elastic contact matrix (paper conclusion 3); the
+//! symmetric part ½(K + Kᵀ) would not do, since at a slipping point it is indefinite. The
+//! two differ only at slipping interface points, so few Krylov iterations are needed.
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -32,10 +34,6 @@ pub struct CholeskySolver {
     workspace: MemBuffer,
     par: Par,
     factorized: bool,
-    /// For each stored entry (i, j), the position of (j, i); built on the first unsymmetric
-    /// solve (the pattern is structurally symmetric).
-    transpose: Vec<u32>,
-    symmetric_part: Vec<f64>,
 }
 
 impl std::fmt::Debug for CholeskySolver {
@@ -72,8 +70,6 @@ impl CholeskySolver {
             workspace,
             par,
             factorized: false,
-            transpose: Vec::new(),
-            symmetric_part: Vec::new(),
         })
     }
 
@@ -109,29 +105,17 @@ impl CholeskySolver {
         Ok(())
     }
 
-    /// Solves `A x = rhs` in place for an unsymmetric `matrix` (full pattern stored):
-    /// factors its symmetric part and runs preconditioned BiCGSTAB to a relative residual of
-    /// 1e-12. Returns the number of Krylov iterations.
+    /// Solves `A x = rhs` in place for an unsymmetric `matrix` (full pattern stored): factors
+    /// the symmetric positive-definite `preconditioner` (same pattern) and runs BiCGSTAB on
+    /// `matrix` preconditioned by it, to a relative residual of 1e-12. Returns the number of
+    /// Krylov iterations.
     pub fn solve_unsymmetric(
         &mut self,
         matrix: SparseColMatRef<'_, u32, f64>,
+        preconditioner: SparseColMatRef<'_, u32, f64>,
         rhs: &mut [f64],
     ) -> Result<usize> {
-        if self.transpose.is_empty() {
-            self.transpose = transpose_positions(matrix);
-        }
-        let values = matrix.val();
-        self.symmetric_part.clear();
-        self.symmetric_part.extend(
-            values
-                .iter()
-                .zip(&self.transpose)
-                .map(|(v, &t)| 0.5 * (v + values[t as usize])),
-        );
-        let symmetric_part = std::mem::take(&mut self.symmetric_part);
-        let result = self.factorize(SparseColMatRef::new(matrix.symbolic(), &symmetric_part));
-        self.symmetric_part = symmetric_part;
-        result?;
+        self.factorize(preconditioner)?;
         let n = rhs.len();
         let precond = CholeskyPreconditioner {
             llt: LltRef::new(&self.symbolic, &self.factor),
@@ -187,26 +171,7 @@ impl CholeskySolver {
     }
 }
 
-/// Position of the transposed entry of every stored entry of a structurally symmetric
-/// pattern.
-fn transpose_positions(matrix: SparseColMatRef<'_, u32, f64>) -> Vec<u32> {
-    let col_ptr = matrix.symbolic().col_ptr();
-    let rows = matrix.symbolic().row_idx();
-    let mut out = vec![0u32; rows.len()];
-    for j in 0..matrix.ncols() {
-        for k in col_ptr[j] as usize..col_ptr[j + 1] as usize {
-            let i = rows[k] as usize;
-            let (a, b) = (col_ptr[i] as usize, col_ptr[i + 1] as usize);
-            let t = rows[a..b]
-                .binary_search(&(j as u32))
-                .expect("element patterns are structurally symmetric");
-            out[k] = (a + t) as u32;
-        }
-    }
-    out
-}
-
-/// The Cholesky factor of the symmetric part, applied as a preconditioner.
+/// A Cholesky factor applied as a preconditioner.
 #[derive(Clone, Copy, Debug)]
 struct CholeskyPreconditioner<'a> {
     llt: LltRef<'a, u32, f64>,

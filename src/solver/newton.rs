@@ -132,7 +132,11 @@ pub fn solve_increment(
             linear.solve_in_place(&mut r);
             log.solve_seconds += t.elapsed().as_secs_f64();
         } else {
-            log.krylov_iterations += linear.solve_unsymmetric(system.matrix(), &mut r)?;
+            log.krylov_iterations += linear.solve_unsymmetric(
+                system.matrix(),
+                system.preconditioner_matrix(),
+                &mut r,
+            )?;
             log.unsymmetric_solves += 1;
             log.solve_seconds += t.elapsed().as_secs_f64();
         }

@@ -7,7 +7,7 @@
 use crate::assembly::GlobalSystem;
 use crate::contact::InterfaceState;
 use crate::material::PointState;
-use crate::model::{INTERFACE_POINTS, Model};
+use crate::model::{ElasticContactCorrection, INTERFACE_POINTS, Model};
 use crate::solver::linear::CholeskySolver;
 use crate::solver::newton::{NewtonLog, NewtonSettings, Problem, norm, solve_increment};
 use crate::{Error, Result};
@@ -68,19 +68,38 @@ impl Problem for Mechanics<'_> {
             self.trial,
             with_tangent,
         );
+        let (ic, it) = (self.interface_committed, &mut *self.interface_trial);
         system.assemble(
             &m.interface,
             &m.interface_coloring,
             &m.dofs,
             u,
-            self.interface_committed,
-            self.interface_trial,
+            ic,
+            it,
             with_tangent,
         );
-        !self
+        let symmetric = !self
             .interface_trial
             .iter()
-            .any(InterfaceState::has_unsymmetric_tangent)
+            .any(InterfaceState::has_unsymmetric_tangent);
+        if with_tangent && !symmetric {
+            // Preconditioner: the tangent with the elastic contact matrix (paper conclusion 3).
+            system.preconditioner.clone_from(&system.values);
+            let mut scratch = self.interface_trial.to_vec();
+            let mut target = std::mem::take(&mut system.preconditioner);
+            let correction = ElasticContactCorrection(&m.interface);
+            system.assemble_matrix_into(
+                &correction,
+                &m.interface_coloring,
+                &m.dofs,
+                u,
+                ic,
+                &mut scratch,
+                &mut target,
+            );
+            system.preconditioner = target;
+        }
+        symmetric
     }
 }
 

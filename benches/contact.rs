@@ -1,0 +1,178 @@
+//! `make bench` (second part): what the unsymmetric tangent of sliding friction costs.
+//! A block is pressed onto a base and pushed along it until every interface point slips
+//! (paper Eq. 21 makes the tangent unsymmetric there). On that tangent the bench times
+//! (a) the symmetric path: numeric Cholesky of the symmetric part + one solve, and
+//! (b) the unsymmetric path: the same factorisation used as BiCGSTAB preconditioner on the
+//! true tangent, and reports the Krylov iterations. Figures go to BENCHMARKS.md.
+
+use std::io::Write;
+use std::path::Path;
+use std::time::Instant;
+
+use asperity::assembly::GlobalSystem;
+use asperity::case::Case;
+use asperity::mesh::{gmsh, msh};
+use asperity::model::{ElasticContactCorrection, Model};
+use asperity::solver::linear::CholeskySolver;
+use asperity::solver::newton::NewtonSettings;
+use asperity::solver::stepping::run_steps;
+
+const CASE: &str = r#"
+[mesh]
+file = "unused.msh"
+[analysis]
+type = "plane_strain"
+[[body]]
+group = "base"
+material = { E = 210000.0, nu = 0.3 }
+[[body]]
+group = "block"
+material = { E = 210000.0, nu = 0.3 }
+[[support]]
+group = "ground"
+ux = 0.0
+uy = 0.0
+[[support]]
+group = "block_top"
+ux = 0.05
+factors = [0.0, 1.0]
+[[load]]
+group = "block_top"
+pressure = 10.0
+factors = [1.0, 1.0]
+[[contact]]
+side_a = "base_top"
+side_b = "block_bottom"
+law = { type = "linear_coulomb", normal_stiffness = 1e5, tangential_stiffness = 1e5, friction = 0.3 }
+[steps]
+count = 2
+"#;
+
+fn main() {
+    let quick = std::env::args().any(|a| a == "--quick");
+    let case = Case::from_toml(CASE, Path::new("bench.toml")).expect("bench case");
+    let mut rows = Vec::new();
+    for n in [40usize, 128] {
+        let mesh_path = Path::new("build/bench").join(format!("sliding-{n}.msh"));
+        gmsh::mesh_geo(
+            Path::new("geo/sliding_block.geo"),
+            1.0,
+            &[("n".into(), n as f64)],
+            &mesh_path,
+        )
+        .expect("gmsh");
+        let model = Model::build(msh::read_msh(&mesh_path).expect("read"), &case).expect("model");
+        let t = Instant::now();
+        let (solution, stats) =
+            run_steps(&model, &NewtonSettings::from(case.solver), |_| Ok(0.0)).expect("solve");
+        let t_run = t.elapsed().as_secs_f64();
+        let slipping = solution
+            .interface_committed
+            .iter()
+            .filter(|s| s.has_unsymmetric_tangent())
+            .count();
+        // The tangent at the converged sliding state.
+        let mut system = GlobalSystem::new(model.pattern.clone(), model.dofs.dof_count());
+        let mut trial = solution.trial.clone();
+        let mut itrial = solution.interface_trial.clone();
+        let u = &solution.u;
+        system.assemble(
+            &model.continuum,
+            &model.continuum_coloring,
+            &model.dofs,
+            u,
+            &solution.committed,
+            &mut trial,
+            true,
+        );
+        system.assemble(
+            &model.interface,
+            &model.interface_coloring,
+            &model.dofs,
+            u,
+            &solution.interface_committed,
+            &mut itrial,
+            true,
+        );
+        // Preconditioner: the tangent with the elastic contact matrix, as the solver builds it.
+        let mut pre = system.values.clone();
+        let mut scratch = solution.interface_trial.clone();
+        let correction = ElasticContactCorrection(&model.interface);
+        system.assemble_matrix_into(
+            &correction,
+            &model.interface_coloring,
+            &model.dofs,
+            u,
+            &solution.interface_committed,
+            &mut scratch,
+            &mut pre,
+        );
+        system.preconditioner = pre;
+        let mut linear = CholeskySolver::new(&model.pattern).expect("symbolic");
+        let rhs: Vec<f64> = (0..model.dofs.free_count())
+            .map(|i| ((i % 7) as f64 - 3.0) * 1e-3)
+            .collect();
+        let mut x = rhs.clone();
+        linear
+            .solve_unsymmetric(system.matrix(), system.preconditioner_matrix(), &mut x)
+            .expect("warm-up");
+        let t = Instant::now();
+        let mut x = rhs.clone();
+        let iterations = linear
+            .solve_unsymmetric(system.matrix(), system.preconditioner_matrix(), &mut x)
+            .expect("unsymmetric");
+        let t_unsym = t.elapsed().as_secs_f64();
+        // Symmetric path on the same pattern: what an iteration without slipping points costs
+        // (numeric Cholesky + one solve of a symmetric matrix of this pattern).
+        let t = Instant::now();
+        linear
+            .factorize(system.preconditioner_matrix())
+            .expect("factor");
+        let mut y = rhs.clone();
+        linear.solve_in_place(&mut y);
+        let t_sym = t.elapsed().as_secs_f64();
+        let row = format!(
+            "| {} | {} | {slipping} | {} | {} | {:.2} | {:.4} | {:.4} | {iterations} | {:.2} |",
+            model.dofs.free_count(),
+            model.interface.elements.len(),
+            stats.iterations,
+            stats.unsymmetric_solves,
+            t_run,
+            t_sym,
+            t_unsym,
+            t_unsym / t_sym
+        );
+        println!("{row}");
+        rows.push(row);
+        if quick {
+            break;
+        }
+    }
+    let date = std::process::Command::new("date")
+        .args(["-u", "+%Y-%m-%d %H:%M UTC"])
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_default();
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
+    let mut file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open("BENCHMARKS.md")
+        .expect("BENCHMARKS.md");
+    writeln!(
+        file,
+        "\n### Sliding block, unsymmetric friction tangent (plane strain), {date}, {cores} cores\n"
+    )
+    .unwrap();
+    writeln!(
+        file,
+        "| unknowns | interface elements | slipping points | Newton iterations (2 steps) | unsymmetric solves | whole run [s] | symmetric factorise+solve [s] | unsymmetric solve [s] | BiCGSTAB iterations | ratio |"
+    )
+    .unwrap();
+    writeln!(file, "|---|---|---|---|---|---|---|---|---|---|").unwrap();
+    for r in rows {
+        writeln!(file, "{r}").unwrap();
+    }
+}
