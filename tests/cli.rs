@@ -167,3 +167,80 @@ fn a_successful_run_writes_the_series_and_history() {
     let history = std::fs::read_to_string(out.join("history.csv")).unwrap();
     assert_eq!(history.lines().count(), 3, "{history}");
 }
+
+/// A block pressed (step 1, linear) then dragged into sliding (step 2, needs several Newton
+/// iterations): with one iteration allowed and no cut-backs step 2 fails. The run must stop
+/// with an error naming the step, and the files of step 1 must be complete on disk.
+#[test]
+fn a_step_that_cannot_converge_is_named_and_earlier_results_stay_on_disk() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = dir.path().join("case.toml");
+    std::fs::write(
+        &case,
+        format!(
+            r#"[mesh]
+file = "{}"
+[analysis]
+type = "plane_strain"
+[[body]]
+group = "lower"
+material = {{ E = 1000.0, nu = 0.3 }}
+[[body]]
+group = "upper"
+material = {{ E = 1000.0, nu = 0.3 }}
+[[support]]
+group = "base"
+ux = 0.0
+uy = 0.0
+[[support]]
+group = "lid"
+ux = 0.5
+factors = [0.0, 1.0]
+[[load]]
+group = "lid"
+pressure = 10.0
+factors = [1.0, 1.0]
+[[contact]]
+name = "joint"
+side_a = "lower_top"
+side_b = "upper_bottom"
+law = {{ type = "linear_coulomb", normal_stiffness = 1e4, tangential_stiffness = 1e4, friction = 0.3 }}
+[steps]
+count = 2
+[solver]
+max_iterations = 1
+max_cutbacks = 0
+"#,
+            fixture("contact_pair.msh")
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let (ok, text) = asperity(&[
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok, "{text}");
+    assert!(
+        text.contains("step 2") && text.contains("did not converge") && text.contains("residuals"),
+        "{text}"
+    );
+    for f in [
+        "bodies_0001.vtu",
+        "interface_0001.vtu",
+        "contact_joint_0001.csv",
+        "results.pvd",
+        "history.csv",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing after the failed step");
+    }
+    assert!(!out.join("bodies_0002.vtu").exists());
+    let leftovers: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left behind");
+}
