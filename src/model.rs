@@ -527,20 +527,6 @@ fn model_scale(mesh: &Mesh) -> f64 {
     (hi[0] - lo[0]).max(hi[1] - lo[1]).max(f64::MIN_POSITIVE)
 }
 
-fn group_names(mesh: &Mesh, dim: u8) -> String {
-    let names: Vec<&str> = mesh
-        .groups
-        .iter()
-        .filter(|g| g.dim == dim)
-        .map(|g| g.name.as_str())
-        .collect();
-    if names.is_empty() {
-        "none".into()
-    } else {
-        names.join(", ")
-    }
-}
-
 /// The physical curve or point called `name` (a name used for both is ambiguous).
 fn boundary_group<'m>(mesh: &'m Mesh, name: &str, what: &str) -> Result<&'m PhysicalGroup> {
     match (mesh.group(1, name), mesh.group(0, name)) {
@@ -552,8 +538,8 @@ fn boundary_group<'m>(mesh: &'m Mesh, name: &str, what: &str) -> Result<&'m Phys
         (None, None) => Err(Error::Model(format!(
             "{what} '{name}': no physical curve or point of that name in {} (curves: {}; points: {})",
             mesh.path.display(),
-            group_names(mesh, 1),
-            group_names(mesh, 0)
+            mesh.group_names(1),
+            mesh.group_names(0)
         ))),
     }
 }
@@ -569,7 +555,7 @@ fn build_continuum(mesh: &Mesh, case: &Case) -> Result<(Vec<String>, ContinuumSe
                 "body '{}': no physical surface of that name in {} (surfaces: {})",
                 spec.group,
                 mesh.path.display(),
-                group_names(mesh, 2)
+                mesh.group_names(2)
             ))
         })?;
         let material = LinearElastic::new(spec.material.e, spec.material.nu)

@@ -162,18 +162,7 @@ impl Ctx<'_> {
     }
 
     fn names(&self, dim: u8) -> String {
-        let names: Vec<&str> = self
-            .mesh
-            .groups
-            .iter()
-            .filter(|g| g.dim == dim)
-            .map(|g| g.name.as_str())
-            .collect();
-        if names.is_empty() {
-            "none".into()
-        } else {
-            names.join(", ")
-        }
+        self.mesh.group_names(dim)
     }
 
     /// All node references in range and one tag per node, so that indexing cannot panic

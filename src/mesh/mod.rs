@@ -116,6 +116,22 @@ impl Mesh {
         self.groups.iter().find(|g| g.dim == dim && g.name == name)
     }
 
+    /// Comma-separated names of the physical groups of dimension `dim` ("none" if there are
+    /// none), for error messages that list the alternatives.
+    pub fn group_names(&self, dim: u8) -> String {
+        let names: Vec<&str> = self
+            .groups
+            .iter()
+            .filter(|g| g.dim == dim)
+            .map(|g| g.name.as_str())
+            .collect();
+        if names.is_empty() {
+            "none".into()
+        } else {
+            names.join(", ")
+        }
+    }
+
     /// Cells in the surface group `group`.
     pub fn cells_in<'a>(
         &'a self,
