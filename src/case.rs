@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+use crate::contact::ContactAlgorithm;
 use crate::element::Analysis;
 use crate::element::interface6::InterfaceRule;
 use crate::mesh::interface::Pairing;
@@ -170,6 +171,40 @@ pub enum LawSpec {
         #[serde(default)]
         friction: f64,
     },
+    /// The paper's law (§2): power-law normal compliance u_N = c_N p^m, tangential stiffness
+    /// k_T = p^S / R, slip-hardening friction μ_F = μ_m [1 − (1 − β) exp(−n ū)].
+    RoughJoint {
+        /// c_N in mm/MPa^m (the paper's values are in µm: multiply them by 1e-3).
+        c_n: f64,
+        m: f64,
+        /// Optional unloading curve (c_N, m); default: the loading curve.
+        unloading_c_n: Option<f64>,
+        unloading_m: Option<f64>,
+        /// R such that p^S / R is in MPa/mm (the paper's values × 1e-3), and S.
+        #[serde(rename = "R")]
+        r: f64,
+        #[serde(rename = "S")]
+        s: f64,
+        /// Macroscopic friction coefficient μ_m.
+        mu_m: f64,
+        /// Initial friction as a fraction of μ_m (default 1: no hardening).
+        #[serde(default = "default_beta")]
+        beta: f64,
+        /// Slip-hardening rate n in 1/mm (default 0).
+        #[serde(default)]
+        n: f64,
+        /// Pressure (MPa) below which stiffnesses are evaluated at this value (default 0.1).
+        #[serde(default = "default_starting_pressure")]
+        starting_pressure: f64,
+    },
+}
+
+fn default_beta() -> f64 {
+    1.0
+}
+
+fn default_starting_pressure() -> f64 {
+    0.1
 }
 
 impl LawSpec {
@@ -185,6 +220,36 @@ impl LawSpec {
                 tangential_stiffness,
                 friction,
             )?)),
+            LawSpec::RoughJoint {
+                c_n,
+                m,
+                unloading_c_n,
+                unloading_m,
+                r,
+                s,
+                mu_m,
+                beta,
+                n,
+                starting_pressure,
+            } => {
+                let unloading = match (unloading_c_n, unloading_m) {
+                    (None, None) => None,
+                    (Some(c), Some(m)) => Some((c, m)),
+                    _ => return Err("give both unloading_c_n and unloading_m, or neither".into()),
+                };
+                let law = crate::contact::rough::RoughJoint {
+                    c_n,
+                    m,
+                    unloading,
+                    r,
+                    s,
+                    mu_m,
+                    beta,
+                    n,
+                    starting_pressure,
+                };
+                Ok(Box::new(crate::contact::rough::RoughJoint::new(law)?))
+            }
         }
     }
 }
@@ -291,6 +356,11 @@ pub struct SolverSpec {
     /// How often a step that fails to converge is halved and retried.
     #[serde(default = "default_max_cutbacks")]
     pub max_cutbacks: usize,
+    /// Global algorithm for contact: `"newton"` (consistent tangent, default), `"two_step"`
+    /// (normal stress frozen in the friction tangent, symmetric) or `"elastic_contact"`
+    /// (elastic contact matrix).
+    #[serde(default)]
+    pub contact_algorithm: ContactAlgorithm,
 }
 
 fn default_max_cutbacks() -> usize {
@@ -311,6 +381,7 @@ impl Default for SolverSpec {
             force_tolerance: default_tolerance(),
             displacement_tolerance: default_tolerance(),
             max_cutbacks: default_max_cutbacks(),
+            contact_algorithm: ContactAlgorithm::default(),
         }
     }
 }

@@ -9,7 +9,7 @@ use std::collections::HashMap;
 
 use crate::assembly::{Coloring, DofMap, ElementSet, SparsityPattern};
 use crate::case::{Case, LoadSpec, SupportSpec};
-use crate::contact::{InterfaceLaw, InterfaceState, WithElasticTangent};
+use crate::contact::{ContactAlgorithm, InterfaceLaw, InterfaceState};
 use crate::element::continuum::{evaluate_cell, min_jacobian};
 use crate::element::interface6::{InterfaceElement, InterfaceRule, evaluate_interface};
 use crate::element::quadrature::{GAUSS3, MAX_CELL_POINTS};
@@ -99,6 +99,8 @@ pub struct InterfaceSet {
     pub analysis: Analysis,
     pub elements: Vec<InterfaceElement>,
     pub pairs: Vec<ContactPair>,
+    /// Which interface tangent the global iterations use.
+    pub algorithm: ContactAlgorithm,
 }
 
 /// Integration points per interface element.
@@ -135,6 +137,7 @@ impl ElementSet for InterfaceSet {
             element,
             pair.interference,
             pair.law.as_ref(),
+            self.algorithm,
             u,
             committed,
             trial,
@@ -189,18 +192,19 @@ impl ElementSet for ElasticContactCorrection<'_> {
             element,
             pair.interference,
             law,
+            set.algorithm,
             u,
             committed,
             trial,
             Some(&mut consistent),
             &mut scratch,
         );
-        let elastic_law = WithElasticTangent(law);
         evaluate_interface(
             analysis,
             element,
             pair.interference,
-            &elastic_law,
+            law,
+            ContactAlgorithm::ElasticContact,
             u,
             committed,
             trial,
@@ -512,6 +516,7 @@ fn build_interface(
         analysis: case.analysis,
         elements,
         pairs,
+        algorithm: case.solver.contact_algorithm,
     })
 }
 

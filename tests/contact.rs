@@ -25,20 +25,20 @@ fn pressures(model: &Model, solution: &Solution) -> Vec<f64> {
 mod shrink_fit {
     use super::*;
 
-    const B: f64 = 10.0;
+    pub const B: f64 = 10.0;
     const C: f64 = 20.0;
-    const L: f64 = 10.0;
-    const DELTA: f64 = 0.01;
+    pub const L: f64 = 10.0;
+    pub const DELTA: f64 = 0.01;
 
     /// Plane-strain compliance C = b (C_s + C_h) of a solid shaft in a hub (REFERENCES §1).
-    fn compliance() -> f64 {
+    pub fn compliance() -> f64 {
         let (e, nu) = (E / (1.0 - NU * NU), NU / (1.0 - NU));
         let cs = (1.0 - nu) / e;
         let ch = ((C * C + B * B) / (C * C - B * B) + nu) / e;
         B * (cs + ch)
     }
 
-    fn bodies(conforming: bool) -> Mesh {
+    pub fn bodies(conforming: bool) -> Mesh {
         let zs = uniform(0.0, L, 4);
         let mut shaft = tensor(&uniform(0.0, B, 6), &zs, "shaft");
         add_curve_group(&mut shaft, "shaft_ends", |x| x[1] == 0.0 || x[1] == L);
@@ -53,7 +53,7 @@ mod shrink_fit {
         merge(shaft, hub, conforming)
     }
 
-    fn text(pairing: &str, k_n: f64) -> String {
+    pub fn text(pairing: &str, k_n: f64) -> String {
         format!(
             r#"[analysis]
             type = "axisymmetric"
@@ -257,7 +257,7 @@ mod block {
 
     /// A block [1, 3] × [1, 2] on a base [0, 4] × [0, 1] (plane strain), coincident nodes on
     /// the contact. The block's top edge is the loaded/driven one.
-    fn mesh() -> Mesh {
+    pub fn mesh() -> Mesh {
         let mut base = tensor(&uniform(0.0, 4.0, 8), &uniform(0.0, 1.0, 2), "base");
         add_curve_group(&mut base, "ground", |x| x[1] == 0.0);
         add_curve_group(&mut base, "base_top", |x| {
@@ -548,5 +548,147 @@ mod bad_input {
             err.contains("normal_stiffness") && err.contains("positive") && err.contains("c.toml"),
             "{err}"
         );
+    }
+}
+
+/// The paper's law (issue: power-law compliance and slip-hardening friction) in whole models.
+mod rough_joint {
+    use super::*;
+    use asperity::contact::ContactStatus;
+    use asperity::solver::newton::NewtonSettings;
+    use asperity::solver::stepping::run_steps;
+
+    /// Shrink fit with u_N = c_N p^m: the pressure is the root of C p + c_N p^m = δ.
+    #[test]
+    fn shrink_fit_pressure_is_the_root_of_the_compliance_equation() {
+        use shrink_fit::*;
+        for (c_n, m) in [(5e-4, 0.5), (1e-3, 1.0 / 3.0)] {
+            let law = format!(
+                r#"law = {{ type = "rough_joint", c_n = {c_n}, m = {m}, R = 1e-3, S = 0.5, mu_m = 0.2 }}"#
+            );
+            let text = text("side_a = \"shaft_outer\"\nside_b = \"hub_bore\"", 1.0)
+                .lines()
+                .map(|l| {
+                    if l.trim_start().starts_with("law =") {
+                        law.clone()
+                    } else {
+                        l.to_string()
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join("\n");
+            let (model, solution) = solve(bodies(false), &case(&text));
+            // Root of C p + c_N p^m − δ by bisection on (0, δ/C).
+            let c = compliance();
+            let (mut lo, mut hi) = (0.0, DELTA / c);
+            for _ in 0..200 {
+                let mid = 0.5 * (lo + hi);
+                if c * mid + c_n * f64::powf(mid, m) > DELTA {
+                    hi = mid
+                } else {
+                    lo = mid
+                }
+            }
+            let expected = 0.5 * (lo + hi);
+            let p = pressures(&model, &solution);
+            let worst = p
+                .iter()
+                .map(|v| (v - expected).abs() / expected)
+                .fold(0.0, f64::max);
+            println!(
+                "c_N = {c_n}, m = {m:.4}: root p = {expected:.5}, FE {:.5} (max rel. error {worst:.2e})",
+                p[0]
+            );
+            assert!(worst < 1e-3, "pressure off by {worst}");
+        }
+    }
+
+    fn sliding_case(algorithm: &str) -> asperity::case::Case {
+        case(&format!(
+            r#"[analysis]
+            type = "plane_strain"
+            [[body]]
+            group = "base"
+            material = {{ E = {E}, nu = {NU} }}
+            [[body]]
+            group = "block"
+            material = {{ E = {E}, nu = {NU} }}
+            [[support]]
+            group = "ground"
+            ux = 0.0
+            uy = 0.0
+            [[support]]
+            group = "block_top"
+            ux = 0.004
+            factors = [0.0, 0.5, 1.0]
+            [[load]]
+            group = "block_top"
+            pressure = 10.0
+            factors = [1.0, 1.0, 1.0]
+            [steps]
+            count = 3
+            [solver]
+            contact_algorithm = "{algorithm}"
+            max_iterations = 200
+            force_tolerance = 1e-10
+            displacement_tolerance = 1e-10
+            [[contact]]
+            side_a = "base_top"
+            side_b = "block_bottom"
+            law = {{ type = "rough_joint", c_n = 1e-4, m = 0.5, R = 1e-3, S = 0.5, mu_m = 0.3, beta = 0.3, n = 100.0 }}
+            "#
+        ))
+    }
+
+    #[test]
+    fn the_three_global_algorithms_reach_the_same_solution() {
+        let mut solutions = Vec::new();
+        for algorithm in ["newton", "two_step", "elastic_contact"] {
+            let case = sliding_case(algorithm);
+            let model = Model::build(block::mesh(), &case).unwrap();
+            let mut residuals = Vec::new();
+            let t = std::time::Instant::now();
+            let (solution, stats) = run_steps(&model, &NewtonSettings::from(case.solver), |step| {
+                residuals.push(step.newton.residuals.clone());
+                Ok(0.0)
+            })
+            .unwrap();
+            let slipping = solution
+                .interface_committed
+                .iter()
+                .filter(|s| s.status == ContactStatus::Slip)
+                .count();
+            println!(
+                "{algorithm:>15}: {} iterations, {} unsymmetric solves, {:.3} s, {slipping} slipping points; last step residuals {:?}",
+                stats.iterations,
+                stats.unsymmetric_solves,
+                t.elapsed().as_secs_f64(),
+                residuals.last().unwrap()
+            );
+            assert!(slipping > 0, "the case must slip");
+            if algorithm == "newton" {
+                let r = residuals.last().unwrap();
+                let k = r.len() - 1;
+                let order = r[k].ln() / r[k - 1].ln();
+                println!("  observed order of the last Newton iteration: {order:.2}");
+                assert!(
+                    order > 1.7 || r[k] < 1e-15,
+                    "Newton should converge quadratically: {r:?}"
+                );
+            }
+            solutions.push(solution.u);
+        }
+        let scale = solutions[0].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for other in &solutions[1..] {
+            let diff = solutions[0]
+                .iter()
+                .zip(other)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            println!(
+                "max displacement difference to Newton: {:.2e} (scale {scale:.3e})",
+                diff
+            );
+            assert!(diff < 1e-7 * scale, "algorithms disagree by {diff}");
+        }
     }
 }

@@ -11,8 +11,10 @@
 //! converged.
 
 pub mod linear;
+pub mod rough;
 
 use nalgebra::SMatrix;
+use serde::Deserialize;
 
 /// d(p_T, p_N)/d(u_T, u_N): the (generally unsymmetric, paper Eq. 21) interface tangent.
 pub type InterfaceTangent = SMatrix<f64, 2, 2>;
@@ -77,32 +79,46 @@ pub trait InterfaceLaw: Send + Sync + std::fmt::Debug {
     fn describe(&self) -> String;
 }
 
-/// A law seen through its elastic tangent: same stresses and states, tangent replaced by
-/// [`InterfaceLaw::elastic_tangent`].
-#[derive(Debug)]
-pub struct WithElasticTangent<'a>(pub &'a dyn InterfaceLaw);
-
-impl InterfaceLaw for WithElasticTangent<'_> {
-    fn update(
-        &self,
-        relative: [f64; 2],
-        committed: &InterfaceState,
-    ) -> (InterfaceState, InterfaceTangent) {
-        let (state, _) = self.0.update(relative, committed);
-        (state, self.0.elastic_tangent(&state))
-    }
-
-    fn elastic_tangent(&self, state: &InterfaceState) -> InterfaceTangent {
-        self.0.elastic_tangent(state)
-    }
-
-    fn describe(&self) -> String {
-        format!("{} (elastic tangent)", self.0.describe())
-    }
-}
-
 /// Relative size of the stiffness an open point keeps in the tangent (never in the stress),
 /// so that a body touching others only through open contact still has a regular matrix in
 /// the first iteration; the residual uses the true zero stress, so the converged answer is
 /// unaffected.
 pub const OPEN_TANGENT_FRACTION: f64 = 1e-9;
+
+/// The global solution algorithm for contact (paper §2.4 and conclusions 2–3). All three
+/// evaluate the same residual, so they converge to the same solution; they differ in the
+/// interface tangent used to compute the corrections.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactAlgorithm {
+    /// Full Newton with the consistent, unsymmetric tangent (Eq. 21): quadratic convergence.
+    #[default]
+    Newton,
+    /// The paper's two-step scheme: the normal contact stress is taken as known in the
+    /// friction law, which drops the coupling ∂p_T/∂u_N and makes the tangent symmetric
+    /// (§2.4 end, conclusion 2); the normal problem keeps its full tangent.
+    TwoStep,
+    /// Iterations with the elastic contact matrix diag(k_T, k_N) (conclusion 3): symmetric
+    /// and stable, but only linearly convergent once points slip.
+    ElasticContact,
+}
+
+impl ContactAlgorithm {
+    /// The interface tangent this algorithm uses at `state`, given the law's consistent one.
+    pub fn tangent(
+        self,
+        law: &dyn InterfaceLaw,
+        state: &InterfaceState,
+        consistent: InterfaceTangent,
+    ) -> InterfaceTangent {
+        match self {
+            ContactAlgorithm::Newton => consistent,
+            ContactAlgorithm::TwoStep => {
+                let mut k = consistent;
+                k[(0, 1)] = 0.0;
+                k
+            }
+            ContactAlgorithm::ElasticContact => law.elastic_tangent(state),
+        }
+    }
+}

@@ -18,7 +18,7 @@ use serde::Deserialize;
 use super::quadrature::{GAUSS3, LOBATTO3};
 use super::shape::line3;
 use super::{Analysis, ElementMatrix, ElementVector};
-use crate::contact::{InterfaceLaw, InterfaceState};
+use crate::contact::{ContactAlgorithm, InterfaceLaw, InterfaceState};
 
 /// Integration rule of an interface element.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
@@ -106,13 +106,15 @@ pub fn relative_operator(p: &InterfacePoint) -> nalgebra::SMatrix<f64, 2, 16> {
 }
 
 /// Tangent and internal force of one interface element for nodal displacements `u`
-/// (dofs of [a0, a1, a_mid, b0, b1, b_mid]), updating `trial` from `committed`.
+/// (dofs of [a0, a1, a_mid, b0, b1, b_mid]), updating `trial` from `committed`. The tangent
+/// is the one of `algorithm` (the consistent one for Newton).
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate_interface(
     analysis: &Analysis,
     element: &InterfaceElement,
     interference: f64,
     law: &dyn InterfaceLaw,
+    algorithm: ContactAlgorithm,
     u: &ElementVector,
     committed: &[InterfaceState],
     trial: &mut [InterfaceState],
@@ -134,7 +136,7 @@ pub fn evaluate_interface(
         let stress = nalgebra::Vector2::new(state.stress[0], state.stress[1]);
         f.gemv_tr(p.da, &b, &stress, 1.0);
         if let Some(k) = k.as_deref_mut() {
-            let eb = tangent * b;
+            let eb = algorithm.tangent(law, &state, tangent) * b;
             k.gemm_tr(p.da, &b, &eb, 1.0);
         }
         trial[g] = state;
@@ -174,6 +176,7 @@ mod tests {
             &e,
             0.0,
             &law,
+            ContactAlgorithm::Newton,
             &u,
             &[InterfaceState::default(); 3],
             &mut trial,
@@ -211,6 +214,7 @@ mod tests {
                 &element(rule),
                 0.0,
                 &law,
+                ContactAlgorithm::Newton,
                 &u,
                 &[InterfaceState::default(); 3],
                 &mut trial,
@@ -250,6 +254,7 @@ mod tests {
                 &e,
                 0.0,
                 &law,
+                ContactAlgorithm::Newton,
                 &u,
                 &committed,
                 &mut trial,
@@ -263,10 +268,28 @@ mod tests {
                 um[j] -= h;
                 let (mut fp, mut fm) = (ElementVector::zeros(), ElementVector::zeros());
                 evaluate_interface(
-                    &analysis, &e, 0.0, &law, &up, &committed, &mut trial, None, &mut fp,
+                    &analysis,
+                    &e,
+                    0.0,
+                    &law,
+                    ContactAlgorithm::Newton,
+                    &up,
+                    &committed,
+                    &mut trial,
+                    None,
+                    &mut fp,
                 );
                 evaluate_interface(
-                    &analysis, &e, 0.0, &law, &um, &committed, &mut trial, None, &mut fm,
+                    &analysis,
+                    &e,
+                    0.0,
+                    &law,
+                    ContactAlgorithm::Newton,
+                    &um,
+                    &committed,
+                    &mut trial,
+                    None,
+                    &mut fm,
                 );
                 for i in 0..12 {
                     let fd = (fp[i] - fm[i]) / (2.0 * h);

@@ -1,0 +1,244 @@
+//! The interface law of the paper (§2): a rough joint with power-law normal compliance,
+//! pressure-dependent tangential stiffness and slip-hardening Coulomb friction, integrated by
+//! an implicit return map with the consistent (unsymmetric) tangent.
+//!
+//! Notation: closure c = −u_N (positive when the faces overlap), contact pressure
+//! p = |p_N| = −p_N ≥ 0, accumulated slip ū = Σ|Δu_T^p|.
+//!
+//! - **Normal** (Eqs. 1–2): c = c_N p^m, so p = (c/c_N)^(1/m) from the *total* law (an
+//!   accumulated Δp = k_N Δc would drift), with tangent k_N = dp/dc = p^(1−m)/(c_N m).
+//!   After a maximum closure c_max an optional unloading curve c − c_perm = c_Nu p^(m_u) is
+//!   followed back down (and up again until c_max), with c_perm chosen so that it passes
+//!   through (c_max, p_max): a permanent set of the asperities. By default unloading uses the
+//!   loading coefficients (c_perm = 0), the paper gives no values (NOTES.md).
+//!   No stress in opening (c ≤ 0).
+//! - **Tangential elasticity** (Eq. 3): k_T = p^S / R, incremental as in Box 1 (corrected):
+//!   p_T^tr = p_T,n + k_T(p_{n+1}) (u_T − u_T,n), from the converged p_T,n.
+//! - **Friction** (Eqs. 4–5): μ_F(ū) = μ_m [1 − (1 − β) exp(−n ū)],
+//!   F = |p_T| + μ_F p_N ≤ 0; non-associated slip with Δu_N^p = 0 (Eqs. 8–10).
+//! - **Return map** (Box 1 corrected, Eq. 16): if F^tr > 0, find Δλ > 0 with
+//!   g(Δλ) = |p_T^tr| − k_T Δλ − μ_F(ū_n + Δλ) p = 0 (g is decreasing, g(0) = F^tr > 0 and
+//!   g(F^tr/k_T) ≤ 0, so the root is bracketed); solved by Newton safeguarded by bisection to
+//!   1e-14 relative; then p_T = sign(p_T^tr) μ_F(ū_n+Δλ) p and u_T^p += sign·Δλ.
+//! - **Consistent tangent** (Eq. 21): with H = μ_F'(ū) p,
+//!   ∂p_T/∂u_T = k_T H/(k_T + H) and ∂p_T/∂u_N from differentiating g (the (1,2) coupling of
+//!   shear to normal approach, through μ_F p and through k_T(p)); ∂p_N/∂u_N = k_N.
+//!
+//! **Small pressures (gaps of the paper, NOTES.md).** For m < 1, k_N = p^(1−m)/(c_N m) and
+//! for S > 0, k_T = p^S/R vanish at p = 0: a body held only by contact would have no
+//! stiffness in the first iteration. Both stiffnesses are therefore evaluated at
+//! max(p, p_start) (`starting_pressure`): the *tangent* of the normal law is floored (capped
+//! for m > 1), and the tangential stiffness used in the stress update is k_T(max(p, p_start)),
+//! a documented floor of the shear stiffness. Stresses of the normal law always come from the
+//! exact total law.
+
+use super::{ContactStatus, InterfaceLaw, InterfaceState, InterfaceTangent, OPEN_TANGENT_FRACTION};
+
+/// The paper's rough-joint law (units mm, MPa: c_N in mm/MPa^m, R in mm·MPa^(S−1)... such
+/// that p^S / R is in MPa/mm, n in 1/mm).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RoughJoint {
+    /// Normal compliance coefficient c_N and exponent m (Eq. 1).
+    pub c_n: f64,
+    pub m: f64,
+    /// Unloading coefficients (c_N, m); `None`: the loading curve.
+    pub unloading: Option<(f64, f64)>,
+    /// Tangential stiffness parameters R, S (Eq. 3).
+    pub r: f64,
+    pub s: f64,
+    /// Friction: μ_m, β, n (Eq. 4).
+    pub mu_m: f64,
+    pub beta: f64,
+    pub n: f64,
+    /// Pressure below which stiffnesses are evaluated at this value (MPa).
+    pub starting_pressure: f64,
+}
+
+impl RoughJoint {
+    /// Checks the parameters and names the first wrong one.
+    pub fn new(law: RoughJoint) -> Result<Self, String> {
+        let positive = |x: f64, name: &str| {
+            if x.is_finite() && x > 0.0 {
+                Ok(())
+            } else {
+                Err(format!("{name} = {x} must be positive"))
+            }
+        };
+        positive(law.c_n, "c_n")?;
+        positive(law.m, "m")?;
+        if let Some((c, m)) = law.unloading {
+            positive(c, "unloading_c_n")?;
+            positive(m, "unloading_m")?;
+        }
+        positive(law.r, "R")?;
+        if !(law.s.is_finite() && law.s >= 0.0) {
+            return Err(format!("S = {} must be zero or positive", law.s));
+        }
+        if !(law.mu_m.is_finite() && law.mu_m >= 0.0) {
+            return Err(format!("mu_m = {} must be zero or positive", law.mu_m));
+        }
+        if !(law.beta.is_finite() && law.beta > 0.0 && law.beta <= 1.0) {
+            return Err(format!("beta = {} must lie in (0, 1]", law.beta));
+        }
+        if !(law.n.is_finite() && law.n >= 0.0) {
+            return Err(format!("n = {} must be zero or positive (1/mm)", law.n));
+        }
+        positive(law.starting_pressure, "starting_pressure")?;
+        Ok(law)
+    }
+
+    /// Friction coefficient μ_F(ū) and its slope (Eq. 4, Eq. 14).
+    pub fn friction(&self, slip: f64) -> (f64, f64) {
+        let e = (-self.n * slip).exp();
+        (
+            self.mu_m * (1.0 - (1.0 - self.beta) * e),
+            self.mu_m * (1.0 - self.beta) * self.n * e,
+        )
+    }
+
+    /// Tangential stiffness k_T = max(p, p_start)^S / R and its derivative in p (Eq. 3).
+    pub fn tangential_stiffness(&self, p: f64) -> (f64, f64) {
+        if p > self.starting_pressure {
+            (
+                p.powf(self.s) / self.r,
+                self.s * p.powf(self.s - 1.0) / self.r,
+            )
+        } else {
+            (self.starting_pressure.powf(self.s) / self.r, 0.0)
+        }
+    }
+
+    /// Pressure and tangent k_N = dp/dc for closure `c`, with the largest closure so far
+    /// `c_max` (Eqs. 1–2; unloading curve below c_max).
+    pub fn normal(&self, c: f64, c_max: f64) -> (f64, f64) {
+        if c < 0.0 {
+            return (0.0, 0.0);
+        }
+        if c == 0.0 {
+            // Exactly touching: no stress, the starting stiffness.
+            return (0.0, self.starting_stiffness());
+        }
+        let (coefficient, exponent, offset) = match self.unloading {
+            Some((cu, mu)) if c < c_max => {
+                let p_max = (c_max / self.c_n).powf(1.0 / self.m);
+                (cu, mu, c_max - cu * p_max.powf(mu))
+            }
+            _ => (self.c_n, self.m, 0.0),
+        };
+        let x = c - offset;
+        if x <= 0.0 {
+            return (0.0, 0.0);
+        }
+        let p = (x / coefficient).powf(1.0 / exponent);
+        let p_eval = p.max(self.starting_pressure);
+        (p, p_eval.powf(1.0 - exponent) / (coefficient * exponent))
+    }
+
+    /// Normal tangent at the starting pressure: what a point just touching gets.
+    pub fn starting_stiffness(&self) -> f64 {
+        self.starting_pressure.powf(1.0 - self.m) / (self.c_n * self.m)
+    }
+
+    /// The local return: Δλ > 0 solving g(Δλ) = |p^tr| − k_T Δλ − μ_F(ū_n + Δλ) p = 0.
+    fn slip_increment(&self, trial: f64, kt: f64, p: f64, slip_n: f64) -> f64 {
+        let g = |dl: f64| {
+            let (mu, dmu) = self.friction(slip_n + dl);
+            (trial - kt * dl - mu * p, -kt - dmu * p)
+        };
+        let (mut lo, mut hi) = (0.0, trial / kt);
+        let mut dl = hi;
+        for _ in 0..100 {
+            let (value, slope) = g(dl);
+            if value.abs() <= 1e-14 * trial {
+                break;
+            }
+            if value > 0.0 {
+                lo = dl
+            } else {
+                hi = dl
+            }
+            let newton = dl - value / slope;
+            dl = if newton > lo && newton < hi {
+                newton
+            } else {
+                0.5 * (lo + hi)
+            };
+            if hi - lo <= 1e-16 * hi.max(f64::MIN_POSITIVE) {
+                break;
+            }
+        }
+        dl
+    }
+}
+
+impl InterfaceLaw for RoughJoint {
+    fn update(
+        &self,
+        relative: [f64; 2],
+        committed: &InterfaceState,
+    ) -> (InterfaceState, InterfaceTangent) {
+        let [u_t, u_n] = relative;
+        let closure = -u_n;
+        let loading_max = committed.max_closure.max(closure);
+        let (p, kn) = self.normal(closure, committed.max_closure);
+        let mut s = InterfaceState {
+            relative,
+            plastic_slip: committed.plastic_slip,
+            accumulated_slip: committed.accumulated_slip,
+            max_closure: loading_max,
+            ..InterfaceState::default()
+        };
+        let (kt, dkt) = self.tangential_stiffness(p);
+        let (mu_n, _) = self.friction(committed.accumulated_slip);
+        s.friction = mu_n;
+        s.stiffness = [kt, kn];
+        if closure < 0.0 || (closure > 0.0 && p == 0.0) {
+            // Open (or unloaded below the permanent set): no stress.
+            s.status = ContactStatus::Open;
+            let k0 = self.starting_stiffness();
+            return (
+                s,
+                InterfaceTangent::new(kt, 0.0, 0.0, k0) * OPEN_TANGENT_FRACTION,
+            );
+        }
+        let du = u_t - committed.relative[0];
+        let trial = committed.stress[0] + kt * du;
+        let f = trial.abs() - mu_n * p;
+        if f <= 0.0 {
+            s.stress = [trial, -p];
+            s.status = ContactStatus::Stick;
+            // ∂p_T/∂u_N through k_T(p): dk_T/du_N = k_T'(p) · dp/du_N = −k_T' k_N.
+            return (s, InterfaceTangent::new(kt, -dkt * kn * du, 0.0, kn));
+        }
+        let sign = trial.signum();
+        let dl = self.slip_increment(trial.abs(), kt, p, committed.accumulated_slip);
+        let (mu, dmu) = self.friction(committed.accumulated_slip + dl);
+        s.stress = [sign * mu * p, -p];
+        s.plastic_slip = committed.plastic_slip + sign * dl;
+        s.accumulated_slip = committed.accumulated_slip + dl;
+        s.friction = mu;
+        s.status = ContactStatus::Slip;
+        let h = dmu * p;
+        // Consistent tangent from g(Δλ; u_T, u_N) = 0 (Eq. 21, with NOTES.md's reading).
+        let dg_dun = -kn * dkt * (sign * du - dl) + mu * kn;
+        let dpt_dut = kt * h / (kt + h);
+        let dpt_dun = sign * (h * dg_dun / (kt + h) - mu * kn);
+        (s, InterfaceTangent::new(dpt_dut, dpt_dun, 0.0, kn))
+    }
+
+    fn elastic_tangent(&self, state: &InterfaceState) -> InterfaceTangent {
+        let k = InterfaceTangent::new(state.stiffness[0], 0.0, 0.0, state.stiffness[1]);
+        if state.status == ContactStatus::Open {
+            k * OPEN_TANGENT_FRACTION
+        } else {
+            k
+        }
+    }
+
+    fn describe(&self) -> String {
+        format!(
+            "rough joint (paper §2): c_N = {} mm/MPa^m, m = {}, R = {}, S = {}, mu_m = {}, beta = {}, n = {} 1/mm",
+            self.c_n, self.m, self.r, self.s, self.mu_m, self.beta, self.n
+        )
+    }
+}
