@@ -25,7 +25,7 @@ fn law(mu_m: f64, beta: f64, n: f64) -> RoughJoint {
 fn friction_curve_is_eq_4_pointwise() {
     for (mu_m, beta) in [(0.1, 0.1), (0.2, 0.2), (0.3, 0.3)] {
         let l = law(mu_m, beta, 275.0);
-        for slip in [0.0, 1e-3, 5e-3, 1e-2, 2e-2, 1.0] {
+        for slip in [0.0f64, 1e-3, 5e-3, 1e-2, 2e-2, 1.0] {
             let exact = mu_m * (1.0 - (1.0 - beta) * (-275.0 * slip).exp());
             let (mu, dmu) = l.friction(slip);
             assert!(
