@@ -7,6 +7,7 @@
 //! load step converges, so a failed or cut-back step leaves history untouched.
 
 pub mod elastic;
+pub mod j2;
 
 use nalgebra::{SMatrix, SVector};
 

@@ -107,13 +107,14 @@ impl CholeskySolver {
 
     /// Solves `A x = rhs` in place for an unsymmetric `matrix` (full pattern stored): factors
     /// the symmetric positive-definite `preconditioner` (same pattern) and runs BiCGSTAB on
-    /// `matrix` preconditioned by it, to a relative residual of 1e-12. Returns the number of
-    /// Krylov iterations.
+    /// `matrix` preconditioned by it, to the relative residual `tolerance`. Returns the number
+    /// of Krylov iterations.
     pub fn solve_unsymmetric(
         &mut self,
         matrix: SparseColMatRef<'_, u32, f64>,
         preconditioner: SparseColMatRef<'_, u32, f64>,
         rhs: &mut [f64],
+        tolerance: f64,
     ) -> Result<usize> {
         self.factorize(preconditioner)?;
         let n = rhs.len();
@@ -132,7 +133,7 @@ impl CholeskySolver {
             // uninitialised; with `MaybeNonZero` it computes r = b − A·0 itself.
             initial_guess: InitialGuessStatus::MaybeNonZero,
             abs_tolerance: 0.0,
-            rel_tolerance: 1e-12,
+            rel_tolerance: tolerance,
             max_iters: 1000,
             ..Default::default()
         };

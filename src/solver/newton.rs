@@ -132,10 +132,14 @@ pub fn solve_increment(
             linear.solve_in_place(&mut r);
             log.solve_seconds += t.elapsed().as_secs_f64();
         } else {
+            // Inexact Newton (Eisenstat & Walker): solve only as accurately as the current
+            // residual warrants, η_k = 1e-2 ‖r_k‖ (relative), which keeps quadratic convergence.
+            let forcing = (1e-2 * residual).clamp(1e-12, 1e-3);
             log.krylov_iterations += linear.solve_unsymmetric(
                 system.matrix(),
                 system.preconditioner_matrix(),
                 &mut r,
+                forcing,
             )?;
             log.unsymmetric_solves += 1;
             log.solve_seconds += t.elapsed().as_secs_f64();
