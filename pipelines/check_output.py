@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 import pyvista as pv
 
-POINT_ARRAYS = {"displacement": 3, "stress": 6, "von_mises": 1}
-CELL_ARRAYS = {"body": 1}
+POINT_ARRAYS = {"displacement": 3, "stress": 6, "von_mises": 1, "equivalent_plastic_strain": 1}
+CELL_ARRAYS = {"body": 1, "plastic": 1}
 INTERFACE_ARRAYS = [
     "contact_normal_stress", "contact_pressure", "contact_shear_stress", "normal_gap",
     "tangential_slip", "plastic_slip", "friction_coefficient", "contact_status",

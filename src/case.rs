@@ -83,6 +83,29 @@ pub struct MaterialSpec {
     pub e: f64,
     /// Poisson's ratio.
     pub nu: f64,
+    /// Initial yield stress σ_Y in MPa: makes the body elasto-plastic (von Mises, J2).
+    pub yield_stress: Option<f64>,
+    /// Linear isotropic hardening: the plastic modulus H in MPa, σ_y = σ_Y + H ε̄ᵖ (the slope
+    /// of stress against plastic strain in uniaxial tension; the tangent modulus is
+    /// E_t = E H / (E + H)). The paper's hardening parameter h (Fig. 11) is this H.
+    /// Default 0 (perfectly plastic).
+    pub hardening: Option<f64>,
+}
+
+impl MaterialSpec {
+    /// The constitutive model: linear elastic, or J2 plasticity when `yield_stress` is given.
+    pub fn build(&self) -> std::result::Result<Box<dyn crate::material::Material>, String> {
+        let elastic = crate::material::elastic::LinearElastic::new(self.e, self.nu)?;
+        match (self.yield_stress, self.hardening) {
+            (None, None) => Ok(Box::new(elastic)),
+            (None, Some(_)) => Err("`hardening` needs a `yield_stress`".into()),
+            (Some(sy), h) => Ok(Box::new(crate::material::j2::J2Plasticity::new(
+                elastic,
+                sy,
+                h.unwrap_or(0.0),
+            )?)),
+        }
+    }
 }
 
 /// Prescribed displacement components on the nodes of a physical curve or point. Values are
@@ -471,7 +494,8 @@ impl Case {
             return Err("no [[body]]: name at least one physical surface and its material".into());
         }
         for b in &self.bodies {
-            crate::material::elastic::LinearElastic::new(b.material.e, b.material.nu)
+            b.material
+                .build()
                 .map_err(|m| format!("[[body]] '{}': {m}", b.group))?;
         }
         for s in &self.supports {

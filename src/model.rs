@@ -15,7 +15,6 @@ use crate::element::interface6::{InterfaceElement, InterfaceRule, evaluate_inter
 use crate::element::quadrature::{GAUSS3, MAX_CELL_POINTS};
 use crate::element::shape::line3;
 use crate::element::{Analysis, ElementMatrix, ElementVector};
-use crate::material::elastic::LinearElastic;
 use crate::material::{Material, PointState};
 use crate::mesh::interface::{InterfaceTopology, insert_interface};
 use crate::mesh::{CellKind, Line3, Mesh, PhysicalGroup};
@@ -563,7 +562,9 @@ fn build_continuum(mesh: &Mesh, case: &Case) -> Result<(Vec<String>, ContinuumSe
                 mesh.group_names(2)
             ))
         })?;
-        let material = LinearElastic::new(spec.material.e, spec.material.nu)
+        let material = spec
+            .material
+            .build()
             .map_err(|m| Error::Model(format!("body '{}': {m}", spec.group)))?;
         let before = cells.len();
         for (i, cell) in mesh.cells_in(group) {
@@ -603,7 +604,8 @@ fn build_continuum(mesh: &Mesh, case: &Case) -> Result<(Vec<String>, ContinuumSe
             )));
         }
         bodies.push(spec.group.clone());
-        materials.push(Box::new(material));
+        tracing::info!("body '{}': {}", spec.group, material.describe());
+        materials.push(material);
     }
     for g in mesh
         .groups

@@ -104,10 +104,11 @@ pub fn nodal_values(
 }
 
 /// The bodies' output grid of a step: quadratic cells, point data `displacement`, `stress`
-/// (xx, yy, zz, xy, yz, xz; axisymmetric rr, zz, θθ → xx, yy, zz) and `von_mises`, cell data
-/// `body` (index into the case's bodies).
+/// (xx, yy, zz, xy, yz, xz; axisymmetric rr, zz, θθ → xx, yy, zz), `von_mises` and
+/// `equivalent_plastic_strain`, cell data `body` (index into the case's bodies) and `plastic`
+/// (1 if any integration point yielded in the step).
 pub fn body_grid(model: &Model, points: &BodyPoints, u: &[f64], states: &[PointState]) -> Grid {
-    let (stress, _) = nodal_values(model, points, states);
+    let (stress, equivalent_plastic_strain) = nodal_values(model, points, states);
     let mut grid = Grid {
         points: points
             .points
@@ -141,6 +142,15 @@ pub fn body_grid(model: &Model, points: &BodyPoints, u: &[f64], states: &[PointS
         .iter()
         .map(|c| c.body as i32)
         .collect();
+    let ppe = crate::element::quadrature::MAX_CELL_POINTS;
+    let plastic = (0..model.continuum.cells.len())
+        .map(|e| states[e * ppe..(e + 1) * ppe].iter().any(|s| s.yielding) as i32)
+        .collect();
+    let scalar = |name: &str, values: Vec<f64>| Field {
+        name: name.into(),
+        components: 1,
+        values: FieldValues::F64(values),
+    };
     grid.point_data = vec![
         Field {
             name: "displacement".into(),
@@ -152,17 +162,21 @@ pub fn body_grid(model: &Model, points: &BodyPoints, u: &[f64], states: &[PointS
             components: 6,
             values: FieldValues::F64(tensor),
         },
+        scalar("von_mises", vm),
+        scalar("equivalent_plastic_strain", equivalent_plastic_strain),
+    ];
+    grid.cell_data = vec![
         Field {
-            name: "von_mises".into(),
+            name: "body".into(),
             components: 1,
-            values: FieldValues::F64(vm),
+            values: FieldValues::I32(body),
+        },
+        Field {
+            name: "plastic".into(),
+            components: 1,
+            values: FieldValues::I32(plastic),
         },
     ];
-    grid.cell_data = vec![Field {
-        name: "body".into(),
-        components: 1,
-        values: FieldValues::I32(body),
-    }];
     grid
 }
 
