@@ -1,7 +1,11 @@
 # asperity: build, examples, tests and benchmarks.
 # Every target installs what it needs (gmsh via apt-get, the Python venv via pip).
-#   make thick_cylinder          run the thick-cylinder example (gmsh -> solver -> plots)
-#   make shrink_fit              run the shrink-fit contact example
+#   make tapered_joint           the main example: conical press fit (paper §4.2) -> out/tapered_joint
+#   make plane_punch             plane punch on a foundation (paper §4.1) -> out/plane_punch
+#   make indentation             axisymmetric punch into an elasto-plastic foundation (§4.3)
+#   make examples                all of the above and the validation examples
+#   make thick_cylinder          Lamé thick cylinder (gmsh -> solver -> plots)
+#   make shrink_fit              shrink-fit contact example
 #   make test                    all tests (Rust unit/integration tests + output checks)
 #   make mesh GEO=geo/X.geo SIZE=0.5   mesh a .geo script into build/mesh/
 #   make bench                   timings at ~10k, ~100k, ~1M unknowns, appended to BENCHMARKS.md
@@ -14,7 +18,7 @@ SUDO    := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 BIN     := target/release/asperity
 SIZE    ?= 1
 
-.PHONY: all deps gmsh venv build test mesh bench examples thick_cylinder shrink_fit clean
+.PHONY: all deps gmsh venv build test mesh bench examples tapered_joint plane_punch indentation thick_cylinder shrink_fit clean
 
 all: build
 
@@ -46,7 +50,11 @@ mesh: gmsh
 	@echo "mesh: build/mesh/$(basename $(notdir $(GEO)))-$(SIZE).msh"
 
 ## --- examples -----------------------------------------------------------------
-examples: thick_cylinder shrink_fit
+examples: tapered_joint plane_punch indentation thick_cylinder shrink_fit
+
+tapered_joint plane_punch indentation: deps build
+	$(PYTHON) pipelines/$@.py --out out/$@
+	@echo "results: out/$@ (REPORT.md, figures, one folder per run with results.pvd for ParaView)"
 
 thick_cylinder: deps build
 	$(BIN) run pipelines/thick_cylinder.toml --out out/thick_cylinder
@@ -62,6 +70,14 @@ shrink_fit: deps build
 test: deps
 	$(CARGO) test --release
 	$(CARGO) build --release
+	@for e in tapered_joint plane_punch indentation; do \
+	  test -f pipelines/$$e.py || continue; \
+	  echo "example $$e (coarse)"; \
+	  $(PYTHON) pipelines/$$e.py --quick --out build/test/$$e || exit 1; \
+	  for d in build/test/$$e/*/; do \
+	    test -f $$d/results.pvd && { $(PYTHON) pipelines/check_output.py $$d >/dev/null || exit 1; }; \
+	  done; \
+	done
 	@for c in thick_cylinder shrink_fit shrink_fit_split; do \
 	  $(BIN) run pipelines/$$c.toml --out build/test/$$c >/dev/null && \
 	  $(PYTHON) pipelines/check_output.py build/test/$$c || exit 1; \

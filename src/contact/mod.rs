@@ -49,13 +49,16 @@ pub struct InterfaceState {
     /// Current tangential and normal stiffness (k_T, k_N) in MPa/mm.
     pub stiffness: [f64; 2],
     pub status: ContactStatus,
+    /// Whether the interface tangent used at this point in the last evaluation was
+    /// unsymmetric (∂p_T/∂u_N ≠ ∂p_N/∂u_T: slip with friction, Eq. 21, or a shear stiffness
+    /// that depends on the pressure, Eq. 3). Set by the element, not by the law.
+    pub unsymmetric: bool,
 }
 
 impl InterfaceState {
-    /// Whether the point's tangent couples shear to normal approach unsymmetrically
-    /// (slipping with friction: the (1,2) entry of Eq. 21 with no (2,1) counterpart).
+    /// Whether the point's tangent couples shear and normal approach unsymmetrically.
     pub fn has_unsymmetric_tangent(&self) -> bool {
-        self.status == ContactStatus::Slip && self.friction > 0.0
+        self.unsymmetric
     }
 }
 

@@ -135,10 +135,13 @@ pub fn evaluate_interface(
         let (state, tangent) = law.update(relative, &committed[g]);
         let stress = nalgebra::Vector2::new(state.stress[0], state.stress[1]);
         f.gemv_tr(p.da, &b, &stress, 1.0);
+        let used = algorithm.tangent(law, &state, tangent);
         if let Some(k) = k.as_deref_mut() {
-            let eb = algorithm.tangent(law, &state, tangent) * b;
+            let eb = used * b;
             k.gemm_tr(p.da, &b, &eb, 1.0);
         }
+        let mut state = state;
+        state.unsymmetric = used[(0, 1)] != used[(1, 0)];
         trial[g] = state;
     }
 }

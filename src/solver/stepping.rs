@@ -5,7 +5,7 @@
 //! the scheduled steps are handed to the output.
 
 use crate::assembly::GlobalSystem;
-use crate::contact::{ContactAlgorithm, InterfaceState};
+use crate::contact::InterfaceState;
 use crate::material::PointState;
 use crate::model::{ElasticContactCorrection, INTERFACE_POINTS, Model};
 use crate::solver::linear::CholeskySolver;
@@ -78,13 +78,12 @@ impl Problem for Mechanics<'_> {
             it,
             with_tangent,
         );
-        // Only the consistent tangent of slipping points is unsymmetric (Eq. 21); the
-        // two-step and elastic-contact algorithms use symmetric interface tangents.
-        let symmetric = m.interface.algorithm != ContactAlgorithm::Newton
-            || !self
-                .interface_trial
-                .iter()
-                .any(InterfaceState::has_unsymmetric_tangent);
+        // Each point records whether the interface tangent it contributed was unsymmetric
+        // (only the consistent tangent of the Newton algorithm can be).
+        let symmetric = !self
+            .interface_trial
+            .iter()
+            .any(InterfaceState::has_unsymmetric_tangent);
         if with_tangent && !symmetric {
             // Preconditioner: the tangent with the elastic contact matrix (paper conclusion 3).
             system.preconditioner.clone_from(&system.values);
