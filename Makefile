@@ -85,9 +85,10 @@ test: deps
 	done
 
 ## --- benchmarks ---------------------------------------------------------------
-bench: gmsh
+bench: gmsh venv build
 	$(CARGO) bench --bench elastic
 	$(CARGO) bench --bench contact
+	$(PYTHON) pipelines/compare_algorithms.py pipelines/tapered_joint/coulomb.toml pipelines/tapered_joint/compliant_1.toml pipelines/tapered_joint/compliant_2.toml
 
 clean:
 	rm -rf target build out $(VENV)

@@ -49,10 +49,10 @@ def variant(template: Path, path: Path, replacements: dict[str, str] | None = No
     return path
 
 
-def run_cases(runs: list[tuple[Path, Path]], jobs: int | None = None) -> list[str]:
+def run_cases(runs: list[tuple[Path, Path]], jobs: int | None = None, fail_fast: bool = True) -> list[str]:
     """Runs `asperity run CASE --out DIR` for every (case, out) pair, as many at a time as
     there are cores, and returns each run's summary. Stops the pipeline with the run's error
-    message if one fails."""
+    message if one fails, or, with `fail_fast=False`, returns "FAILED: <message>" for it."""
     if not BINARY.exists():
         sys.exit(f"{BINARY} not found: build it with `cargo build --release` (the Makefile does)")
     jobs = jobs or os.cpu_count() or 1
@@ -61,7 +61,10 @@ def run_cases(runs: list[tuple[Path, Path]], jobs: int | None = None) -> list[st
         case, out = run
         done = subprocess.run([str(BINARY), "run", str(case), "--out", str(out)], capture_output=True, text=True)
         if done.returncode != 0:
-            raise RuntimeError(f"{case}: {done.stderr.strip() or done.stdout.strip()}")
+            message = done.stderr.strip() or done.stdout.strip()
+            if not fail_fast:
+                return f"FAILED: {message}"
+            raise RuntimeError(f"{case}: {message}")
         (out / "summary.txt").write_text(done.stdout)
         return done.stdout
 
