@@ -9,7 +9,8 @@
 //! Data flows one way: gmsh geometry → [`mesh::Mesh`] (MSH 4.1 reader) → [`model::Model`]
 //! (bodies, materials, supports, loads, degrees of freedom) → [`solver`] (incremental
 //! Newton-Raphson over load steps, sparse Cholesky from `faer`) → [`output`] (VTU/PVD, CSV).
-//! [`pipeline::run`] strings these together for a [`case::Case`] file.
+//! [`pipeline::run`] strings these together for a [`case::Case`] file; [`converge`] runs a
+//! case at several mesh sizes and checks the convergence of quantities of interest.
 //!
 //! ## Conventions
 //! - Units: mm, N, MPa (N/mm²) throughout.
@@ -24,6 +25,7 @@
 pub mod assembly;
 pub mod case;
 pub mod contact;
+pub mod converge;
 pub mod element;
 pub mod error;
 pub mod material;

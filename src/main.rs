@@ -6,7 +6,8 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-use asperity::case::Case;
+use asperity::case::{Case, QuantitySpec};
+use asperity::converge;
 use asperity::mesh::msh;
 use asperity::pipeline;
 
@@ -32,6 +33,33 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Mesh-convergence study: mesh the case's .geo at several sizes, solve each, and check
+    /// the convergence of quantities of interest. Exit status: 0 when every quantity passes,
+    /// 1 when one fails (one line each on stderr), 2 when the study cannot be run.
+    Converge {
+        /// The case file (TOML); it must mesh a .geo script.
+        case: PathBuf,
+        /// Number of mesh levels (at least 3).
+        #[arg(long, default_value_t = 3)]
+        levels: usize,
+        /// Refinement ratio: each level's mesh size factor is the previous one's / RATIO.
+        #[arg(long, default_value_t = 2.0)]
+        ratio: f64,
+        /// A quantity of interest in addition to the case's [[quantity]] sections (replacing
+        /// one of the same name): name:kind:key=value,key=value, e.g.
+        /// 'u:displacement:point=bore_point,component=x'. Repeatable.
+        #[arg(long = "quantity", value_parser = converge::parse_quantity)]
+        quantities: Vec<QuantitySpec>,
+        /// Output folder (default: out/converge/<case name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Levels solved at once (default: the number of cores; memory permitting).
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Do not make convergence.png.
+        #[arg(long)]
+        no_plot: bool,
+    },
     /// Describe a gmsh MSH 4.1 file: physical groups, element counts and types, problems.
     MeshInfo {
         /// The mesh file.
@@ -51,6 +79,15 @@ fn main() -> ExitCode {
         .with_writer(std::io::stderr)
         .with_target(false)
         .init();
+    if let Command::Converge { .. } = cli.command {
+        return match converge_command(cli.command) {
+            Ok(code) => code,
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        };
+    }
     match execute(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -58,6 +95,44 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+fn converge_command(command: Command) -> asperity::Result<ExitCode> {
+    let Command::Converge {
+        case,
+        levels,
+        ratio,
+        quantities,
+        out,
+        jobs,
+        no_plot,
+    } = command
+    else {
+        unreachable!("called for converge only")
+    };
+    let parsed = Case::from_file(&case)?;
+    let out = out.unwrap_or_else(|| {
+        PathBuf::from("out/converge").join(case.file_stem().unwrap_or_default())
+    });
+    let options = converge::Options {
+        levels,
+        ratio,
+        out,
+        quantities,
+        jobs,
+        plot: !no_plot,
+    };
+    let report = converge::run(&parsed, &options)?;
+    println!("{report}");
+    let failures = report.failures();
+    for line in &failures {
+        eprintln!("FAILED {line}");
+    }
+    Ok(if failures.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
 }
 
 fn execute(command: Command) -> asperity::Result<()> {
@@ -71,6 +146,7 @@ fn execute(command: Command) -> asperity::Result<()> {
             let summary = pipeline::run(&parsed, &out_dir, progress)?;
             println!("{summary}");
         }
+        Command::Converge { .. } => unreachable!("handled by converge_command"),
         Command::MeshInfo { file } => {
             let mesh = msh::read_msh(&file)?;
             println!("{}", msh::describe(&mesh));

@@ -120,6 +120,21 @@ pub fn run(case: &Case, out_dir: &Path, progress: bool) -> Result<RunSummary> {
     let t = Instant::now();
     let mesh = load_mesh(case, out_dir)?;
     let mesh_seconds = t.elapsed().as_secs_f64();
+    run_mesh(case, mesh, mesh_seconds, out_dir, progress, |_, _| Ok(()))
+}
+
+/// Runs `case` on an already loaded `mesh` (from [`load_mesh`], which took `mesh_seconds`),
+/// writing results to `out_dir`, and calls `on_step` with the model and every converged step
+/// after its files are written (e.g. to evaluate quantities in memory; an error stops the run).
+pub fn run_mesh(
+    case: &Case,
+    mesh: Mesh,
+    mesh_seconds: f64,
+    out_dir: &Path,
+    progress: bool,
+    mut on_step: impl FnMut(&Model, &StepResult) -> Result<()>,
+) -> Result<RunSummary> {
+    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
     let t = Instant::now();
     let model = Model::build(mesh, case)?;
     let model_seconds = t.elapsed().as_secs_f64();
@@ -136,6 +151,7 @@ pub fn run(case: &Case, out_dir: &Path, progress: bool) -> Result<RunSummary> {
     let (_, stats) = run_steps(&model, &case.solver.into(), |step| {
         let t = Instant::now();
         last_reactions = writer.write(step)?;
+        on_step(&model, step)?;
         bar.inc(1);
         bar.set_message(format!("load factor {}", step.load_factor));
         Ok(t.elapsed().as_secs_f64())

@@ -106,7 +106,8 @@ fn cyclic_history_at_constant_pressure_matches_the_closed_form_at_any_step_size(
     // Closure for p = 50 MPa: c = c_N p^m.
     let p: f64 = 50.0;
     let u_n = -1e-4 * p.powf(0.5);
-    let kt = p.powf(0.5) / 1e-3;
+    // k_T is constant at constant pressure (the law's smooth floor changes it by ~1e-6 here).
+    let kt = l.tangential_stiffness(p).0;
     // Load, reverse, reload (mm): each beyond the elastic range (β μ_m p / k_T ≈ 2.8e-4 at
     // first) but with n ū ≈ 1..2, inside the hardening range of Eq. (4).
     let path = [0.004, -0.001, 0.005];

@@ -5,7 +5,7 @@
 //! target folder and renames it into place once it is complete. They also refuse to write
 //! non-finite numbers (a NaN in a result file is an error, not data).
 
-mod atomic;
+pub(crate) mod atomic;
 pub mod csv;
 pub mod pvd;
 pub mod vtu;
