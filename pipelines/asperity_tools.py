@@ -3,7 +3,7 @@ write reports. Used by pipelines/<example>.py scripts; see README "Examples".
 
 A pipeline script typically:
     cases = [variant(template, out_dir / "a.toml", {"mu_m = 0.2": "mu_m = 0.1"}), ...]
-    run_cases([(case, out_dir / "a"), ...], size=args.size)
+    run_cases([(case, out_dir / "a"), ...])   # mesh size: variant(..., size=...)
     history = read_history(out_dir / "a"); contact = read_contact(out_dir / "a", "joint")
     write_report(out_dir / "REPORT.md", "Title", [("Section", "markdown text"), ...])
 """
