@@ -39,6 +39,16 @@ pub struct NodalContact {
 }
 
 impl NodalContact {
+    /// Extrapolation from Gauss points (elements on the axis, or the `gauss` rule) can push
+    /// quantities slightly past their physical bounds; they are clamped there: p_N ≤ 0, and
+    /// pressure, accumulated slip, friction coefficient and stiffnesses ≥ 0.
+    fn clamp_to_physical_range(&mut self) {
+        self.values[0] = self.values[0].min(0.0);
+        for i in [1, 5, 7, 8, 9] {
+            self.values[i] = self.values[i].max(0.0);
+        }
+    }
+
     fn from_state(s: &InterfaceState) -> [f64; 10] {
         [
             s.stress[1],
@@ -155,6 +165,7 @@ impl InterfaceOutput {
         for (pair, counts) in out.iter_mut().zip(&count) {
             for (n, &c) in pair.iter_mut().zip(counts) {
                 n.values.iter_mut().for_each(|v| *v /= c.max(1) as f64);
+                n.clamp_to_physical_range();
             }
         }
         out

@@ -98,7 +98,8 @@ pub fn nodal_values(
     }
     for ((s, e), &k) in stress.iter_mut().zip(&mut eqp).zip(&count) {
         *s /= k as f64;
-        *e /= k as f64;
+        // ε̄ᵖ cannot be negative; extrapolation from the Gauss points can undershoot.
+        *e = (*e / k as f64).max(0.0);
     }
     (stress, eqp)
 }
