@@ -7,6 +7,7 @@
 #   make thick_cylinder          Lamé thick cylinder (gmsh -> solver -> plots)
 #   make shrink_fit              shrink-fit contact example
 #   make test                    all tests (Rust unit/integration tests + output checks)
+#   make convergence             mesh-convergence verification studies -> out/convergence
 #   make mesh GEO=geo/X.geo SIZE=0.5   mesh a .geo script into build/mesh/
 #   make bench                   timings at ~10k, ~100k, ~1M unknowns, appended to BENCHMARKS.md
 
@@ -19,6 +20,7 @@ BIN     := target/release/asperity
 SIZE    ?= 1
 
 .PHONY: all deps gmsh venv build test mesh bench examples tapered_joint plane_punch indentation thick_cylinder shrink_fit clean
+.PHONY: convergence
 
 all: build
 
@@ -83,6 +85,36 @@ test: deps
 	  $(PYTHON) pipelines/check_output.py build/test/$$c || exit 1; \
 	  $(PYTHON) pipelines/plot_fields.py build/test/$$c >/dev/null 2>&1 || { echo "plot_fields.py failed on $$c"; exit 1; }; \
 	done
+	$(call convergence_studies,3,3,build/test/convergence,$(CONVERGENCE_SUMMARY))
+
+## --- convergence studies ------------------------------------------------------
+# pipelines/convergence/*.toml (README "Convergence studies"): every study must pass, and the
+# singular edge pressure of flat_punch_edge must be reported as not converged (exit status 1).
+CONVERGENCE_STUDIES := thick_cylinder shrink_fit flat_punch tapered_joint
+CONVERGENCE_SUMMARY := sed -n '/^summary:/,/^table:/p'
+
+# $(call convergence_studies,LEVELS_CHEAP,LEVELS,OUT,SHOW): LEVELS_CHEAP levels for the cheap
+# smooth studies (thick_cylinder, shrink_fit), LEVELS for the others; SHOW filters the tables.
+define convergence_studies
+	@mkdir -p $(3)
+	@for s in $(CONVERGENCE_STUDIES); do \
+	  levels=$(2); case $$s in thick_cylinder|shrink_fit) levels=$(1);; esac; \
+	  echo "== convergence study $$s ($$levels levels, ratio 2)"; \
+	  $(BIN) converge pipelines/convergence/$$s.toml --levels $$levels --out $(3)/$$s >$(3)/$$s.txt 2>&1 \
+	    || { cat $(3)/$$s.txt; exit 1; }; \
+	  $(4) $(3)/$$s.txt; \
+	done
+	@echo "== convergence study flat_punch_edge ($(2) levels): must be reported as not converged"
+	@$(BIN) converge pipelines/convergence/flat_punch_edge.toml --levels $(2) --out $(3)/flat_punch_edge \
+	  >$(3)/flat_punch_edge.txt 2>&1; status=$$?; $(4) $(3)/flat_punch_edge.txt; \
+	  if [ $$status = 1 ] && grep -q "^FAILED edge_pressure: not converged" $(3)/flat_punch_edge.txt; then \
+	    echo "   as expected: edge_pressure not converged, exit status 1"; \
+	  else echo "flat_punch_edge: expected exit status 1 and 'not converged' (got $$status)"; exit 1; fi
+endef
+
+convergence: deps build
+	$(call convergence_studies,5,4,out/convergence,cat)
+	@echo "results: out/convergence/<study>/ (convergence.csv, convergence.png, level_k/)"
 
 ## --- benchmarks ---------------------------------------------------------------
 bench: gmsh venv build

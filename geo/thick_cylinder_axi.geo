@@ -3,7 +3,7 @@
 // u_z = 0 on both end planes it is the plane-strain Lamé problem (../shared/REFERENCES.md §1).
 //
 // Physical groups: surface "cylinder"; curves "bore" (r = a, pressure), "outer" (r = b),
-// "bottom" (z = 0) and "top" (z = H).
+// "bottom" (z = 0) and "top" (z = H); point "bore_point" (r = a, z = 0).
 // Run: gmsh thick_cylinder_axi.geo -2 -order 2 -setnumber Mesh.SecondOrderIncomplete 1
 //      [-setnumber a 10 -setnumber b 20 -setnumber H 5 -setnumber n_wall 4 -clscale 1]
 DefineConstant[ a = {10, Name "bore radius a [mm]"} ];
@@ -37,3 +37,5 @@ Physical Curve("bore") = {4};
 Physical Curve("outer") = {2};
 Physical Curve("bottom") = {1};
 Physical Curve("top") = {3};
+// A point on the bore at z = 0 (e.g. for the bore displacement in convergence studies).
+Physical Point("bore_point") = {1};

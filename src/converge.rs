@@ -117,7 +117,7 @@ pub fn parse_quantity(text: &str) -> std::result::Result<QuantitySpec, String> {
         }
     }
     serde::Deserialize::deserialize(toml::Value::Table(table))
-        .map_err(|e: toml::de::Error| bad(e.to_string().trim().into()))
+        .map_err(|e: toml::de::Error| bad(e.to_string().trim().replace('\n', " ")))
 }
 
 /// The pass criteria of a quantity.
@@ -265,7 +265,18 @@ pub fn analyse(q: &[f64], h: &[f64], ratio: f64, criteria: &Criteria) -> Converg
             .filter(|(v, _)| (*v - reference).abs() > floor)
             .map(|(v, h)| (h.ln(), error(*v).ln()))
             .collect();
-        if points.len() >= 2 {
+        let signed: Vec<f64> = q
+            .iter()
+            .map(|v| v - reference)
+            .filter(|e| e.abs() > floor)
+            .collect();
+        if signed.windows(2).any(|w| w[0] * w[1] < 0.0) {
+            c.notes.push(
+                "the error against the reference changes sign along the levels (oscillation, or a reference that \
+                 is not the limit of the model: a modelling error), so no order is fitted to it"
+                    .into(),
+            );
+        } else if points.len() >= 2 {
             c.reference_order = Some(slope(&points));
         }
         if e > criteria.tolerance {
@@ -413,6 +424,32 @@ impl std::fmt::Display for Report {
             }
         }
         writeln!(f)?;
+        writeln!(f, "summary:")?;
+        let width = self
+            .quantities
+            .iter()
+            .map(|q| q.name.len())
+            .max()
+            .unwrap_or(0);
+        for (q, c) in self.quantities.iter().zip(&self.results) {
+            let mut line = format!(
+                "  {:<6} {:<width$}  order {:>5}",
+                if c.passed() { "ok" } else { "FAILED" },
+                q.name,
+                c.order.map_or("n/a".into(), |p| format!("{p:.2}"))
+            );
+            if let (Some(x), Some(e)) = (c.extrapolated, c.error_estimate) {
+                let _ = write!(line, "  extrapolated {x:.10e} ± {e:.1e}");
+            }
+            let _ = write!(line, "  change {:.1e}", c.relative_change);
+            if let Some(e) = c.reference_error {
+                let _ = write!(line, "  error vs reference {e:.1e}");
+            }
+            if !c.converged {
+                line.push_str("  NOT CONVERGED");
+            }
+            writeln!(f, "{line}")?;
+        }
         writeln!(f, "table: {}", self.csv.display())?;
         write!(f, "plot: {}", self.plot)
     }
@@ -499,6 +536,8 @@ pub fn run(case: &Case, options: &Options) -> Result<Report> {
     let gate = MemoryGate::new(available_memory().map_or(u64::MAX, |m| m / 2));
     let queue = Mutex::new((0..n).collect::<Vec<usize>>()); // popped finest first
     let cancel = AtomicBool::new(false);
+    // Progress lines as the levels finish, on a terminal only (the report lists them anyway).
+    let terminal = std::io::IsTerminal::is_terminal(&std::io::stderr());
     let results: Mutex<Vec<Option<Result<Level>>>> = Mutex::new((0..n).map(|_| None).collect());
     std::thread::scope(|s| {
         for _ in 0..jobs {
@@ -512,10 +551,16 @@ pub fn run(case: &Case, options: &Options) -> Result<Report> {
                     }
                     let result = run_level(case, &quantities, options, k, &gate);
                     match &result {
-                        Ok(l) => eprintln!(
-                            "level {k}: size {:.6}, {} unknowns, {:.2} s",
-                            l.size, l.unknowns, l.seconds
-                        ),
+                        Ok(l) => {
+                            let line = format!(
+                                "level {k}: size {:.6}, {} unknowns, {:.2} s",
+                                l.size, l.unknowns, l.seconds
+                            );
+                            tracing::info!("{line}");
+                            if terminal {
+                                eprintln!("{line}");
+                            }
+                        }
                         Err(_) => cancel.store(true, Ordering::Relaxed),
                     }
                     results.lock().expect("results")[k] = Some(result);
@@ -958,5 +1003,38 @@ fn plot(out: &Path) -> String {
             "skipped convergence.png: cannot run {}: {e}",
             python.display()
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::mpsc;
+    use std::time::Duration;
+
+    #[test]
+    fn a_level_larger_than_the_budget_runs_alone() {
+        let gate = MemoryGate::new(10);
+        let (tx, rx) = mpsc::channel();
+        std::thread::scope(|s| {
+            let big = gate.acquire(3, 100); // more than the budget: takes all of it
+            s.spawn(|| {
+                let _small = gate.acquire(1, 1);
+                tx.send(()).unwrap();
+            });
+            assert!(
+                rx.recv_timeout(Duration::from_millis(200)).is_err(),
+                "ran beside the big level"
+            );
+            drop(big);
+            rx.recv_timeout(Duration::from_secs(5))
+                .expect("runs once the big level is done");
+        });
+        // Small levels share the budget.
+        let a = gate.acquire(2, 4);
+        let b = gate.acquire(1, 5);
+        assert_eq!(gate.state.lock().unwrap().0, 1);
+        drop((a, b));
+        assert_eq!(gate.state.lock().unwrap().0, 10);
     }
 }
