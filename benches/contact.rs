@@ -5,9 +5,10 @@
 //! (b) the unsymmetric path: the same factorisation used as BiCGSTAB preconditioner on the
 //! true tangent, and reports the Krylov iterations. Figures go to BENCHMARKS.md.
 
-use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
+
+mod common;
 
 use asperity::assembly::GlobalSystem;
 use asperity::case::Case;
@@ -225,41 +226,32 @@ fn main() {
             break;
         }
     }
-    let date = std::process::Command::new("date")
-        .args(["-u", "+%Y-%m-%d %H:%M UTC"])
-        .output()
-        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-        .unwrap_or_default();
-    let cores = std::thread::available_parallelism()
-        .map(|n| n.get())
-        .unwrap_or(1);
-    let mut file = std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open("BENCHMARKS.md")
-        .expect("BENCHMARKS.md");
-    writeln!(
-        file,
-        "\n### Sliding block, unsymmetric friction tangent (plane strain), {date}, {cores} cores\n"
-    )
-    .unwrap();
-    writeln!(
-        file,
-        "| unknowns | interface elements | slipping points | Newton iterations (2 steps) | unsymmetric solves | whole run [s] | symmetric factorise+solve [s] | unsymmetric solve [s] | BiCGSTAB iterations | ratio |"
-    )
-    .unwrap();
-    writeln!(file, "|---|---|---|---|---|---|---|---|---|---|").unwrap();
-    for r in rows {
-        writeln!(file, "{r}").unwrap();
-    }
-    writeln!(file, "\n### Global contact algorithms, sliding block with the paper's law (5 steps of push-along), {date}, {cores} cores\n").unwrap();
-    writeln!(
-        file,
-        "| unknowns | algorithm | steps | Newton iterations | unsymmetric solves | time [s] |"
-    )
-    .unwrap();
-    writeln!(file, "|---|---|---|---|---|---|").unwrap();
-    for r in algorithm_rows {
-        writeln!(file, "{r}").unwrap();
-    }
+    common::append_table(
+        "Sliding block, unsymmetric friction tangent (plane strain)",
+        &[
+            "unknowns",
+            "interface elements",
+            "slipping points",
+            "Newton iterations (2 steps)",
+            "unsymmetric solves",
+            "whole run [s]",
+            "symmetric factorise+solve [s]",
+            "unsymmetric solve [s]",
+            "BiCGSTAB iterations",
+            "ratio",
+        ],
+        &rows,
+    );
+    common::append_table(
+        "Global contact algorithms, sliding block with the paper's law (5 steps of push-along)",
+        &[
+            "unknowns",
+            "algorithm",
+            "steps",
+            "Newton iterations",
+            "unsymmetric solves",
+            "time [s]",
+        ],
+        &algorithm_rows,
+    );
 }

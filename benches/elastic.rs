@@ -3,9 +3,10 @@
 //! 10k, 100k and 1M unknowns, and appends the figures (machine and date) to BENCHMARKS.md.
 //! Pass `--quick` to stop after the smallest size.
 
-use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
+
+mod common;
 
 use asperity::assembly::GlobalSystem;
 use asperity::case::Case;
@@ -113,40 +114,22 @@ fn main() {
 }
 
 fn append_to_benchmarks(rows: &[String]) {
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into());
-    let cores = std::thread::available_parallelism()
-        .map(|n| n.get())
-        .unwrap_or(1);
-    let date = std::process::Command::new("date")
-        .arg("-u")
-        .arg("+%Y-%m-%d %H:%M UTC")
-        .output()
-        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-        .unwrap_or_default();
-    let mut file = std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open("BENCHMARKS.md")
-        .expect("BENCHMARKS.md");
-    writeln!(
-        file,
-        "\n### Elastic block (plane strain, quad8), {date}, {cpu}, {cores} cores\n"
-    )
-    .unwrap();
-    writeln!(
-        file,
-        "| unknowns | elements | matrix nnz | gmsh [s] | read [s] | model [s] | assembly [s] | AMD+symbolic [s] | factorise [s] | refactorise [s] | solve [s] | factor [MB] |"
-    )
-    .unwrap();
-    writeln!(file, "|---|---|---|---|---|---|---|---|---|---|---|---|").unwrap();
-    for r in rows {
-        writeln!(file, "{r}").unwrap();
-    }
+    common::append_table(
+        "Elastic block (plane strain, quad8)",
+        &[
+            "unknowns",
+            "elements",
+            "matrix nnz",
+            "gmsh [s]",
+            "read [s]",
+            "model [s]",
+            "assembly [s]",
+            "AMD+symbolic [s]",
+            "factorise [s]",
+            "refactorise [s]",
+            "solve [s]",
+            "factor [MB]",
+        ],
+        rows,
+    );
 }

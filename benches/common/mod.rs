@@ -1,0 +1,45 @@
+//! Shared by the benches: appending a result table, with the machine and date, to
+//! BENCHMARKS.md.
+
+use std::io::Write;
+
+/// The machine: CPU model and number of cores.
+fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
+    format!("{cpu}, {cores} cores")
+}
+
+/// The current UTC date and time.
+fn now() -> String {
+    std::process::Command::new("date")
+        .args(["-u", "+%Y-%m-%d %H:%M UTC"])
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_default()
+}
+
+/// Appends `### title, date, machine` and a markdown table with `header` and `rows` (rows are
+/// already formatted `| a | b |` lines) to BENCHMARKS.md.
+pub fn append_table(title: &str, header: &[&str], rows: &[String]) {
+    let mut file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open("BENCHMARKS.md")
+        .expect("BENCHMARKS.md");
+    writeln!(file, "\n### {title}, {}, {}\n", now(), machine()).unwrap();
+    writeln!(file, "| {} |", header.join(" | ")).unwrap();
+    writeln!(file, "|{}", "---|".repeat(header.len())).unwrap();
+    for r in rows {
+        writeln!(file, "{r}").unwrap();
+    }
+}
