@@ -94,15 +94,6 @@ impl InterfaceLaw for LinearCoulomb {
         (s, InterfaceTangent::new(0.0, -mu * kn * sign, 0.0, kn))
     }
 
-    fn elastic_tangent(&self, state: &InterfaceState) -> InterfaceTangent {
-        let k = InterfaceTangent::new(self.tangential_stiffness, 0.0, 0.0, self.normal_stiffness);
-        if state.status == ContactStatus::Open {
-            k * OPEN_TANGENT_FRACTION
-        } else {
-            k
-        }
-    }
-
     fn describe(&self) -> String {
         format!(
             "linear Coulomb, k_N = {} MPa/mm, k_T = {} MPa/mm, mu = {}",

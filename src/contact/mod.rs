@@ -72,11 +72,19 @@ pub trait InterfaceLaw: Send + Sync + std::fmt::Debug {
         committed: &InterfaceState,
     ) -> (InterfaceState, InterfaceTangent);
 
-    /// The elastic (stick) tangent at `state`: diag(k_T, k_N) for a closed point, the
-    /// regularising stiffness for an open one. It is symmetric positive definite, and is
-    /// what the paper iterates with (conclusion 3, "elastic contact matrix"); asperity uses it
-    /// to precondition the unsymmetric consistent tangent.
-    fn elastic_tangent(&self, state: &InterfaceState) -> InterfaceTangent;
+    /// The elastic (stick) tangent at `state`: diag(k_T, k_N) from the stiffnesses the law
+    /// stored in the state, scaled to the regularising stiffness for an open point. It is
+    /// symmetric positive definite, and is what the paper iterates with (conclusion 3,
+    /// "elastic contact matrix"); asperity also uses it to precondition the unsymmetric
+    /// consistent tangent.
+    fn elastic_tangent(&self, state: &InterfaceState) -> InterfaceTangent {
+        let k = InterfaceTangent::new(state.stiffness[0], 0.0, 0.0, state.stiffness[1]);
+        if state.status == ContactStatus::Open {
+            k * OPEN_TANGENT_FRACTION
+        } else {
+            k
+        }
+    }
 
     /// Short description for logs.
     fn describe(&self) -> String;

@@ -229,15 +229,6 @@ impl InterfaceLaw for RoughJoint {
         (s, InterfaceTangent::new(dpt_dut, dpt_dun, 0.0, kn))
     }
 
-    fn elastic_tangent(&self, state: &InterfaceState) -> InterfaceTangent {
-        let k = InterfaceTangent::new(state.stiffness[0], 0.0, 0.0, state.stiffness[1]);
-        if state.status == ContactStatus::Open {
-            k * OPEN_TANGENT_FRACTION
-        } else {
-            k
-        }
-    }
-
     fn describe(&self) -> String {
         format!(
             "rough joint (paper §2): c_N = {} mm/MPa^m, m = {}, R = {}, S = {}, mu_m = {}, beta = {}, n = {} 1/mm",
