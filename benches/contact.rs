@@ -11,10 +11,11 @@ use std::time::Instant;
 mod common;
 
 use asperity::assembly::GlobalSystem;
-use asperity::case::Case;
+use asperity::config::Case;
 use asperity::mesh::{gmsh, msh};
-use asperity::model::{ElasticContactCorrection, Model};
+use asperity::model::Model;
 use asperity::solver::linear::CholeskySolver;
+use asperity::solver::mechanics::ElasticContactCorrection;
 use asperity::solver::newton::NewtonSettings;
 use asperity::solver::stepping::run_steps;
 

@@ -9,7 +9,7 @@ use std::time::Instant;
 mod common;
 
 use asperity::assembly::GlobalSystem;
-use asperity::case::Case;
+use asperity::config::Case;
 use asperity::material::PointState;
 use asperity::mesh::{gmsh, msh};
 use asperity::model::Model;

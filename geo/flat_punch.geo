@@ -1,8 +1,8 @@
 // Frictionless flat punch on an elastic foundation, axisymmetric (x = r, y = z): a stiff
 // cylindrical punch of radius a pressed onto a foundation 20a wide and 20a deep, as in
 // tests/contact.rs (mod flat_punch). Validation against Sneddon's rigid flat punch on a half
-// space (../shared/REFERENCES.md §3): p(r) = p_m / (2 sqrt(1 - r²/a²)), p_m = P / (π a²),
-// singular at the punch edge r = a.
+// space (Sneddon 1946; docs/theory.md, "Rigid flat punch on a half-space"):
+// p(r) = p_m / (2 sqrt(1 - r²/a²)), p_m = P / (π a²), singular at the punch edge r = a.
 //
 // Two bodies with coincident but distinct nodes on the contact (Geometry.AutoCoherence = 0).
 // The foundation is graded: uniform under the punch (n_punch elements), growing

@@ -1,9 +1,9 @@
 // Plane elastic punch on an elastic foundation: example 4.1 of Buczkowski & Kleiber (1994),
-// Figs. 2-4 (../shared/paper/buczkowski-kleiber-1994.md §4.1).
+// Figs. 2-4 (the paper's §4.1).
 //
 // The paper does not give the geometry of this example (it is in Fredriksson 1976, not in the
-// text; see ../shared/paper/NOTES.md, "Geometry of the examples"). Chosen here, all of them
-// parameters below:
+// text; see docs/theory.md, "The paper's examples: data and choices"). Chosen here, all of
+// them parameters below:
 //   punch (body B, on top)    width 2a = 100 mm (a = 50), height h = 50 mm;
 //   foundation (body A)       width 2W = 600 mm (W = 6a: 5a beyond each punch edge),
 //                             depth D = 250 mm (5a), bottom held vertically.

@@ -1,6 +1,7 @@
 // Shrink fit: solid shaft (0 <= r <= b) in a hub (b <= r <= c), axisymmetric slice of
-// height L (x = r, y = z). Validation case of ../shared/REFERENCES.md §1: with u_z = 0 on
-// the end planes of both bodies the contact pressure is p = delta / (C + 1/k_N).
+// height L (x = r, y = z). Validation case of docs/theory.md, "Lamé cylinders and the shrink
+// fit": with u_z = 0 on the end planes of both bodies the contact pressure is
+// p = delta / (C + 1/k_N).
 //
 // recipe = 0: two bodies with coincident but distinct nodes on r = b (curves "shaft_outer"
 //             and "hub_bore"; case: side_a/side_b).

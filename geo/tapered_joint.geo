@@ -1,11 +1,11 @@
 // Tapered (conical) press fit, axisymmetric (x = r, y = z): paper §4.2, Fig. 5.
 //
-// The paper gives no dimensions (../shared/paper/NOTES.md): the taper "1/2.5" is read as DIN
-// C = 1:2.5, i.e. tan(gamma) = C/2 = 0.2 (gamma the half cone angle). Chosen here: contact
-// length L = 40 mm, mean contact radius r_m = 20 mm (so the cone runs from r = 16 at z = 0
-// to r = 24 at z = L), sleeve outer radius R_o = 40 mm, solid shaft with a cylindrical
-// head of height L_head = 20 mm above the sleeve. The shaft is pushed down into the sleeve
-// by a pressure on its top face; the sleeve rests on its bottom face.
+// The paper gives no dimensions (docs/theory.md, "The paper's examples: data and choices"):
+// the taper "1/2.5" is read as DIN C = 1:2.5, i.e. tan(gamma) = C/2 = 0.2 (gamma the half cone
+// angle). Chosen here: contact length L = 40 mm, mean contact radius r_m = 20 mm (so the cone
+// runs from r = 16 at z = 0 to r = 24 at z = L), sleeve outer radius R_o = 40 mm, solid shaft
+// with a cylindrical head of height L_head = 20 mm above the sleeve. The shaft is pushed down
+// into the sleeve by a pressure on its top face; the sleeve rests on its bottom face.
 //
 // Two bodies with coincident but distinct nodes on the cone (Geometry.AutoCoherence = 0).
 // Physical groups: surfaces "shaft", "sleeve"; curves "shaft_cone" (side A of the contact),

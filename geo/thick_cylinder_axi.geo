@@ -1,6 +1,7 @@
 // Thick-walled cylinder under internal pressure, axisymmetric (x = r, y = z).
 // A slice of height H of a cylinder with bore radius a and outer radius b; with
-// u_z = 0 on both end planes it is the plane-strain Lamé problem (../shared/REFERENCES.md §1).
+// u_z = 0 on both end planes it is the plane-strain Lamé problem
+// (docs/theory.md, "Lamé cylinders and the shrink fit").
 //
 // Physical groups: surface "cylinder"; curves "bore" (r = a, pressure), "outer" (r = b),
 // "bottom" (z = 0) and "top" (z = H); point "bore_point" (r = a, z = 0).

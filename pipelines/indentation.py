@@ -508,7 +508,8 @@ both, foundation J2 with σ_Y = {SIGMA_Y:g} MPa. Mesh `geo/indentation.geo` at s
 {summary_line(runs['model_a']['summary'], 'model:').removeprefix('model: ')}. Foundation
 bottom u_z = 0, outer surface free, punch held by the contact only.
 
-Load: uniform pressure 1.6 r p0 on the punch top, p0 = 20π MPa (NOTES misprint 6); load factor
+Load: uniform pressure 1.6 r p0 on the punch top, p0 = 20π MPa (misprint 6 in `docs/theory.md`,
+"Known misprints in the paper"); load factor
 = r, steps of 0.1 up to r = 2 (Fig. 11: steps of 0.125 up to 4.6/1.6 = 2.875, i.e. Q = 4.6 π a² p0).
 Interface: `rough_joint`, c_n = 1e-7 (paper 0.0001 × 1e-3), m = 0.5, S = 0.5, R = 5e-5 (paper
 0.05 × 1e-3) unless stated, n = 275 1/mm (not given in §4.3; taken from §4.1/4.2, it only

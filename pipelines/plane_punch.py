@@ -356,9 +356,9 @@ Checks: {'all passed' if not failures else '**FAILED**: ' + '; '.join(failures)}
 """),
         ("Model", f"""
 Example 4.1 of Buczkowski & Kleiber (1994), plane elastic punch on an elastic foundation.
-The paper does not give its geometry (it is Fredriksson's, 1976; `../shared/paper/NOTES.md`,
-"Geometry of the examples"), so it was chosen (parameters of `geo/plane_punch.geo`, set in
-the cases `pipelines/plane_punch/*.toml`):
+The paper does not give its geometry (it is Fredriksson's, 1976; `docs/theory.md`,
+"The paper's examples: data and choices"), so it was chosen (parameters of
+`geo/plane_punch.geo`, set in the cases `pipelines/plane_punch/*.toml`):
 
 {model_table}
 """),

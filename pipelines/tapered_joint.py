@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Tapered press fit (paper §4.2, Figs. 5-6): push-in force against axial displacement for
 Coulomb friction without interface compliance and for two interface-compliance sets,
-compared with the slice model of Kollmann / DIN 7190 (../shared/REFERENCES.md §2), and the
-self-locking of the joint on unloading (tan gamma <= mu).
+compared with the slice model of Kollmann / DIN 7190 (docs/theory.md, "Conical press fit: the
+slice model"), and the self-locking of the joint on unloading (tan gamma <= mu).
 
 Usage: tapered_joint.py [--out out/tapered_joint] [--size S] [--quick]
 
@@ -166,7 +166,8 @@ def main() -> None:
                     summary_line(summaries[name], "time [s]:").removeprefix("time [s]: ")] for name in CASES])
     write_report(out / "REPORT.md", "Tapered joint (paper §4.2)", [
         ("Set-up", f"""Axisymmetric conical press fit, `geo/tapered_joint.geo`: taper 1:2.5 read as tan γ = {TAPER}
-(NOTES.md), contact length L = {L} mm, mean contact radius r_m = {R_M} mm, sleeve outer radius
+(`docs/theory.md`, "The paper's examples: data and choices"), contact length L = {L} mm,
+mean contact radius r_m = {R_M} mm, sleeve outer radius
 R_o = {R_O} mm, solid shaft; E = {E:.0f} MPa, ν = {NU}; μ = {MU}. The shaft is pushed in by
 p0 = {P0} MPa on its top face (F = p0 π r² = {P0 * np.pi * R_TOP**2 / 1e3:.2f} kN at load factor 1) in
 ten increments, then unloaded to zero in five. Cases: {", ".join(f"`{c}` ({d})" for c, d in CASES.items())}.
@@ -175,7 +176,8 @@ Mesh size factor: {size or "as in the case files"}."""),
             ["case", "slope dF/du_a [kN/mm]", "slope / slice model", "u_a at full load [µm]", "u_a after unloading [µm]",
              "relative return on unloading"], rows) + f"""
 
-Slice model (REFERENCES §2): dF/du_a = 2π tan γ tan(γ+ρ) ∫dz/K(r) = {slope_ref / 1e3:.1f} kN/mm.
+Slice model (Kollmann 1984; `docs/theory.md`, "Conical press fit: the slice model"):
+dF/du_a = 2π tan γ tan(γ+ρ) ∫dz/K(r) = {slope_ref / 1e3:.1f} kN/mm.
 The FE slope differs from it by end effects (the slice model ignores the shear coupling
 between slices and the free ends of the sleeve). With interface compliance the joint is
 softer (larger u_a at the same force), as the paper reports, the more so the larger c_N.

@@ -12,6 +12,7 @@
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use rayon::prelude::*;
 
+use crate::element::set::ElementSet;
 use crate::element::{ElementMatrix, ElementVector};
 
 /// Marker for a constrained (prescribed) degree of freedom in [`DofMap`].
@@ -81,41 +82,6 @@ impl DofMap {
         }
     }
 }
-
-/// A family of elements sharing a kernel and a kind of integration-point state (continuum
-/// cells, interface elements, ...). The assembler is generic over this trait.
-pub trait ElementSet: Sync {
-    /// History stored per integration point.
-    type State: Copy + Default + Send + Sync;
-
-    /// Number of elements.
-    fn len(&self) -> usize;
-
-    /// Whether the set is empty.
-    fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Global node indices of element `e` (at most 8).
-    fn nodes(&self, e: usize) -> &[u32];
-
-    /// State slots per element; element `e` owns slots `e·P .. (e+1)·P`.
-    fn points_per_element(&self) -> usize;
-
-    /// Internal force `f` (and tangent `k` if requested) of element `e` for its nodal
-    /// displacements `u` (dof order of [`ElementVector`]), updating `trial` from `committed`.
-    #[allow(clippy::too_many_arguments)]
-    fn evaluate(
-        &self,
-        e: usize,
-        u: &ElementVector,
-        committed: &[Self::State],
-        trial: &mut [Self::State],
-        k: Option<&mut ElementMatrix>,
-        f: &mut ElementVector,
-    );
-}
-
 /// Groups of elements of one set such that no two elements of a group share a node.
 #[derive(Clone, Debug, Default)]
 pub struct Coloring {

@@ -9,8 +9,9 @@
 //! Data flows one way: gmsh geometry → [`mesh::Mesh`] (MSH 4.1 reader) → [`model::Model`]
 //! (bodies, materials, supports, loads, degrees of freedom) → [`solver`] (incremental
 //! Newton-Raphson over load steps, sparse Cholesky from `faer`) → [`output`] (VTU/PVD, CSV).
-//! [`pipeline::run`] strings these together for a [`case::Case`] file; [`converge`] runs a
+//! [`pipeline::run`] strings these together for a [`config::Case`] file; [`study`] runs a
 //! case at several mesh sizes and checks the convergence of quantities of interest.
+//! `ARCHITECTURE.md` says what each module owns.
 //!
 //! ## Conventions
 //! - Units: mm, N, MPa (N/mm²) throughout.
@@ -23,9 +24,8 @@
 //!   displacement = body B minus body A.
 
 pub mod assembly;
-pub mod case;
+pub mod config;
 pub mod contact;
-pub mod converge;
 pub mod element;
 pub mod error;
 pub mod material;
@@ -35,5 +35,6 @@ pub mod output;
 pub mod pipeline;
 pub mod post;
 pub mod solver;
+pub mod study;
 
 pub use error::{Error, Result};

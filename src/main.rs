@@ -6,10 +6,10 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-use asperity::case::{Case, QuantitySpec};
-use asperity::converge;
+use asperity::config::{Case, QuantitySpec};
 use asperity::mesh::msh;
 use asperity::pipeline;
+use asperity::study;
 
 /// Finite-element analysis of 2D plane and axisymmetric contact with interface compliance
 /// and friction (Buczkowski & Kleiber 1994). Units: mm, N, MPa.
@@ -48,7 +48,7 @@ enum Command {
         /// A quantity of interest in addition to the case's [[quantity]] sections (replacing
         /// one of the same name): name:kind:key=value,key=value, e.g.
         /// 'u:displacement:point=bore_point,component=x'. Repeatable.
-        #[arg(long = "quantity", value_parser = converge::parse_quantity)]
+        #[arg(long = "quantity", value_parser = asperity::config::parse_quantity)]
         quantities: Vec<QuantitySpec>,
         /// Output folder (default: out/converge/<case name>).
         #[arg(long)]
@@ -114,7 +114,7 @@ fn converge_command(command: Command) -> asperity::Result<ExitCode> {
     let out = out.unwrap_or_else(|| {
         PathBuf::from("out/converge").join(case.file_stem().unwrap_or_default())
     });
-    let options = converge::Options {
+    let options = study::Options {
         levels,
         ratio,
         out,
@@ -122,7 +122,7 @@ fn converge_command(command: Command) -> asperity::Result<ExitCode> {
         jobs,
         plot: !no_plot,
     };
-    let report = converge::run(&parsed, &options)?;
+    let report = study::run(&parsed, &options)?;
     println!("{report}");
     let failures = report.failures();
     for line in &failures {

@@ -17,7 +17,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use crate::case::Case;
+use crate::config::Case;
 use crate::mesh::{Mesh, gmsh, msh};
 use crate::model::Model;
 use crate::output::csv::{CsvTable, write_csv};

@@ -538,7 +538,7 @@ mod bad_input {
     fn a_negative_stiffness_is_rejected_with_its_name() {
         let text = pair("lower_top", "upper_bottom")
             .replace("normal_stiffness = 1e4", "normal_stiffness = -1e4");
-        let err = asperity::case::Case::from_toml(
+        let err = asperity::config::Case::from_toml(
             &format!("[mesh]\nfile = \"m.msh\"\n{text}"),
             std::path::Path::new("c.toml"),
         )
@@ -603,7 +603,7 @@ mod rough_joint {
         }
     }
 
-    fn sliding_case(algorithm: &str) -> asperity::case::Case {
+    fn sliding_case(algorithm: &str) -> asperity::config::Case {
         case(&format!(
             r#"[analysis]
             type = "plane_strain"

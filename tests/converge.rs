@@ -8,12 +8,14 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use asperity::case::Case;
-use asperity::converge::{Criteria, analyse, evaluate, parse_quantity};
+use asperity::config::Case;
+use asperity::config::parse_quantity;
 use asperity::model::Model;
 use asperity::post::interface::resultants;
+use asperity::post::quantities::evaluate;
 use asperity::solver::newton::NewtonSettings;
 use asperity::solver::stepping::run_steps;
+use asperity::study::{Criteria, analyse};
 use common::*;
 
 fn criteria(reference: Option<f64>, tolerance: f64, min_order: Option<f64>) -> Criteria {

@@ -141,7 +141,7 @@ fn bad_plastic_parameters_are_rejected_with_their_names() {
         ),
         ("E = 1000.0, nu = 0.3, hardening = 10.0", "yield_stress"),
     ] {
-        let e = asperity::case::Case::from_toml(&base(material), std::path::Path::new("c.toml"))
+        let e = asperity::config::Case::from_toml(&base(material), std::path::Path::new("c.toml"))
             .unwrap_err()
             .to_string();
         assert!(

@@ -9,6 +9,7 @@
 pub mod continuum;
 pub mod interface6;
 pub mod quadrature;
+pub mod set;
 pub mod shape;
 
 use nalgebra::{SMatrix, SVector};

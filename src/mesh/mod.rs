@@ -32,14 +32,6 @@ impl CellKind {
             CellKind::Tri6 => 6,
         }
     }
-
-    /// VTK cell type id (23 quadratic quad, 22 quadratic triangle).
-    pub fn vtk_type(self) -> u8 {
-        match self {
-            CellKind::Quad8 => 23,
-            CellKind::Tri6 => 22,
-        }
-    }
 }
 
 /// A quadratic surface cell. `nodes[..kind.node_count()]` are valid (0-based node indices).

@@ -10,6 +10,8 @@ pub mod csv;
 pub mod pvd;
 pub mod vtu;
 
+use crate::mesh::CellKind;
+
 /// An array attached to the points or cells of a [`Grid`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Field {
@@ -56,5 +58,14 @@ impl Grid {
     /// Number of cells.
     pub fn cell_count(&self) -> usize {
         self.cell_types.len()
+    }
+}
+
+/// VTK cell type of a quadratic body cell (23 quadratic quad, 22 quadratic triangle); VTK's
+/// node order of these cells is gmsh's.
+pub fn vtk_cell_type(kind: CellKind) -> u8 {
+    match kind {
+        CellKind::Quad8 => 23,
+        CellKind::Tri6 => 22,
     }
 }

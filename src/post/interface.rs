@@ -9,8 +9,9 @@ use nalgebra::Matrix3;
 
 use crate::contact::InterfaceState;
 use crate::element::interface6::interface_point;
+use crate::element::set::INTERFACE_POINTS;
 use crate::element::shape::line3;
-use crate::model::{INTERFACE_POINTS, Model};
+use crate::model::Model;
 use crate::output::csv::CsvTable;
 use crate::output::{Field, FieldValues, Grid};
 

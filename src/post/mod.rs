@@ -16,9 +16,10 @@ use crate::element::shape::cell_shape;
 use crate::material::{PointState, Voigt, ZZ, von_mises};
 use crate::mesh::CellKind;
 use crate::model::Model;
-use crate::output::{Field, FieldValues, Grid};
+use crate::output::{Field, FieldValues, Grid, vtk_cell_type};
 
 pub mod interface;
+pub mod quantities;
 
 /// Extrapolation matrix (nodes × integration points) of a cell kind.
 fn extrapolation(kind: CellKind) -> &'static DMatrix<f64> {
@@ -120,7 +121,7 @@ pub fn body_grid(model: &Model, points: &BodyPoints, u: &[f64], states: &[PointS
     };
     for c in &model.continuum.cells {
         grid.push_cell(
-            c.kind.vtk_type(),
+            vtk_cell_type(c.kind),
             c.nodes[..c.kind.node_count()]
                 .iter()
                 .map(|&n| points.point(c.body, n) as u64),

@@ -2,5 +2,6 @@
 //! ([`newton`]) and the load stepping that drives it ([`stepping`]).
 
 pub mod linear;
+pub mod mechanics;
 pub mod newton;
 pub mod stepping;

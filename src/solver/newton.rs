@@ -23,8 +23,8 @@ pub struct NewtonSettings {
     pub max_cutbacks: usize,
 }
 
-impl From<crate::case::SolverSpec> for NewtonSettings {
-    fn from(s: crate::case::SolverSpec) -> Self {
+impl From<crate::config::SolverSpec> for NewtonSettings {
+    fn from(s: crate::config::SolverSpec) -> Self {
         Self {
             max_iterations: s.max_iterations,
             force_tolerance: s.force_tolerance,

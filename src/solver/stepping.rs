@@ -6,10 +6,12 @@
 
 use crate::assembly::GlobalSystem;
 use crate::contact::InterfaceState;
+use crate::element::set::INTERFACE_POINTS;
 use crate::material::PointState;
-use crate::model::{ElasticContactCorrection, INTERFACE_POINTS, Model};
+use crate::model::Model;
 use crate::solver::linear::CholeskySolver;
-use crate::solver::newton::{NewtonLog, NewtonSettings, Problem, norm, solve_increment};
+use crate::solver::mechanics::Mechanics;
+use crate::solver::newton::{NewtonLog, NewtonSettings, norm, solve_increment};
 use crate::{Error, Result};
 
 /// The evolving solution: displacements and integration-point states.
@@ -44,64 +46,6 @@ impl Solution {
         self.committed.copy_from_slice(&self.trial);
         self.interface_committed
             .copy_from_slice(&self.interface_trial);
-    }
-}
-
-/// The mechanical problem of a model: bodies and interfaces, with their states.
-struct Mechanics<'a> {
-    model: &'a Model,
-    committed: &'a [PointState],
-    trial: &'a mut [PointState],
-    interface_committed: &'a [InterfaceState],
-    interface_trial: &'a mut [InterfaceState],
-}
-
-impl Problem for Mechanics<'_> {
-    fn assemble(&mut self, u: &[f64], system: &mut GlobalSystem, with_tangent: bool) -> bool {
-        let m = self.model;
-        system.assemble(
-            &m.continuum,
-            &m.continuum_coloring,
-            &m.dofs,
-            u,
-            self.committed,
-            self.trial,
-            with_tangent,
-        );
-        let (ic, it) = (self.interface_committed, &mut *self.interface_trial);
-        system.assemble(
-            &m.interface,
-            &m.interface_coloring,
-            &m.dofs,
-            u,
-            ic,
-            it,
-            with_tangent,
-        );
-        // Each point records whether the interface tangent it contributed was unsymmetric
-        // (only the consistent tangent of the Newton algorithm can be).
-        let symmetric = !self
-            .interface_trial
-            .iter()
-            .any(InterfaceState::has_unsymmetric_tangent);
-        if with_tangent && !symmetric {
-            // Preconditioner: the tangent with the elastic contact matrix (paper conclusion 3).
-            system.preconditioner.clone_from(&system.values);
-            let mut scratch = self.interface_trial.to_vec();
-            let mut target = std::mem::take(&mut system.preconditioner);
-            let correction = ElasticContactCorrection(&m.interface);
-            system.assemble_matrix_into(
-                &correction,
-                &m.interface_coloring,
-                &m.dofs,
-                u,
-                ic,
-                &mut scratch,
-                &mut target,
-            );
-            system.preconditioner = target;
-        }
-        symmetric
     }
 }
 

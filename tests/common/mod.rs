@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use asperity::case::Case;
+use asperity::config::Case;
 use asperity::mesh::{Cell, CellKind, Line3, Mesh, PhysicalGroup, PointElement};
 use asperity::model::Model;
 use asperity::solver::newton::NewtonSettings;

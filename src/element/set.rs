@@ -1,0 +1,170 @@
+//! Element sets: the [`ElementSet`] trait the assembler is generic over, and the model's two
+//! sets, the continuum cells of the bodies and the interface elements of the contact pairs.
+
+use super::continuum::evaluate_cell;
+use super::interface6::{InterfaceElement, evaluate_interface};
+use super::quadrature::MAX_CELL_POINTS;
+use super::{Analysis, ElementMatrix, ElementVector};
+use crate::contact::{ContactAlgorithm, InterfaceLaw, InterfaceState};
+use crate::material::{Material, PointState};
+use crate::mesh::CellKind;
+
+/// A family of elements sharing a kernel and a kind of integration-point state (continuum
+/// cells, interface elements, ...). The assembler is generic over this trait.
+pub trait ElementSet: Sync {
+    /// History stored per integration point.
+    type State: Copy + Default + Send + Sync;
+
+    /// Number of elements.
+    fn len(&self) -> usize;
+
+    /// Whether the set is empty.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Global node indices of element `e` (at most 8).
+    fn nodes(&self, e: usize) -> &[u32];
+
+    /// State slots per element; element `e` owns slots `e·P .. (e+1)·P`.
+    fn points_per_element(&self) -> usize;
+
+    /// Internal force `f` (and tangent `k` if requested) of element `e` for its nodal
+    /// displacements `u` (dof order of [`ElementVector`]), updating `trial` from `committed`.
+    #[allow(clippy::too_many_arguments)]
+    fn evaluate(
+        &self,
+        e: usize,
+        u: &ElementVector,
+        committed: &[Self::State],
+        trial: &mut [Self::State],
+        k: Option<&mut ElementMatrix>,
+        f: &mut ElementVector,
+    );
+}
+
+/// A continuum cell of the model with its node coordinates copied in (so assembly reads one
+/// contiguous record per element).
+#[derive(Clone, Copy, Debug)]
+pub struct ContinuumCell {
+    pub kind: CellKind,
+    pub nodes: [u32; 8],
+    pub coords: [[f64; 2]; 8],
+    /// Index of the body (into [`Model::bodies`](crate::model::Model::bodies)).
+    pub body: u32,
+    /// Index of the cell in [`Mesh::cells`](crate::mesh::Mesh::cells).
+    pub mesh_cell: u32,
+}
+
+/// All continuum cells of the model, with one material per body.
+#[derive(Debug)]
+pub struct ContinuumSet {
+    pub analysis: Analysis,
+    pub cells: Vec<ContinuumCell>,
+    pub materials: Vec<Box<dyn Material>>,
+}
+
+impl ElementSet for ContinuumSet {
+    type State = PointState;
+
+    fn len(&self) -> usize {
+        self.cells.len()
+    }
+
+    fn nodes(&self, e: usize) -> &[u32] {
+        let c = &self.cells[e];
+        &c.nodes[..c.kind.node_count()]
+    }
+
+    fn points_per_element(&self) -> usize {
+        MAX_CELL_POINTS
+    }
+
+    fn evaluate(
+        &self,
+        e: usize,
+        u: &ElementVector,
+        committed: &[PointState],
+        trial: &mut [PointState],
+        k: Option<&mut ElementMatrix>,
+        f: &mut ElementVector,
+    ) {
+        let c = &self.cells[e];
+        evaluate_cell(
+            &self.analysis,
+            c.kind,
+            &c.coords,
+            u,
+            self.materials[c.body as usize].as_ref(),
+            committed,
+            trial,
+            k,
+            f,
+        );
+    }
+}
+
+/// A contact pair: its law, interference and the range of its elements in
+/// [`InterfaceSet::elements`].
+#[derive(Debug)]
+pub struct ContactPair {
+    pub name: String,
+    pub law: Box<dyn InterfaceLaw>,
+    /// Initial interference δ in mm (positive: overlap).
+    pub interference: f64,
+    pub elements: std::ops::Range<usize>,
+}
+
+/// All interface elements of the model, pair after pair.
+#[derive(Debug)]
+pub struct InterfaceSet {
+    pub analysis: Analysis,
+    pub elements: Vec<InterfaceElement>,
+    pub pairs: Vec<ContactPair>,
+    /// Which interface tangent the global iterations use.
+    pub algorithm: ContactAlgorithm,
+}
+
+/// Integration points per interface element.
+pub const INTERFACE_POINTS: usize = 3;
+
+impl ElementSet for InterfaceSet {
+    type State = InterfaceState;
+
+    fn len(&self) -> usize {
+        self.elements.len()
+    }
+
+    fn nodes(&self, e: usize) -> &[u32] {
+        &self.elements[e].nodes
+    }
+
+    fn points_per_element(&self) -> usize {
+        INTERFACE_POINTS
+    }
+
+    fn evaluate(
+        &self,
+        e: usize,
+        u: &ElementVector,
+        committed: &[InterfaceState],
+        trial: &mut [InterfaceState],
+        k: Option<&mut ElementMatrix>,
+        f: &mut ElementVector,
+    ) {
+        let element = &self.elements[e];
+        let pair = &self.pairs[element.pair as usize];
+        evaluate_interface(
+            &self.analysis,
+            element,
+            pair.interference,
+            pair.law.as_ref(),
+            self.algorithm,
+            u,
+            committed,
+            trial,
+            k,
+            f,
+        );
+    }
+}
