@@ -1,5 +1,5 @@
 //! Interface elements and the linear Coulomb law against closed-form references
-//! (../shared/REFERENCES.md §1, §3): shrink fit (both mesh recipes), frictionless flat
+//! (docs/theory.md, closed forms): shrink fit (both mesh recipes), frictionless flat
 //! punch (Sneddon), Newton-Cotes against Gauss, a block sticking and sliding, opening, and
 //! Newton's convergence.
 mod common;
@@ -30,7 +30,7 @@ mod shrink_fit {
     pub const L: f64 = 10.0;
     pub const DELTA: f64 = 0.01;
 
-    /// Plane-strain compliance C = b (C_s + C_h) of a solid shaft in a hub (REFERENCES §1).
+    /// Plane-strain compliance C = b (C_s + C_h) of a solid shaft in a hub (docs/theory.md, "Lamé cylinders and the shrink fit").
     pub fn compliance() -> f64 {
         let (e, nu) = (E / (1.0 - NU * NU), NU / (1.0 - NU));
         let cs = (1.0 - nu) / e;

@@ -1,4 +1,4 @@
-//! Lamé thick cylinder under internal pressure (../shared/REFERENCES.md §1): axisymmetric
+//! Lamé thick cylinder under internal pressure (docs/theory.md, "Closed-form solutions used for verification"): axisymmetric
 //! slice with u_z = 0 on both ends (= plane strain) and a plane-strain quarter annulus,
 //! against the closed form; plus a mesh-refinement study of the displacement error.
 mod common;

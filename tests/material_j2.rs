@@ -1,5 +1,5 @@
 //! Material-point tests of J2 plasticity with linear isotropic hardening
-//! (../shared/REFERENCES.md §6): uniaxial stress and simple shear against the exact curves,
+//! (docs/theory.md, closed forms): uniaxial stress and simple shear against the exact curves,
 //! step-size independence along radial paths, the consistent tangent against finite
 //! differences, return to the yield surface, plastic incompressibility and parameter checks.
 

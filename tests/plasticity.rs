@@ -1,4 +1,4 @@
-//! J2 plasticity of the bodies in whole models (../shared/REFERENCES.md §6): a thick
+//! J2 plasticity of the bodies in whole models (Hill 1950; docs/theory.md, closed forms): a thick
 //! cylinder under internal pressure in plane strain, elastic-perfectly plastic, driven by the
 //! bore displacement: onset of yield at the closed-form pressure, the pressure-displacement
 //! curve flattening at the collapse pressure p_L = (2/√3) σ_Y ln(c/b), and Newton's

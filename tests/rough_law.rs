@@ -1,6 +1,6 @@
 //! The paper's interface law (§2) at one integration point: the friction curve (Eq. 4,
 //! Fig. 4), a cyclic tangential history at constant pressure against the closed form of
-//! ../shared/REFERENCES.md §5 (Lambert W), the normal power law, and property tests of the
+//! docs/theory.md (Lambert W), the normal power law, and property tests of the
 //! return map and its consistent tangent.
 use asperity::contact::rough::RoughJoint;
 use asperity::contact::{ContactStatus, InterfaceLaw, InterfaceState};
@@ -66,7 +66,7 @@ fn lambert_w0(x: f64) -> f64 {
     w
 }
 
-/// Exact constant-pressure response (REFERENCES §5) of a point driven along `path`
+/// Exact constant-pressure response (docs/theory.md, Lambert W) of a point driven along `path`
 /// (u_T values, monotonic between them), tracked event by event.
 struct Exact {
     kt: f64,

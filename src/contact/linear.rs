@@ -1,6 +1,6 @@
 //! The first interface law: linear normal stiffness in compression with a tension cut-off,
 //! linear tangential stiffness, and ideal Coulomb slip |p_T| ≤ μ|p_N| by radial return
-//! (paper Box 1, with the corrections of NOTES.md: the trial stress starts from the converged
+//! (paper Box 1, corrected as in docs/theory.md, "Known misprints in the paper", 1–2: the trial stress starts from the converged
 //! p_T,n, and the returned stress is p_T = μ|p_N| sign(p_T^tr)).
 
 use super::{ContactStatus, InterfaceLaw, InterfaceState, InterfaceTangent, OPEN_TANGENT_FRACTION};

@@ -10,7 +10,7 @@
 //!   After a maximum closure c_max an optional unloading curve c − c_perm = c_Nu p^(m_u) is
 //!   followed back down (and up again until c_max), with c_perm chosen so that it passes
 //!   through (c_max, p_max): a permanent set of the asperities. By default unloading uses the
-//!   loading coefficients (c_perm = 0), the paper gives no values (NOTES.md).
+//!   loading coefficients (c_perm = 0), the paper gives no values (docs/theory.md).
 //!   No stress in opening (c ≤ 0).
 //! - **Tangential elasticity** (Eq. 3): k_T = p^S / R, incremental as in Box 1 (corrected):
 //!   p_T^tr = p_T,n + k_T(p_{n+1}) (u_T − u_T,n), from the converged p_T,n.
@@ -24,7 +24,7 @@
 //!   ∂p_T/∂u_T = k_T H/(k_T + H) and ∂p_T/∂u_N from differentiating g (the (1,2) coupling of
 //!   shear to normal approach, through μ_F p and through k_T(p)); ∂p_N/∂u_N = k_N.
 //!
-//! **Small pressures (gaps of the paper, NOTES.md).** For m < 1, k_N = p^(1−m)/(c_N m) and
+//! **Small pressures (gaps of the paper; docs/theory.md).** For m < 1, k_N = p^(1−m)/(c_N m) and
 //! for S > 0, k_T = p^S/R vanish at p = 0: a body held only by contact would have no
 //! stiffness in the first iteration. Hence
 //! - a point *exactly touching* (closure 0, e.g. coincident faces at the start) gets the
@@ -222,7 +222,7 @@ impl InterfaceLaw for RoughJoint {
         s.friction = mu;
         s.status = ContactStatus::Slip;
         let h = dmu * p;
-        // Consistent tangent from g(Δλ; u_T, u_N) = 0 (Eq. 21, with NOTES.md's reading).
+        // Consistent tangent from g(Δλ; u_T, u_N) = 0 (Eq. 21 completed; docs/theory.md, "The consistent tangent").
         let dg_dun = -kn * dkt * (sign * du - dl) + mu * kn;
         let dpt_dut = kt * h / (kt + h);
         let dpt_dun = sign * (h * dg_dun / (kt + h) - mu * kn);

@@ -4,8 +4,7 @@
 //! (backward-Euler) return map instead, because it is unconditionally stable, exact for
 //! proportional stress paths with linear hardening (so results do not depend on the step
 //! size along such paths) and has an algorithmically consistent tangent that gives the global
-//! Newton–Raphson iteration its quadratic convergence (../shared/paper/NOTES.md, "Bulk
-//! plasticity").
+//! Newton–Raphson iteration its quadratic convergence (docs/theory.md, "J2 plasticity of the bodies").
 //!
 //! # Model
 //! - Yield function f = q(σ) − σ_y(ε̄ᵖ), with the von Mises equivalent stress
