@@ -7,6 +7,7 @@
 use crate::assembly::GlobalSystem;
 use crate::contact::InterfaceState;
 use crate::element::set::INTERFACE_POINTS;
+use crate::error::{Attempt, NoConvergence};
 use crate::material::PointState;
 use crate::model::Model;
 use crate::solver::linear::CholeskySolver;
@@ -124,7 +125,7 @@ pub fn run_steps(
         let mut cutbacks = 0;
         let mut increments = 0;
         let mut iterations = 0;
-        let mut failures: Vec<String> = Vec::new();
+        let mut attempts: Vec<Attempt> = Vec::new();
         let log = loop {
             let trial_time = if time + size >= target - 1e-12 {
                 target
@@ -156,31 +157,27 @@ pub fn run_steps(
                     size *= 2.0;
                 }
                 outcome => {
-                    let at = format!(
-                        "at time {trial_time:.6} (load factor {:.6})",
-                        model.schedule.value(0, trial_time)
-                    );
-                    failures.push(match &outcome {
-                        Ok(log) => format!(
-                            "{at}: relative residuals {}",
-                            log.residuals
-                                .iter()
-                                .map(|r| format!("{r:.2e}"))
-                                .collect::<Vec<_>>()
-                                .join(", ")
-                        ),
-                        Err(e) => format!("{at}: {e}"),
+                    attempts.push(Attempt {
+                        time: trial_time,
+                        load_factor: model.schedule.value(0, trial_time),
+                        iterations: outcome.as_ref().map_or(0, |log| log.iterations),
+                        residuals: outcome
+                            .as_ref()
+                            .map_or_else(|_| Vec::new(), |log| log.residuals.clone()),
+                        reason: outcome.as_ref().err().map(ToString::to_string),
                     });
                     if let Ok(log) = &outcome {
                         stats.add(log);
                     }
                     if cutbacks == settings.max_cutbacks {
-                        return Err(Error::NoConvergence(format!(
-                            "step {step} (load factor {}) did not converge after {cutbacks} cut-backs; the last \
-                             converged state is at time {time:.6}. Attempts:\n  {}",
-                            model.schedule.load_factor(step),
-                            failures.join("\n  ")
-                        )));
+                        return Err(Error::NoConvergence(Box::new(NoConvergence {
+                            step,
+                            load_factor: model.schedule.load_factor(step),
+                            converged_time: time,
+                            converged_load_factor: model.schedule.value(0, time),
+                            cutbacks,
+                            attempts,
+                        })));
                     }
                     cutbacks += 1;
                     stats.cutbacks += 1;

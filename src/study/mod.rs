@@ -171,11 +171,12 @@ pub fn run(case: &Case, options: &Options) -> Result<Report> {
         match r {
             Some(Ok(l)) => levels.push(l),
             Some(Err(e)) => {
-                return Err(Error::External(format!(
-                    "{}: level {k} (size {}) failed: {e}",
-                    case.path.display(),
-                    level_size(case, options.ratio, k)
-                )));
+                return Err(Error::StudyLevel {
+                    case: case.path.clone(),
+                    level: k,
+                    size: level_size(case, options.ratio, k),
+                    source: Box::new(e),
+                });
             }
             None => {} // skipped after another level failed
         }
