@@ -1,22 +1,22 @@
-//! `make bench` (second part): what the unsymmetric tangent of sliding friction costs.
-//! A block is pressed onto a base and pushed along it until every interface point slips
-//! (paper Eq. 21 makes the tangent unsymmetric there). On that tangent the bench times
-//! (a) the symmetric path: numeric Cholesky of the symmetric part + one solve, and
-//! (b) the unsymmetric path: the same factorisation used as BiCGSTAB preconditioner on the
-//! true tangent, and reports the Krylov iterations. Figures go to BENCHMARKS.md.
+//! `make bench` (second part): what the unsymmetric tangent of sliding friction costs. A
+//! block is pressed onto a base and pushed along it until every interface point slips
+//! (friction, Buczkowski & Kleiber (1994), Eq. 21, makes the tangent unsymmetric there). On
+//! that tangent the bench times (a) the symmetric path: numeric Cholesky of the symmetric
+//! part + one solve, and (b) the unsymmetric path: the same factorisation used as BiCGSTAB
+//! preconditioner on the true tangent, and reports the Krylov iterations. Figures go to
+//! BENCHMARKS.md.
 
 use std::path::Path;
 use std::time::Instant;
 
 mod common;
 
-use asperity::assembly::GlobalSystem;
+use asperity::assembly::{AssemblyInput, GlobalSystem};
 use asperity::config::Case;
 use asperity::mesh::{gmsh, msh};
 use asperity::model::Model;
 use asperity::solver::linear::CholeskySolver;
-use asperity::solver::mechanics::ElasticContactCorrection;
-use asperity::solver::newton::NewtonSettings;
+use asperity::solver::newton::{NewtonSettings, Problem};
 use asperity::solver::stepping::run_steps;
 
 const CASE: &str = r#"
@@ -132,51 +132,26 @@ fn main() {
         algorithm_rows.extend(algorithms(n, &mesh_path));
         let model = Model::build(msh::read_msh(&mesh_path).expect("read"), &case).expect("model");
         let t = Instant::now();
-        let (solution, stats) =
-            run_steps(&model, &NewtonSettings::from(case.solver), |_| Ok(0.0)).expect("solve");
+        let settings = NewtonSettings::from(case.solver);
+        let (mut solution, stats) = run_steps(&model, &settings, |_| Ok(0.0)).expect("solve");
         let t_run = t.elapsed().as_secs_f64();
         let slipping = solution
             .interface_committed
             .iter()
             .filter(|s| s.has_unsymmetric_tangent())
             .count();
-        // The tangent at the converged sliding state.
+        // The tangent at the converged sliding state, and its preconditioner, as the solver
+        // builds them.
         let mut system = GlobalSystem::new(model.pattern.clone(), model.dofs.dof_count());
-        let mut trial = solution.trial.clone();
-        let mut itrial = solution.interface_trial.clone();
-        let u = &solution.u;
-        system.assemble(
-            &model.continuum,
-            &model.continuum_coloring,
-            &model.dofs,
+        let (u, mut problem) = solution.split(&model);
+        let input = AssemblyInput {
+            dofs: &model.dofs,
             u,
-            &solution.committed,
-            &mut trial,
-            true,
-        );
-        system.assemble(
-            &model.interface,
-            &model.interface_coloring,
-            &model.dofs,
-            u,
-            &solution.interface_committed,
-            &mut itrial,
-            true,
-        );
-        // Preconditioner: the tangent with the elastic contact matrix, as the solver builds it.
-        let mut pre = system.values.clone();
-        let mut scratch = solution.interface_trial.clone();
-        let correction = ElasticContactCorrection(&model.interface);
-        system.assemble_matrix_into(
-            &correction,
-            &model.interface_coloring,
-            &model.dofs,
-            u,
-            &solution.interface_committed,
-            &mut scratch,
-            &mut pre,
-        );
-        system.preconditioner = pre;
+            tangent: true,
+            algorithm: settings.contact_algorithm,
+        };
+        let symmetric = problem.assemble(&mut system, &input);
+        assert!(!symmetric, "the block slips, so its tangent is unsymmetric");
         let mut linear = CholeskySolver::new(&model.pattern).expect("symbolic");
         let rhs: Vec<f64> = (0..model.dofs.free_count())
             .map(|i| ((i % 7) as f64 - 3.0) * 1e-3)

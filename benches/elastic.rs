@@ -8,8 +8,9 @@ use std::time::Instant;
 
 mod common;
 
-use asperity::assembly::GlobalSystem;
+use asperity::assembly::{AssemblyInput, GlobalSystem};
 use asperity::config::Case;
+use asperity::contact::ContactAlgorithm;
 use asperity::material::PointState;
 use asperity::mesh::{gmsh, msh};
 use asperity::model::Model;
@@ -65,14 +66,18 @@ fn main() {
         let u = vec![0.0; model.dofs.dof_count()];
         let mut system = GlobalSystem::new(model.pattern.clone(), model.dofs.dof_count());
         let t = Instant::now();
+        let input = AssemblyInput {
+            dofs: &model.dofs,
+            u: &u,
+            tangent: true,
+            algorithm: ContactAlgorithm::default(),
+        };
         system.assemble(
+            &input,
             &model.continuum,
             &model.continuum_coloring,
-            &model.dofs,
-            &u,
             &committed,
             &mut trial,
-            true,
         );
         let t_assembly = t.elapsed().as_secs_f64();
         let t = Instant::now();

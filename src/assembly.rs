@@ -2,8 +2,9 @@
 //! tangent matrix and internal-force vector from sets of elements.
 //!
 //! The global matrix is stored in full compressed-column form over the free degrees of
-//! freedom, so that unsymmetric element contributions (friction, paper Eq. 21) can be
-//! assembled as they are; the Cholesky path reads only its lower triangle.
+//! freedom, so that unsymmetric element contributions (friction, Buczkowski & Kleiber
+//! (1994), Eq. 21) can be assembled as they are; the Cholesky path reads only its lower
+//! triangle.
 //!
 //! Assembly runs in parallel without locks: elements are greedily coloured so that no two
 //! elements of one colour share a node, hence no two write the same matrix entry or vector
@@ -12,8 +13,9 @@
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use rayon::prelude::*;
 
+use crate::contact::ContactAlgorithm;
 use crate::element::set::ElementSet;
-use crate::element::{ElementMatrix, ElementVector};
+use crate::element::{ElementInput, ElementMatrix, ElementOutput, ElementVector};
 
 /// Marker for a constrained (prescribed) degree of freedom in [`DofMap`].
 const FIXED: u32 = u32::MAX;
@@ -73,11 +75,11 @@ impl DofMap {
         }
     }
 
-    /// Adds an equation vector into the free components of a full dof vector.
-    pub fn add_free(&self, eqs: &[f64], full: &mut [f64]) {
+    /// Adds `alpha` times an equation vector into the free components of a full dof vector.
+    pub fn add_free(&self, alpha: f64, eqs: &[f64], full: &mut [f64]) {
         for (dof, v) in full.iter_mut().enumerate() {
             if let Some(eq) = self.equation(dof) {
-                *v += eqs[eq];
+                *v += alpha * eqs[eq];
             }
         }
     }
@@ -222,6 +224,21 @@ impl SparsityPattern {
     }
 }
 
+/// What one assembly pass shares between all its elements: the displacements, their
+/// numbering, and what to compute.
+#[derive(Clone, Copy, Debug)]
+pub struct AssemblyInput<'a> {
+    pub dofs: &'a DofMap,
+    /// Displacements over all dofs (2 per node).
+    pub u: &'a [f64],
+    /// Whether the tangent is assembled; residual-only passes (the line search) skip it.
+    pub tangent: bool,
+    /// Which interface tangent the global iterations use (Buczkowski & Kleiber (1994),
+    /// §2.4); it also decides which points record an unsymmetric tangent, so residual-only
+    /// passes need it too.
+    pub algorithm: ContactAlgorithm,
+}
+
 /// The assembled tangent matrix (values over a [`SparsityPattern`]) and internal-force vector
 /// over all dofs (free and prescribed, so reactions can be read from it).
 #[derive(Clone, Debug)]
@@ -282,77 +299,84 @@ impl GlobalSystem {
         SparseColMatRef::new(self.pattern.symbolic().as_ref(), &self.values)
     }
 
-    /// Adds the contributions of every element of `set` for the full displacement vector `u`
-    /// (2 dofs per node), updating `trial` states from `committed` ones.
-    #[allow(clippy::too_many_arguments)]
+    /// Adds the internal forces (and, if `input.tangent`, the tangents) of every element of
+    /// `set` at the displacements `input.u`, updating `trial` states from `committed` ones.
     pub fn assemble<S: ElementSet>(
         &mut self,
+        input: &AssemblyInput,
         set: &S,
         coloring: &Coloring,
-        dofs: &DofMap,
-        u: &[f64],
         committed: &[S::State],
         trial: &mut [S::State],
-        with_tangent: bool,
     ) {
-        let values = with_tangent.then_some(SharedMut(self.values.as_mut_ptr()));
-        let force = Some(SharedMut(self.internal_force.as_mut_ptr()));
+        let targets = Targets {
+            values: input.tangent.then_some(SharedMut(self.values.as_mut_ptr())),
+            force: Some(SharedMut(self.internal_force.as_mut_ptr())),
+        };
         scatter(
             &self.pattern,
+            input,
             set,
             coloring,
-            dofs,
-            u,
             committed,
             trial,
-            values,
-            force,
+            targets,
         );
     }
 
-    /// Adds only the element matrices of `set` into `target`, a value array over this
-    /// system's pattern (e.g. a preconditioner); internal forces are left alone.
-    #[allow(clippy::too_many_arguments)]
-    pub fn assemble_matrix_into<S: ElementSet>(
-        &self,
+    /// Sets the preconditioner to the assembled tangent plus the element matrices of `set`
+    /// (e.g. a correction from the consistent to a symmetric positive-definite interface
+    /// tangent); internal forces are left alone. The value array is allocated on the first
+    /// call and reused after it.
+    pub fn assemble_preconditioner<S: ElementSet>(
+        &mut self,
+        input: &AssemblyInput,
         set: &S,
         coloring: &Coloring,
-        dofs: &DofMap,
-        u: &[f64],
         committed: &[S::State],
         trial: &mut [S::State],
-        target: &mut [f64],
     ) {
-        assert_eq!(target.len(), self.values.len());
-        let values = Some(SharedMut(target.as_mut_ptr()));
+        self.preconditioner.clone_from(&self.values);
+        let targets = Targets {
+            values: Some(SharedMut(self.preconditioner.as_mut_ptr())),
+            force: None,
+        };
         scatter(
             &self.pattern,
+            input,
             set,
             coloring,
-            dofs,
-            u,
             committed,
             trial,
-            values,
-            None,
+            targets,
         );
     }
 }
 
-/// Evaluates every element of `set` (colour by colour, in parallel within a colour) and adds
-/// its matrix into `values` and its force into `force`, where given.
-#[allow(clippy::too_many_arguments)]
-fn scatter<S: ElementSet>(
-    pattern: &SparsityPattern,
-    set: &S,
-    coloring: &Coloring,
-    dofs: &DofMap,
-    u: &[f64],
-    committed: &[S::State],
-    trial: &mut [S::State],
+/// Where one assembly pass adds the element contributions: matrix values over the pattern
+/// and internal forces over all dofs, each only where given.
+#[derive(Clone, Copy)]
+struct Targets {
     values: Option<SharedMut<f64>>,
     force: Option<SharedMut<f64>>,
+}
+
+/// Evaluates every element of `set` (colour by colour, in parallel within a colour) and adds
+/// its matrix and its force into `targets`. Allocates nothing: element vectors and matrices
+/// live on the stack.
+fn scatter<S: ElementSet>(
+    pattern: &SparsityPattern,
+    input: &AssemblyInput,
+    set: &S,
+    coloring: &Coloring,
+    committed: &[S::State],
+    trial: &mut [S::State],
+    targets: Targets,
 ) {
+    let Targets { values, force } = targets;
+    let AssemblyInput {
+        dofs, u, algorithm, ..
+    } = *input;
     let ppe = set.points_per_element();
     assert_eq!(trial.len(), set.len() * ppe);
     assert_eq!(committed.len(), trial.len());
@@ -368,15 +392,17 @@ fn scatter<S: ElementSet>(
         let mut fe = ElementVector::zeros();
         // SAFETY: every element is evaluated exactly once, and its state slots are its own.
         let trial_e = unsafe { std::slice::from_raw_parts_mut(states.get().add(e * ppe), ppe) };
-        let tangent = values.is_some().then_some(&mut ke);
-        set.evaluate(
-            e,
-            &ue,
-            &committed[e * ppe..(e + 1) * ppe],
-            trial_e,
-            tangent,
-            &mut fe,
-        );
+        let element_input = ElementInput {
+            u: &ue,
+            committed: &committed[e * ppe..(e + 1) * ppe],
+            algorithm,
+        };
+        let output = ElementOutput {
+            trial: trial_e,
+            k: values.is_some().then_some(&mut ke),
+            f: &mut fe,
+        };
+        set.evaluate(e, &element_input, output);
         let global = |a: usize| 2 * nodes[a / 2] as usize + a % 2;
         if let Some(force) = force {
             for a in 0..2 * nodes.len() {

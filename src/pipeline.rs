@@ -17,7 +17,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use crate::config::Case;
+use crate::config::{Case, SolverSpec};
 use crate::mesh::{Mesh, gmsh, msh};
 use crate::model::Model;
 use crate::output::csv::{CsvTable, write_csv};
@@ -25,6 +25,7 @@ use crate::output::pvd::{PvdEntry, write_pvd};
 use crate::output::vtu::write_vtu;
 use crate::post::interface::{InterfaceOutput, resultants};
 use crate::post::{BodyPoints, body_grid, reactions};
+use crate::solver::newton::NewtonSettings;
 use crate::solver::stepping::{RunStatistics, StepResult, run_steps};
 use crate::{Error, Result};
 
@@ -148,7 +149,7 @@ pub fn run_mesh(
     let bar = progress_bar(progress, model.schedule.steps());
     let mut writer = StepWriter::new(&model, out_dir, case.output.vtu);
     let mut last_reactions = Vec::new();
-    let (_, stats) = run_steps(&model, &case.solver.into(), |step| {
+    let (_, stats) = run_steps(&model, &newton_settings(&case.solver), |step| {
         let t = Instant::now();
         last_reactions = writer.write(step)?;
         on_step(&model, step)?;
@@ -172,6 +173,24 @@ pub fn run_mesh(
             .zip(last_reactions)
             .collect(),
     })
+}
+
+/// The Newton settings of a case's `[solver]` table (the numerics never read the case file).
+pub fn newton_settings(spec: &SolverSpec) -> NewtonSettings {
+    NewtonSettings {
+        max_iterations: spec.max_iterations,
+        force_tolerance: spec.force_tolerance,
+        displacement_tolerance: spec.displacement_tolerance,
+        max_cutbacks: spec.max_cutbacks,
+        contact_algorithm: spec.contact_algorithm,
+    }
+}
+
+/// Lets callers that hold a case write `NewtonSettings::from(case.solver)`.
+impl From<SolverSpec> for NewtonSettings {
+    fn from(spec: SolverSpec) -> Self {
+        newton_settings(&spec)
+    }
 }
 
 fn progress_bar(enabled: bool, steps: usize) -> indicatif::ProgressBar {

@@ -64,15 +64,14 @@ fn internal_force(
     let mut system =
         asperity::assembly::GlobalSystem::new(model.pattern.clone(), model.dofs.dof_count());
     let mut trial = solution.trial.clone();
-    system.assemble(
-        &model.continuum,
-        &model.continuum_coloring,
-        &model.dofs,
-        &solution.u,
-        &solution.committed,
-        &mut trial,
-        false,
-    );
+    let input = asperity::assembly::AssemblyInput {
+        dofs: &model.dofs,
+        u: &solution.u,
+        tangent: false,
+        algorithm: Default::default(),
+    };
+    let (set, coloring) = (&model.continuum, &model.continuum_coloring);
+    system.assemble(&input, set, coloring, &solution.committed, &mut trial);
     system.internal_force
 }
 

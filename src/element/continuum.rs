@@ -6,7 +6,7 @@ use nalgebra::SMatrix;
 
 use super::quadrature::{QuadPoint, cell_rule};
 use super::shape::{ShapeValues, cell_shape};
-use super::{Analysis, ElementMatrix, ElementVector};
+use super::{Analysis, ElementInput, ElementOutput};
 use crate::material::{Material, OutOfPlane, PointState, Voigt, ZZ};
 use crate::mesh::CellKind;
 
@@ -110,18 +110,16 @@ pub fn min_jacobian(kind: CellKind, coords: &[[f64; 2]; 8]) -> f64 {
 /// Each integration point's material is updated from `committed[g]` into `trial[g]`. The
 /// tangent is accumulated into `k` only when `k` is given (residual-only evaluations skip it).
 /// Cells must have passed [`min_jacobian`] at model set-up.
-#[allow(clippy::too_many_arguments)]
 pub fn evaluate_cell(
     analysis: &Analysis,
     kind: CellKind,
     coords: &[[f64; 2]; 8],
-    u: &ElementVector,
     material: &dyn Material,
-    committed: &[PointState],
-    trial: &mut [PointState],
-    mut k: Option<&mut ElementMatrix>,
-    f: &mut ElementVector,
+    input: &ElementInput<PointState>,
+    output: ElementOutput<PointState>,
 ) {
+    let ElementInput { u, committed, .. } = *input;
+    let ElementOutput { trial, mut k, f } = output;
     let out_of_plane = if analysis.is_plane_stress() {
         OutOfPlane::StressFree
     } else {

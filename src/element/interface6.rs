@@ -1,4 +1,4 @@
-//! The zero-thickness 6-node quadratic interface element (paper §3).
+//! The zero-thickness 6-node quadratic interface element (Buczkowski & Kleiber (1994), §3).
 //!
 //! Nodes [a0, a1, a_mid, b0, b1, b_mid] (gmsh line order: end, end, middle): three on the face
 //! of body A and the three paired nodes of body B. Geometry and local frame come from side B
@@ -17,14 +17,15 @@ use serde::Deserialize;
 
 use super::quadrature::{GAUSS3, LOBATTO3};
 use super::shape::line3;
-use super::{Analysis, ElementMatrix, ElementVector};
-use crate::contact::{ContactAlgorithm, InterfaceLaw, InterfaceState};
+use super::{Analysis, ElementInput, ElementOutput};
+use crate::contact::{InterfaceLaw, InterfaceState};
 
 /// Integration rule of an interface element.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum InterfaceRule {
-    /// 3-point Newton-Cotes (Lobatto) at the nodes: lumped (paper Eqs. 39–40).
+    /// 3-point Newton-Cotes (Lobatto) at the nodes: lumped (Buczkowski & Kleiber (1994),
+    /// Eqs. 39–40).
     #[default]
     NewtonCotes,
     /// 3-point Gauss: consistent (full) integration.
@@ -91,7 +92,8 @@ pub struct InterfaceElement {
 }
 
 /// Relative displacement operator row for point `p`: u_T = Σ N_i (u_B,i − u_A,i)·t and the
-/// same with n. Returns the 2×12 matrix B (in a 2×16 to match [`ElementVector`]).
+/// same with n. Returns the 2×12 matrix B (in a 2×16 to match
+/// [`ElementVector`](super::ElementVector)).
 pub fn relative_operator(p: &InterfacePoint) -> nalgebra::SMatrix<f64, 2, 16> {
     let mut b = nalgebra::SMatrix::<f64, 2, 16>::zeros();
     for i in 0..3 {
@@ -105,22 +107,24 @@ pub fn relative_operator(p: &InterfacePoint) -> nalgebra::SMatrix<f64, 2, 16> {
     b
 }
 
-/// Tangent and internal force of one interface element for nodal displacements `u`
-/// (dofs of [a0, a1, a_mid, b0, b1, b_mid]), updating `trial` from `committed`. The tangent
-/// is the one of `algorithm` (the consistent one for Newton).
-#[allow(clippy::too_many_arguments)]
+/// Tangent and internal force of one interface element for nodal displacements `input.u`
+/// (dofs of [a0, a1, a_mid, b0, b1, b_mid]), updating the trial states from the committed
+/// ones. The tangent is the one of `input.algorithm` (the consistent one, Buczkowski &
+/// Kleiber (1994), Eq. 21, for Newton).
 pub fn evaluate_interface(
     analysis: &Analysis,
     element: &InterfaceElement,
     interference: f64,
     law: &dyn InterfaceLaw,
-    algorithm: ContactAlgorithm,
-    u: &ElementVector,
-    committed: &[InterfaceState],
-    trial: &mut [InterfaceState],
-    mut k: Option<&mut ElementMatrix>,
-    f: &mut ElementVector,
+    input: &ElementInput<InterfaceState>,
+    output: ElementOutput<InterfaceState>,
 ) {
+    let ElementInput {
+        u,
+        committed,
+        algorithm,
+    } = *input;
+    let ElementOutput { trial, mut k, f } = output;
     for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
         let p = interface_point(analysis, &element.b_coords, xi, w);
         let b = relative_operator(&p);
@@ -149,7 +153,33 @@ pub fn evaluate_interface(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::contact::ContactAlgorithm;
     use crate::contact::linear::LinearCoulomb;
+    use crate::element::{ElementMatrix, ElementVector};
+
+    /// Evaluates `e` (no interference) with the Newton tangent; trial states are discarded.
+    fn newton(
+        analysis: &Analysis,
+        e: &InterfaceElement,
+        law: &dyn InterfaceLaw,
+        u: &ElementVector,
+        committed: &[InterfaceState],
+        k: Option<&mut ElementMatrix>,
+        f: &mut ElementVector,
+    ) {
+        let mut trial = [InterfaceState::default(); 3];
+        let input = ElementInput {
+            u,
+            committed,
+            algorithm: ContactAlgorithm::Newton,
+        };
+        let output = ElementOutput {
+            trial: &mut trial,
+            k,
+            f,
+        };
+        evaluate_interface(analysis, e, 0.0, law, &input, output);
+    }
 
     /// A straight horizontal element from x = 1 to x = 3 at y = 0 (B walks +x, so n = +y).
     fn element(rule: InterfaceRule) -> InterfaceElement {
@@ -171,18 +201,14 @@ mod tests {
         for i in 3..6 {
             u[2 * i + 1] = -1e-3;
         }
-        let mut trial = [InterfaceState::default(); 3];
         let mut f = ElementVector::zeros();
         let e = element(InterfaceRule::NewtonCotes);
-        evaluate_interface(
+        newton(
             &analysis,
             &e,
-            0.0,
             &law,
-            ContactAlgorithm::Newton,
             &u,
             &[InterfaceState::default(); 3],
-            &mut trial,
             None,
             &mut f,
         );
@@ -211,16 +237,12 @@ mod tests {
         ] {
             let mut k = ElementMatrix::zeros();
             let mut f = ElementVector::zeros();
-            let mut trial = [InterfaceState::default(); 3];
-            evaluate_interface(
+            newton(
                 &analysis,
                 &element(rule),
-                0.0,
                 &law,
-                ContactAlgorithm::Newton,
                 &u,
                 &[InterfaceState::default(); 3],
-                &mut trial,
                 Some(&mut k),
                 &mut f,
             );
@@ -251,49 +273,15 @@ mod tests {
             u[7] += 1e-4;
             let mut k = ElementMatrix::zeros();
             let mut f = ElementVector::zeros();
-            let mut trial = [InterfaceState::default(); 3];
-            evaluate_interface(
-                &analysis,
-                &e,
-                0.0,
-                &law,
-                ContactAlgorithm::Newton,
-                &u,
-                &committed,
-                &mut trial,
-                Some(&mut k),
-                &mut f,
-            );
+            newton(&analysis, &e, &law, &u, &committed, Some(&mut k), &mut f);
             let h = 1e-9;
             for j in 0..12 {
                 let (mut up, mut um) = (u, u);
                 up[j] += h;
                 um[j] -= h;
                 let (mut fp, mut fm) = (ElementVector::zeros(), ElementVector::zeros());
-                evaluate_interface(
-                    &analysis,
-                    &e,
-                    0.0,
-                    &law,
-                    ContactAlgorithm::Newton,
-                    &up,
-                    &committed,
-                    &mut trial,
-                    None,
-                    &mut fp,
-                );
-                evaluate_interface(
-                    &analysis,
-                    &e,
-                    0.0,
-                    &law,
-                    ContactAlgorithm::Newton,
-                    &um,
-                    &committed,
-                    &mut trial,
-                    None,
-                    &mut fm,
-                );
+                newton(&analysis, &e, &law, &up, &committed, None, &mut fp);
+                newton(&analysis, &e, &law, &um, &committed, None, &mut fm);
                 for i in 0..12 {
                     let fd = (fp[i] - fm[i]) / (2.0 * h);
                     // Absolute scale of the closed-state entries (k_N × area ≈ 1e5); the open

@@ -1,6 +1,7 @@
 //! Elements: shape functions ([`shape`]), quadrature rules ([`quadrature`]), the analysis
-//! type that decides thickness, hoop strain and volume measure ([`Analysis`]), and the 2D
-//! continuum element ([`continuum`]).
+//! type that decides thickness, hoop strain and volume measure ([`Analysis`]), the 2D
+//! continuum element ([`continuum`]), the interface element ([`interface6`]) and what one
+//! element evaluation reads and writes ([`ElementInput`], [`ElementOutput`]).
 //!
 //! All element matrices are fixed 16×16 (8 nodes × 2 degrees of freedom); elements with fewer
 //! nodes use the leading block. Fixed sizes let nalgebra keep them on the stack, so assembly
@@ -15,10 +16,38 @@ pub mod shape;
 use nalgebra::{SMatrix, SVector};
 use serde::Deserialize;
 
+use crate::contact::ContactAlgorithm;
+
 /// Element stiffness (tangent) matrix, 8 nodes × 2 dofs, dof order (u_x1, u_y1, u_x2, ...).
 pub type ElementMatrix = SMatrix<f64, 16, 16>;
 /// Element force or displacement vector in the same dof order.
 pub type ElementVector = SVector<f64, 16>;
+
+/// What one element evaluation reads: its nodal displacements, the integration-point states
+/// of the last converged increment, and the choices of the global iteration.
+#[derive(Clone, Copy, Debug)]
+pub struct ElementInput<'a, S> {
+    /// Nodal displacements in [`ElementVector`] dof order.
+    pub u: &'a ElementVector,
+    /// States committed at the last converged increment, one per integration point.
+    pub committed: &'a [S],
+    /// Which interface tangent the global iterations use (Buczkowski & Kleiber (1994),
+    /// §2.4). A setting of the solver, not of the model, so it travels with the assembly;
+    /// continuum cells ignore it.
+    pub algorithm: ContactAlgorithm,
+}
+
+/// What one element evaluation writes: the updated integration-point states, the internal
+/// force and, when asked for, the tangent. Force and tangent are added to, not overwritten.
+#[derive(Debug)]
+pub struct ElementOutput<'a, S> {
+    /// Trial states of the current iteration, one per integration point.
+    pub trial: &'a mut [S],
+    /// Tangent, or `None` for residual-only evaluations (line search).
+    pub k: Option<&'a mut ElementMatrix>,
+    /// Internal force.
+    pub f: &'a mut ElementVector,
+}
 
 /// The 2D idealisation of the 3D problem.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
@@ -42,7 +71,8 @@ fn unit_thickness() -> f64 {
 
 impl Analysis {
     /// Factor that turns an in-plane area (or length) integral into a volume (or area)
-    /// integral at radius `r`: the thickness, or 2πr in axisymmetry (paper Eq. 37).
+    /// integral at radius `r`: the thickness, or 2πr in axisymmetry (Buczkowski & Kleiber
+    /// (1994), Eq. 37).
     #[inline]
     pub fn measure(&self, r: f64) -> f64 {
         match *self {

@@ -18,11 +18,11 @@ pub const GAUSS3: [(f64, f64); 3] = [
 ];
 
 /// 3-point Newton-Cotes (Lobatto, Simpson) on [−1, 1]: nodes at −1, 0, 1, weights 1/3, 4/3,
-/// 1/3 (paper §3.3.1, W_g = 2/6, 8/6, 2/6); exact for degree 3.
+/// 1/3 (Buczkowski & Kleiber (1994), §3.3.1: W_g = 2/6, 8/6, 2/6); exact for degree 3.
 pub const LOBATTO3: [(f64, f64); 3] = [(-1.0, 1.0 / 3.0), (0.0, 4.0 / 3.0), (1.0, 1.0 / 3.0)];
 
-/// 3×3 Gauss rule on the square (paper §3.2: 3×3 sampling points for quad8), exact for
-/// degree 5 in each direction.
+/// 3×3 Gauss rule on the square (Buczkowski & Kleiber (1994), §3.2: 3×3 sampling points for
+/// quad8), exact for degree 5 in each direction.
 pub const QUAD_GAUSS_3X3: [QuadPoint; 9] = {
     let mut pts = [QuadPoint {
         xi: 0.0,

@@ -4,8 +4,8 @@
 use super::continuum::evaluate_cell;
 use super::interface6::{InterfaceElement, evaluate_interface};
 use super::quadrature::MAX_CELL_POINTS;
-use super::{Analysis, ElementMatrix, ElementVector};
-use crate::contact::{ContactAlgorithm, InterfaceLaw, InterfaceState};
+use super::{Analysis, ElementInput, ElementOutput};
+use crate::contact::{InterfaceLaw, InterfaceState};
 use crate::material::{Material, PointState};
 use crate::mesh::CellKind;
 
@@ -29,17 +29,13 @@ pub trait ElementSet: Sync {
     /// State slots per element; element `e` owns slots `e·P .. (e+1)·P`.
     fn points_per_element(&self) -> usize;
 
-    /// Internal force `f` (and tangent `k` if requested) of element `e` for its nodal
-    /// displacements `u` (dof order of [`ElementVector`]), updating `trial` from `committed`.
-    #[allow(clippy::too_many_arguments)]
+    /// Adds the internal force (and the tangent, if requested) of element `e` to `output`,
+    /// updating its trial states from the committed ones in `input`.
     fn evaluate(
         &self,
         e: usize,
-        u: &ElementVector,
-        committed: &[Self::State],
-        trial: &mut [Self::State],
-        k: Option<&mut ElementMatrix>,
-        f: &mut ElementVector,
+        input: &ElementInput<Self::State>,
+        output: ElementOutput<Self::State>,
     );
 }
 
@@ -83,24 +79,12 @@ impl ElementSet for ContinuumSet {
     fn evaluate(
         &self,
         e: usize,
-        u: &ElementVector,
-        committed: &[PointState],
-        trial: &mut [PointState],
-        k: Option<&mut ElementMatrix>,
-        f: &mut ElementVector,
+        input: &ElementInput<PointState>,
+        output: ElementOutput<PointState>,
     ) {
         let c = &self.cells[e];
-        evaluate_cell(
-            &self.analysis,
-            c.kind,
-            &c.coords,
-            u,
-            self.materials[c.body as usize].as_ref(),
-            committed,
-            trial,
-            k,
-            f,
-        );
+        let material = self.materials[c.body as usize].as_ref();
+        evaluate_cell(&self.analysis, c.kind, &c.coords, material, input, output);
     }
 }
 
@@ -121,8 +105,6 @@ pub struct InterfaceSet {
     pub analysis: Analysis,
     pub elements: Vec<InterfaceElement>,
     pub pairs: Vec<ContactPair>,
-    /// Which interface tangent the global iterations use.
-    pub algorithm: ContactAlgorithm,
 }
 
 /// Integration points per interface element.
@@ -146,25 +128,19 @@ impl ElementSet for InterfaceSet {
     fn evaluate(
         &self,
         e: usize,
-        u: &ElementVector,
-        committed: &[InterfaceState],
-        trial: &mut [InterfaceState],
-        k: Option<&mut ElementMatrix>,
-        f: &mut ElementVector,
+        input: &ElementInput<InterfaceState>,
+        output: ElementOutput<InterfaceState>,
     ) {
         let element = &self.elements[e];
         let pair = &self.pairs[element.pair as usize];
+        let law = pair.law.as_ref();
         evaluate_interface(
             &self.analysis,
             element,
             pair.interference,
-            pair.law.as_ref(),
-            self.algorithm,
-            u,
-            committed,
-            trial,
-            k,
-            f,
+            law,
+            input,
+            output,
         );
     }
 }

@@ -83,8 +83,8 @@ pub fn tri6(xi: f64, eta: f64) -> ShapeValues {
 }
 
 /// Quadratic line shape functions in gmsh order (end, end, middle) at ξ ∈ [−1, 1], with
-/// their derivatives. Paper Eq. (23) numbers them along the line (N1 at ξ = −1, N2 in the
-/// middle, N3 at ξ = +1); here index 2 is the middle node.
+/// their derivatives. Buczkowski & Kleiber (1994), Eq. 23, numbers them along the line (N1
+/// at ξ = −1, N2 in the middle, N3 at ξ = +1); here index 2 is the middle node.
 pub fn line3(xi: f64) -> ([f64; 3], [f64; 3]) {
     (
         [0.5 * xi * (xi - 1.0), 0.5 * xi * (xi + 1.0), 1.0 - xi * xi],

@@ -247,7 +247,6 @@ fn build_interface(
         analysis: case.analysis,
         elements,
         pairs,
-        algorithm: case.solver.contact_algorithm,
     })
 }
 

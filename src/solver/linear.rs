@@ -6,13 +6,17 @@
 //! faer's high-level API would allocate a fresh workspace on every call (about 1.3 GB at a
 //! million unknowns, measured), so the low-level API is used with a buffer kept here.
 //!
-//! Friction makes the tangent unsymmetric (paper Eq. 21). faer's sparse LU fills badly on FE
-//! matrices (its ordering needed 4.3 GB at 200k unknowns, measured), so the unsymmetric path keeps the Cholesky machinery: it factors a
-//! symmetric positive-definite approximation of the tangent with the same symbolic
-//! factorisation and uses it as the preconditioner of BiCGSTAB on the true tangent. The
-//! approximation is the tangent with the elastic contact matrix (paper conclusion 3); the
+//! Friction makes the tangent unsymmetric (Buczkowski & Kleiber (1994), Eq. 21). faer's
+//! sparse LU fills badly on FE matrices (its ordering needed 4.3 GB at 200k unknowns,
+//! measured), so the unsymmetric path keeps the Cholesky machinery: it factors a symmetric
+//! positive-definite approximation of the tangent with the same symbolic factorisation and
+//! uses it as the preconditioner of BiCGSTAB on the true tangent. The approximation is the
+//! tangent with the elastic contact matrix (Buczkowski & Kleiber (1994), conclusion 3); the
 //! symmetric part ½(K + Kᵀ) would not do, since at a slipping point it is indefinite. The
 //! two differ only at slipping interface points, so few Krylov iterations are needed.
+//!
+//! Every workspace is kept between calls: the numeric factorisation, the solves and BiCGSTAB
+//! allocate nothing once the first unsymmetric solve has sized the Krylov workspace.
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -32,8 +36,19 @@ pub struct CholeskySolver {
     symbolic: SymbolicCholesky<u32>,
     factor: Vec<f64>,
     workspace: MemBuffer,
+    /// BiCGSTAB's workspace, made by the first unsymmetric solve: runs whose tangent stays
+    /// symmetric (no slipping point) never pay for it.
+    krylov: Option<KrylovWorkspace>,
     par: Par,
     factorized: bool,
+    symbolic_seconds: f64,
+}
+
+/// Scratch memory of BiCGSTAB (sized for its requirement `req`) and its solution vector.
+struct KrylovWorkspace {
+    req: StackReq,
+    buffer: MemBuffer,
+    x: Mat<f64>,
 }
 
 impl std::fmt::Debug for CholeskySolver {
@@ -49,6 +64,7 @@ impl CholeskySolver {
     /// Orders (AMD) and symbolically factors the lower triangle of `pattern`, and allocates
     /// the factor and the workspace for numeric factorisation and solves.
     pub fn new(pattern: &SparsityPattern) -> Result<Self> {
+        let t = std::time::Instant::now();
         let symbolic = factorize_symbolic_cholesky(
             pattern.symbolic().as_ref(),
             Side::Lower,
@@ -68,9 +84,16 @@ impl CholeskySolver {
             symbolic,
             factor,
             workspace,
+            krylov: None,
             par,
             factorized: false,
+            symbolic_seconds: t.elapsed().as_secs_f64(),
         })
+    }
+
+    /// Seconds [`CholeskySolver::new`] took (ordering, symbolic factorisation, allocation).
+    pub fn symbolic_seconds(&self) -> f64 {
+        self.symbolic_seconds
     }
 
     /// Number of stored entries of the Cholesky factor (a measure of fill-in).
@@ -123,11 +146,21 @@ impl CholeskySolver {
             n,
         };
         let identity = IdentityPrecond { dim: n };
-        let mut x = Mat::<f64>::zeros(n, 1);
-        let b = MatRef::from_column_major_slice(rhs, n, 1);
-        let mut buffer =
-            MemBuffer::try_new(bicgstab_scratch(identity, precond, matrix, 1, self.par))
+        let req = bicgstab_scratch(identity, precond, matrix, 1, self.par);
+        // The requirement depends only on the pattern, so this allocates once per solver.
+        if self
+            .krylov
+            .as_ref()
+            .is_none_or(|k| k.req != req || k.x.nrows() != n)
+        {
+            let buffer = MemBuffer::try_new(req)
                 .map_err(|_| Error::Linear("out of memory for the Krylov workspace".into()))?;
+            let x = Mat::<f64>::zeros(n, 1);
+            self.krylov = Some(KrylovWorkspace { req, buffer, x });
+        }
+        let KrylovWorkspace { buffer, x, .. } = self.krylov.as_mut().expect("made above");
+        x.fill(0.0);
+        let b = MatRef::from_column_major_slice(rhs, n, 1);
         let params = BicgParams {
             // `Zero` would be right, but faer 0.24's BiCGSTAB then leaves its residual vector
             // uninitialised; with `MaybeNonZero` it computes r = b − A·0 itself.
@@ -146,7 +179,7 @@ impl CholeskySolver {
             params,
             |_| {},
             self.par,
-            MemStack::new(&mut buffer),
+            MemStack::new(buffer),
         )
         .map_err(|e| {
             Error::Linear(format!(

@@ -2,19 +2,21 @@
 //! tangent of bodies and interfaces at given displacements, and the preconditioner matrix of
 //! unsymmetric solves.
 
-use crate::assembly::GlobalSystem;
+use crate::assembly::{AssemblyInput, GlobalSystem};
 use crate::contact::{ContactAlgorithm, InterfaceState};
 use crate::element::interface6::evaluate_interface;
 use crate::element::set::{ElementSet, INTERFACE_POINTS, InterfaceSet};
-use crate::element::{ElementMatrix, ElementVector};
+use crate::element::{ElementInput, ElementMatrix, ElementOutput, ElementVector};
 use crate::material::PointState;
 use crate::model::Model;
 use crate::solver::newton::Problem;
 
 /// The interface elements seen as the difference between their elastic-tangent matrix and
-/// their consistent one, K_elastic − K_consistent. Added to the consistent global tangent it
-/// gives the tangent with the elastic contact matrix (paper conclusion 3): symmetric positive
-/// definite, used as the preconditioner of unsymmetric solves. Internal forces are zero.
+/// the matrix of the iteration's tangent, K_elastic − K_algorithm. Added to the global
+/// tangent it gives the tangent with the elastic contact matrix (Buczkowski & Kleiber (1994),
+/// conclusion 3): symmetric positive definite, used as the preconditioner of unsymmetric
+/// solves. Internal forces are zero, and the trial states are left as the iteration's
+/// assembly wrote them: both evaluations write into scratch states of their own.
 #[derive(Debug)]
 pub struct ElasticContactCorrection<'a>(pub &'a InterfaceSet);
 
@@ -36,103 +38,63 @@ impl ElementSet for ElasticContactCorrection<'_> {
     fn evaluate(
         &self,
         e: usize,
-        u: &ElementVector,
-        committed: &[InterfaceState],
-        trial: &mut [InterfaceState],
-        k: Option<&mut ElementMatrix>,
-        f: &mut ElementVector,
+        input: &ElementInput<InterfaceState>,
+        output: ElementOutput<InterfaceState>,
     ) {
-        let Some(k) = k else { return };
+        let Some(k) = output.k else { return };
         let set = self.0;
         let element = &set.elements[e];
         let pair = &set.pairs[element.pair as usize];
-        let law = pair.law.as_ref();
+        let (analysis, law) = (&set.analysis, pair.law.as_ref());
+        let matrix = |algorithm, k: &mut ElementMatrix| {
+            let mut scratch = [InterfaceState::default(); INTERFACE_POINTS];
+            let output = ElementOutput {
+                trial: &mut scratch,
+                k: Some(k),
+                f: &mut ElementVector::zeros(),
+            };
+            let input = ElementInput {
+                algorithm,
+                ..*input
+            };
+            evaluate_interface(analysis, element, pair.interference, law, &input, output);
+        };
         let mut consistent = ElementMatrix::zeros();
         let mut elastic = ElementMatrix::zeros();
-        let mut scratch = ElementVector::zeros();
-        let analysis = &set.analysis;
-        evaluate_interface(
-            analysis,
-            element,
-            pair.interference,
-            law,
-            set.algorithm,
-            u,
-            committed,
-            trial,
-            Some(&mut consistent),
-            &mut scratch,
-        );
-        evaluate_interface(
-            analysis,
-            element,
-            pair.interference,
-            law,
-            ContactAlgorithm::ElasticContact,
-            u,
-            committed,
-            trial,
-            Some(&mut elastic),
-            &mut scratch,
-        );
+        matrix(input.algorithm, &mut consistent);
+        matrix(ContactAlgorithm::ElasticContact, &mut elastic);
         *k += elastic - consistent;
-        f.fill(0.0);
+        output.f.fill(0.0);
     }
 }
 
 /// The mechanical problem of a model: bodies and interfaces, with their states.
-pub(crate) struct Mechanics<'a> {
-    pub(crate) model: &'a Model,
-    pub(crate) committed: &'a [PointState],
-    pub(crate) trial: &'a mut [PointState],
-    pub(crate) interface_committed: &'a [InterfaceState],
-    pub(crate) interface_trial: &'a mut [InterfaceState],
+#[derive(Debug)]
+pub struct Mechanics<'a> {
+    pub model: &'a Model,
+    /// Continuum states committed at the last converged increment, and of this iteration.
+    pub committed: &'a [PointState],
+    pub trial: &'a mut [PointState],
+    /// Interface states committed at the last converged increment, and of this iteration.
+    pub interface_committed: &'a [InterfaceState],
+    pub interface_trial: &'a mut [InterfaceState],
 }
 
 impl Problem for Mechanics<'_> {
-    fn assemble(&mut self, u: &[f64], system: &mut GlobalSystem, with_tangent: bool) -> bool {
+    fn assemble(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) -> bool {
         let m = self.model;
-        system.assemble(
-            &m.continuum,
-            &m.continuum_coloring,
-            &m.dofs,
-            u,
-            self.committed,
-            self.trial,
-            with_tangent,
-        );
+        let (cc, ct) = (self.committed, &mut *self.trial);
+        system.assemble(input, &m.continuum, &m.continuum_coloring, cc, ct);
         let (ic, it) = (self.interface_committed, &mut *self.interface_trial);
-        system.assemble(
-            &m.interface,
-            &m.interface_coloring,
-            &m.dofs,
-            u,
-            ic,
-            it,
-            with_tangent,
-        );
+        system.assemble(input, &m.interface, &m.interface_coloring, ic, it);
         // Each point records whether the interface tangent it contributed was unsymmetric
         // (only the consistent tangent of the Newton algorithm can be).
-        let symmetric = !self
-            .interface_trial
-            .iter()
-            .any(InterfaceState::has_unsymmetric_tangent);
-        if with_tangent && !symmetric {
-            // Preconditioner: the tangent with the elastic contact matrix (paper conclusion 3).
-            system.preconditioner.clone_from(&system.values);
-            let mut scratch = self.interface_trial.to_vec();
-            let mut target = std::mem::take(&mut system.preconditioner);
+        let symmetric = !it.iter().any(InterfaceState::has_unsymmetric_tangent);
+        if input.tangent && !symmetric {
+            // Preconditioner: the tangent with the elastic contact matrix (Buczkowski &
+            // Kleiber (1994), conclusion 3).
             let correction = ElasticContactCorrection(&m.interface);
-            system.assemble_matrix_into(
-                &correction,
-                &m.interface_coloring,
-                &m.dofs,
-                u,
-                ic,
-                &mut scratch,
-                &mut target,
-            );
-            system.preconditioner = target;
+            system.assemble_preconditioner(input, &correction, &m.interface_coloring, ic, it);
         }
         symmetric
     }

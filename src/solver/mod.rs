@@ -1,5 +1,6 @@
 //! Solvers: the sparse linear solver ([`linear`]), Newton-Raphson for one increment
-//! ([`newton`]) and the load stepping that drives it ([`stepping`]).
+//! ([`newton`]), the mechanical problem it solves ([`mechanics`]) and the load stepping that
+//! drives it ([`stepping`]).
 
 pub mod linear;
 pub mod mechanics;

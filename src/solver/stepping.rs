@@ -4,15 +4,13 @@
 //! converged state, up to `max_cutbacks` times; sub-increments are solved silently and only
 //! the scheduled steps are handed to the output.
 
-use crate::assembly::GlobalSystem;
 use crate::contact::InterfaceState;
 use crate::element::set::INTERFACE_POINTS;
 use crate::error::{Attempt, NoConvergence};
 use crate::material::PointState;
 use crate::model::Model;
-use crate::solver::linear::CholeskySolver;
 use crate::solver::mechanics::Mechanics;
-use crate::solver::newton::{NewtonLog, NewtonSettings, norm, solve_increment};
+use crate::solver::newton::{Newton, NewtonLog, NewtonSettings, norm};
 use crate::{Error, Result};
 
 /// The evolving solution: displacements and integration-point states.
@@ -31,7 +29,8 @@ pub struct Solution {
 }
 
 impl Solution {
-    fn new(model: &Model) -> Self {
+    /// The unloaded state of `model`: zero displacements, virgin integration points.
+    pub fn new(model: &Model) -> Self {
         let states = model.continuum.cells.len() * crate::element::quadrature::MAX_CELL_POINTS;
         let interface = model.interface.elements.len() * INTERFACE_POINTS;
         Self {
@@ -43,10 +42,24 @@ impl Solution {
         }
     }
 
-    fn commit(&mut self) {
+    /// Makes the trial states of a converged increment the committed ones.
+    pub fn commit(&mut self) {
         self.committed.copy_from_slice(&self.trial);
         self.interface_committed
             .copy_from_slice(&self.interface_trial);
+    }
+
+    /// The displacements and, apart from them, the mechanical problem of `model` over this
+    /// solution's states: the Newton loop updates the one while the other assembles.
+    pub fn split<'a>(&'a mut self, model: &'a Model) -> (&'a mut [f64], Mechanics<'a>) {
+        let problem = Mechanics {
+            model,
+            committed: &self.committed,
+            trial: &mut self.trial,
+            interface_committed: &self.interface_committed,
+            interface_trial: &mut self.interface_trial,
+        };
+        (&mut self.u, problem)
     }
 }
 
@@ -108,11 +121,9 @@ pub fn run_steps(
     mut on_step: impl FnMut(&StepResult) -> Result<f64>,
 ) -> Result<(Solution, RunStatistics)> {
     let mut stats = RunStatistics::default();
-    let t = std::time::Instant::now();
-    let mut linear = CholeskySolver::new(&model.pattern)?;
-    stats.symbolic_seconds = t.elapsed().as_secs_f64();
-    stats.factor_nnz = linear.factor_nnz();
-    let mut system = GlobalSystem::new(model.pattern.clone(), model.dofs.dof_count());
+    let mut newton = Newton::new(*settings, &model.dofs, &model.pattern)?;
+    stats.symbolic_seconds = newton.linear().symbolic_seconds();
+    stats.factor_nnz = newton.linear().factor_nnz();
     let mut solution = Solution::new(model);
     let mut converged_u = solution.u.clone();
     let mut f_ext = vec![0.0; model.dofs.dof_count()];
@@ -132,16 +143,10 @@ pub fn run_steps(
             } else {
                 time + size
             };
-            let attempt = solve_at(
-                model,
-                &mut solution,
-                &mut system,
-                &mut linear,
-                &mut f_ext,
-                trial_time,
-                settings,
-                force_floor,
-            );
+            model.apply_prescribed(trial_time, &mut solution.u);
+            model.external_force(trial_time, &mut f_ext);
+            let (u, mut problem) = solution.split(model);
+            let attempt = newton.solve_increment(&mut problem, u, &f_ext, force_floor);
             match attempt {
                 Ok(log) if log.converged => {
                     stats.add(&log);
@@ -187,7 +192,8 @@ pub fn run_steps(
                 }
             }
         };
-        force_floor = force_floor.max(1e-3 * norm(&system.internal_force));
+        let internal_force = &newton.system().internal_force;
+        force_floor = force_floor.max(1e-3 * norm(internal_force));
         stats.steps += 1;
         stats.last_residual = *log.residuals.last().unwrap_or(&0.0);
         let result = StepResult {
@@ -196,50 +202,10 @@ pub fn run_steps(
             newton: NewtonLog { iterations, ..log },
             increments,
             solution: &solution,
-            internal_force: &system.internal_force,
+            internal_force,
             external_force: &f_ext,
         };
         stats.output_seconds += on_step(&result)?;
     }
     Ok((solution, stats))
-}
-
-/// One Newton increment to pseudo-time `time` from the current solution.
-#[allow(clippy::too_many_arguments)]
-fn solve_at(
-    model: &Model,
-    solution: &mut Solution,
-    system: &mut GlobalSystem,
-    linear: &mut CholeskySolver,
-    f_ext: &mut [f64],
-    time: f64,
-    settings: &NewtonSettings,
-    force_floor: f64,
-) -> Result<NewtonLog> {
-    model.apply_prescribed(time, &mut solution.u);
-    model.external_force(time, f_ext);
-    let Solution {
-        u,
-        committed,
-        trial,
-        interface_committed,
-        interface_trial,
-    } = solution;
-    let mut problem = Mechanics {
-        model,
-        committed,
-        trial,
-        interface_committed,
-        interface_trial,
-    };
-    solve_increment(
-        &mut problem,
-        &model.dofs,
-        system,
-        linear,
-        u,
-        f_ext,
-        settings,
-        force_floor,
-    )
 }

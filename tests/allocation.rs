@@ -1,0 +1,276 @@
+//! Newton iterations allocate nothing: a counting global allocator watches every iteration
+//! of a small frictional contact model once its workspaces exist, on the symmetric path
+//! (sticking contact, Cholesky), on the unsymmetric one (slipping contact, Buczkowski &
+//! Kleiber (1994), Eq. 21: BiCGSTAB preconditioned with the elastic contact matrix) and in
+//! the line search.
+//!
+//! Workspaces made once per run may be allocated in the first step (the warm-up): the Krylov
+//! workspace and the preconditioner values, which the first unsymmetric solve sizes. Every
+//! iteration of the later steps must then allocate nothing at all.
+//!
+//! Which allocations count: those of the threads of a rayon pool made for the test, where the
+//! solver runs and where all of its parallel work (assembly's parallel iterators, faer's
+//! factorisation) runs too; not those of the test harness's own threads. The pool has one
+//! thread: on several, faer's task scheduler spawns rayon jobs (a small box each) when threads
+//! are idle, and rayon's job queues grow by blocks, now and then and not deterministically.
+//! That is the thread pool's allocation, not the solver's; the code that runs is the same.
+
+mod common;
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use asperity::assembly::{AssemblyInput, GlobalSystem};
+use asperity::model::Model;
+use asperity::solver::mechanics::Mechanics;
+use asperity::solver::newton::{Newton, NewtonSettings, Problem, norm};
+use asperity::solver::stepping::Solution;
+use common::{add_curve_group, case, merge, tensor, uniform};
+
+/// The system allocator, counting the allocations and reallocations of the threads that
+/// opted in (frees need no count: a free without an allocation is impossible).
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+thread_local! {
+    /// Whether this thread's allocations are counted.
+    static COUNTED: Cell<bool> = const { Cell::new(false) };
+}
+
+fn count() {
+    if COUNTED.try_with(Cell::get).unwrap_or(false) {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+    }
+}
+
+// SAFETY: every call is forwarded unchanged to the system allocator.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        count();
+        unsafe { System.alloc(layout) }
+    }
+
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        count();
+        unsafe { System.alloc_zeroed(layout) }
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        count();
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
+
+fn allocations() -> usize {
+    ALLOCATIONS.load(Ordering::SeqCst)
+}
+
+/// Where an iteration starts: the allocation count when its tangent assembly begins, and
+/// whether that tangent (hence the linear solve of the iteration) was symmetric.
+#[derive(Clone, Copy, Debug)]
+struct Mark {
+    step: usize,
+    allocations: usize,
+    symmetric: bool,
+}
+
+/// What the marked problem records.
+#[derive(Debug)]
+struct Record {
+    /// The start of every iteration (reserved, so recording allocates nothing).
+    marks: Vec<Mark>,
+    /// Residual-only assemblies (line-search trial steps) so far.
+    line_search_assemblies: usize,
+}
+
+/// The model's problem, marking the start of every iteration (each begins with the one
+/// tangent assembly of that iteration; line-search assemblies are residual-only).
+struct Marked<'a> {
+    inner: Mechanics<'a>,
+    step: usize,
+    record: &'a mut Record,
+}
+
+impl Problem for Marked<'_> {
+    fn assemble(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) -> bool {
+        let allocations = allocations();
+        let symmetric = self.inner.assemble(system, input);
+        let record = &mut *self.record;
+        if input.tangent {
+            assert!(
+                record.marks.len() < record.marks.capacity(),
+                "marks reserved"
+            );
+            record.marks.push(Mark {
+                step: self.step,
+                allocations,
+                symmetric,
+            });
+        } else {
+            record.line_search_assemblies += 1;
+        }
+        symmetric
+    }
+}
+
+/// A block [0.5, 2.5] × [1, 1.75] on a base [0, 3] × [0, 1], plane strain, with coincident
+/// nodes on the contact; pressed by 8 MPa and driven sideways by its top edge. Steps: 1 push
+/// past the friction limit (slip), 2 push back a little (stick), 3 and 4 push on (slip), 5
+/// back a little again (stick), 6 on (slip).
+fn frictional_model() -> (Model, NewtonSettings) {
+    let mut base = tensor(&uniform(0.0, 3.0, 6), &uniform(0.0, 1.0, 2), "base");
+    add_curve_group(&mut base, "ground", |x| x[1] == 0.0);
+    add_curve_group(&mut base, "base_top", |x| {
+        x[1] == 1.0 && (0.5..=2.5).contains(&x[0])
+    });
+    let mut block = tensor(&uniform(0.5, 2.5, 4), &uniform(1.0, 1.75, 2), "block");
+    add_curve_group(&mut block, "block_bottom", |x| x[1] == 1.0);
+    add_curve_group(&mut block, "block_top", |x| x[1] == 1.75);
+    let case = case(
+        r#"[analysis]
+        type = "plane_strain"
+        [[body]]
+        group = "base"
+        material = { E = 70000.0, nu = 0.33 }
+        [[body]]
+        group = "block"
+        material = { E = 70000.0, nu = 0.33 }
+        [[support]]
+        group = "ground"
+        ux = 0.0
+        uy = 0.0
+        [[support]]
+        group = "block_top"
+        ux = 0.01
+        factors = [1.0, 0.9, 1.5, 2.0, 1.9, 2.5]
+        [[load]]
+        group = "block_top"
+        pressure = 8.0
+        factors = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0]
+        [[contact]]
+        side_a = "base_top"
+        side_b = "block_bottom"
+        law = { type = "linear_coulomb", normal_stiffness = 1e4, tangential_stiffness = 1e3, friction = 0.25 }
+        [steps]
+        count = 6"#,
+    );
+    let model = Model::build(merge(base, block, false), &case).expect("model builds");
+    (model, NewtonSettings::from(case.solver))
+}
+
+/// What the run recorded: the iteration marks, the allocation count at the end of each step,
+/// and the unsymmetric solves and line-search assemblies of the first step.
+struct Run {
+    record: Record,
+    ends: Vec<usize>,
+    warm_up_unsymmetric_solves: usize,
+    warm_up_line_search_assemblies: usize,
+}
+
+/// Solves every step of `model` as the load stepping does (one increment per step), marking
+/// the iterations.
+fn solve(model: &Model, settings: NewtonSettings) -> Run {
+    let mut newton = Newton::new(settings, &model.dofs, &model.pattern).expect("solver");
+    let mut solution = Solution::new(model);
+    let mut f_ext = vec![0.0; model.dofs.dof_count()];
+    let mut record = Record {
+        marks: Vec::with_capacity(10_000),
+        line_search_assemblies: 0,
+    };
+    let mut ends = Vec::with_capacity(model.schedule.steps());
+    let (mut warm_up_unsymmetric_solves, mut warm_up_line_search_assemblies) = (0, 0);
+    let mut force_floor: f64 = 0.0;
+    for step in 1..=model.schedule.steps() {
+        let time = step as f64;
+        model.apply_prescribed(time, &mut solution.u);
+        model.external_force(time, &mut f_ext);
+        let (u, inner) = solution.split(model);
+        let mut problem = Marked {
+            inner,
+            step,
+            record: &mut record,
+        };
+        let log = newton
+            .solve_increment(&mut problem, u, &f_ext, force_floor)
+            .expect("solves");
+        ends.push(allocations());
+        assert!(log.converged, "step {step}: {:?}", log.residuals);
+        if step == 1 {
+            warm_up_unsymmetric_solves = log.unsymmetric_solves;
+            warm_up_line_search_assemblies = record.line_search_assemblies;
+        }
+        solution.commit();
+        force_floor = force_floor.max(1e-3 * norm(&newton.system().internal_force));
+    }
+    Run {
+        record,
+        ends,
+        warm_up_unsymmetric_solves,
+        warm_up_line_search_assemblies,
+    }
+}
+
+#[test]
+fn newton_iterations_allocate_nothing_after_the_first_step() {
+    let (model, settings) = frictional_model();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .start_handler(|_| COUNTED.set(true))
+        .build()
+        .expect("pool");
+    let run = pool.install(|| solve(&model, settings));
+    assert!(
+        run.warm_up_unsymmetric_solves > 0,
+        "the warm-up step must slip, so that it makes the Krylov workspace"
+    );
+
+    // One window per iteration: from the start of its tangent assembly to the start of the
+    // next iteration's (linear solve and line search included), or to the end of the
+    // increment for the last one (the converged residual check, no solve).
+    let marks = &run.record.marks;
+    let mut table = Vec::new();
+    let (mut symmetric_solves, mut unsymmetric_solves, mut allocated) = (0, 0, 0);
+    for (i, mark) in marks.iter().enumerate() {
+        let next = marks.get(i + 1).filter(|next| next.step == mark.step);
+        let end = next.map_or(run.ends[mark.step - 1], |next| next.allocations);
+        let solved = next.is_some();
+        table.push(format!(
+            "step {} symmetric {} solve {solved}: {} allocations",
+            mark.step,
+            mark.symmetric,
+            end - mark.allocations
+        ));
+        if mark.step == 1 {
+            continue;
+        }
+        allocated += end - mark.allocations;
+        if solved && mark.symmetric {
+            symmetric_solves += 1;
+        } else if solved {
+            unsymmetric_solves += 1;
+        }
+    }
+    let table = table.join("\n");
+    let line_searches = run.record.line_search_assemblies - run.warm_up_line_search_assemblies;
+    println!(
+        "{table}\nmeasured after the first step: {symmetric_solves} symmetric and \
+         {unsymmetric_solves} unsymmetric solves, {line_searches} line-search assemblies"
+    );
+    assert!(
+        symmetric_solves > 0 && unsymmetric_solves > 0 && line_searches > 0,
+        "both paths and the line search must be measured:\n{table}"
+    );
+    assert_eq!(
+        allocated, 0,
+        "iterations after the first step allocated:\n{table}"
+    );
+}
