@@ -228,6 +228,7 @@ impl SparsityPattern {
 /// numbering, and what to compute.
 #[derive(Clone, Copy, Debug)]
 pub struct AssemblyInput<'a> {
+    /// The numbering of the equations.
     pub dofs: &'a DofMap,
     /// Displacements over all dofs (2 per node).
     pub u: &'a [f64],
@@ -247,7 +248,7 @@ pub struct GlobalSystem {
     pub values: Vec<f64>,
     pub internal_force: Vec<f64>,
     /// Values of a symmetric positive-definite approximation of an unsymmetric tangent, used
-    /// to precondition its solution (filled by the problem when the tangent is unsymmetric).
+    /// to precondition its solution (see [`GlobalSystem::assemble_preconditioner`]).
     pub preconditioner: Vec<f64>,
 }
 
