@@ -14,77 +14,26 @@ mod common;
 use asperity::assembly::{AssemblyInput, GlobalSystem};
 use asperity::config::Case;
 use asperity::mesh::{gmsh, msh};
-use asperity::model::Model;
 use asperity::solver::linear::CholeskySolver;
-use asperity::solver::newton::{NewtonSettings, Problem};
+use asperity::solver::newton::Problem;
 use asperity::solver::stepping::run_steps;
 
-const CASE: &str = r#"
-[mesh]
-file = "unused.msh"
-[analysis]
-type = "plane_strain"
-[[body]]
-group = "base"
-material = { E = 210000.0, nu = 0.3 }
-[[body]]
-group = "block"
-material = { E = 210000.0, nu = 0.3 }
-[[support]]
-group = "ground"
-ux = 0.0
-uy = 0.0
-[[support]]
-group = "block_top"
-ux = 0.05
-factors = [0.0, 1.0]
-[[load]]
-group = "block_top"
-pressure = 10.0
-factors = [1.0, 1.0]
-[[contact]]
-side_a = "base_top"
-side_b = "block_bottom"
-law = { type = "linear_coulomb", normal_stiffness = 1e5, tangential_stiffness = 1e5, friction = 0.3 }
-[steps]
-count = 2
-"#;
+/// The block on the base, pressed and pushed along in two steps, with the linear Coulomb law.
+fn case() -> Case {
+    common::block_on_base(210000.0, 0.3, &[], common::linear_coulomb(1e5, 1e5, 0.3))
+        .pressed_and_pushed(10.0, 0.05, &[0.0, 1.0])
+        .case()
+}
 
 /// The sliding block with the paper's law (slip hardening, power-law compliance), solved by
-/// each global algorithm; `{algorithm}` is replaced.
-const ROUGH: &str = r#"
-[mesh]
-file = "unused.msh"
-[analysis]
-type = "plane_strain"
-[[body]]
-group = "base"
-material = { E = 210000.0, nu = 0.3 }
-[[body]]
-group = "block"
-material = { E = 210000.0, nu = 0.3 }
-[[support]]
-group = "ground"
-ux = 0.0
-uy = 0.0
-[[support]]
-group = "block_top"
-ux = 0.01
-factors = [0.0, 0.25, 0.5, 0.75, 1.0]
-[[load]]
-group = "block_top"
-pressure = 10.0
-factors = [1.0, 1.0, 1.0, 1.0, 1.0]
-[[contact]]
-side_a = "base_top"
-side_b = "block_bottom"
-law = { type = "rough_joint", c_n = 1e-4, m = 0.5, R = 1e-3, S = 0.5, mu_m = 0.3, beta = 0.3, n = 100.0 }
-[steps]
-count = 5
-[solver]
-max_iterations = 200
-contact_algorithm = "{algorithm}"
-"#;
+/// `algorithm`.
+fn rough(algorithm: &str) -> Case {
+    common::block_on_base(210000.0, 0.3, &[], common::sliding_rough_joint())
+        .pressed_and_pushed(10.0, 0.01, &[0.0, 0.25, 0.5, 0.75, 1.0])
+        .set("solver", "max_iterations", 200)
+        .set("solver", "contact_algorithm", algorithm)
+        .case()
+}
 
 /// Iterations and time of each global contact algorithm on the sliding block with the
 /// paper's law.
@@ -92,16 +41,12 @@ fn algorithms(n: usize, mesh_path: &Path) -> Vec<String> {
     ["newton", "two_step", "elastic_contact"]
         .iter()
         .map(|algorithm| {
-            let case = Case::from_toml(
-                &ROUGH.replace("{algorithm}", algorithm),
-                Path::new("bench.toml"),
-            )
-            .expect("case");
+            let case = rough(algorithm);
             let model =
-                Model::build(msh::read_msh(mesh_path).expect("read"), &case).expect("model");
+                common::model(msh::read_msh(mesh_path).expect("read"), &case).expect("model");
             let t = Instant::now();
             let (_, stats) =
-                run_steps(&model, &NewtonSettings::from(case.solver), |_| Ok(0.0)).expect("solve");
+                run_steps(&model, &common::settings(&case), |_| Ok(0.0)).expect("solve");
             format!(
                 "| {} | {algorithm} | {} | {} | {} | {:.3} |",
                 model.dofs.free_count(),
@@ -118,7 +63,7 @@ fn algorithms(n: usize, mesh_path: &Path) -> Vec<String> {
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
     let mut algorithm_rows = Vec::new();
-    let case = Case::from_toml(CASE, Path::new("bench.toml")).expect("bench case");
+    let case = case();
     let mut rows = Vec::new();
     for n in [40usize, 128] {
         let mesh_path = Path::new("build/bench").join(format!("sliding-{n}.msh"));
@@ -130,9 +75,9 @@ fn main() {
         )
         .expect("gmsh");
         algorithm_rows.extend(algorithms(n, &mesh_path));
-        let model = Model::build(msh::read_msh(&mesh_path).expect("read"), &case).expect("model");
+        let model = common::model(msh::read_msh(&mesh_path).expect("read"), &case).expect("model");
         let t = Instant::now();
-        let settings = NewtonSettings::from(case.solver);
+        let settings = common::settings(&case);
         let (mut solution, stats) = run_steps(&model, &settings, |_| Ok(0.0)).expect("solve");
         let t_run = t.elapsed().as_secs_f64();
         let slipping = solution

@@ -9,36 +9,20 @@ use std::time::Instant;
 mod common;
 
 use asperity::assembly::{AssemblyInput, GlobalSystem};
-use asperity::config::Case;
 use asperity::contact::ContactAlgorithm;
 use asperity::material::PointState;
 use asperity::mesh::{gmsh, msh};
-use asperity::model::Model;
 use asperity::solver::linear::CholeskySolver;
-
-const CASE: &str = r#"
-[mesh]
-file = "unused.msh"
-[analysis]
-type = "plane_strain"
-[[body]]
-group = "block"
-material = { E = 210000.0, nu = 0.3 }
-[[support]]
-group = "bottom"
-uy = 0.0
-[[support]]
-group = "left"
-ux = 0.0
-[[load]]
-group = "top"
-pressure = 10.0
-"#;
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
     let dir = Path::new("build/bench");
-    let case = Case::from_toml(CASE, Path::new("bench.toml")).expect("bench case");
+    let case = common::CaseBuilder::plane_strain()
+        .body("block", common::elastic(210000.0, 0.3))
+        .support("bottom", &[("uy", 0.0)])
+        .support("left", &[("ux", 0.0)])
+        .pressure("top", 10.0)
+        .case();
     let mut rows = Vec::new();
     for n in [41usize, 129, 408] {
         let mesh_path = dir.join(format!("block-{n}.msh"));
@@ -55,7 +39,7 @@ fn main() {
         let mesh = msh::read_msh(&mesh_path).expect("read");
         let t_read = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let model = Model::build(mesh, &case).expect("model");
+        let model = common::model(mesh, &case).expect("model");
         let t_model = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let mut linear = CholeskySolver::new(&model.pattern).expect("symbolic");

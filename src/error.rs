@@ -8,11 +8,18 @@ use std::path::PathBuf;
 /// Errors of asperity. Messages are complete sentences meant for the user.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// A mesh file could not be read or is not usable (wrong version, element order, ...).
+    /// A mesh file could not be read or is not usable (wrong version, element order, ...):
+    /// `problem` says what is wrong, `entity` where (a node, an element, a section).
     #[error("{}: {message}", path.display())]
-    Mesh { path: PathBuf, message: String },
+    Mesh {
+        path: PathBuf,
+        problem: MeshProblem,
+        entity: Option<MeshEntity>,
+        message: String,
+    },
     /// A case file could not be read or is inconsistent (TOML syntax, unknown keys, missing
-    /// sections). Invalid values of known keys are [`Error::InvalidParameter`].
+    /// sections, keys that do not go together). Invalid values of known keys are
+    /// [`Error::InvalidParameter`].
     #[error("{}: {message}", path.display())]
     Case { path: PathBuf, message: String },
     /// A case-file value is out of its range: `key` is its path in the case
@@ -24,7 +31,87 @@ pub enum Error {
         value: String,
         reason: String,
     },
-    /// The mesh and case do not fit together (missing group, bad element, ...).
+    /// A physical group named in the case (by `role`: "body", "support", "load", "contact
+    /// 'p': side A curve", ...) is missing from the mesh `mesh`, is not of the `expected`
+    /// kind, or has no elements.
+    #[error("model: {role} '{name}': {}", group_message(mesh, name, *expected, problem))]
+    Group {
+        mesh: PathBuf,
+        role: String,
+        name: String,
+        expected: GroupKind,
+        problem: GroupProblem,
+    },
+    /// The faces of contact pair `pair` cannot be joined by interface elements: `problem`
+    /// says why, `node` and `element` are the gmsh tags of the offending node and line
+    /// element where there is one.
+    #[error("model: contact '{pair}': {message}")]
+    Topology {
+        pair: String,
+        problem: TopologyProblem,
+        node: Option<u64>,
+        element: Option<u64>,
+        message: String,
+    },
+    /// Two supports prescribe different histories of the same displacement component
+    /// (`component` 0 = x, 1 = y) of node `node` (gmsh tag).
+    #[error(
+        "model: supports '{first}' and '{second}' prescribe different {} displacement histories ({} and {} \
+         at factor 1) at node {node} ({position:?})",
+        ["x", "y"][*component], values[0], values[1]
+    )]
+    ConflictingSupports {
+        first: String,
+        second: String,
+        component: usize,
+        values: [f64; 2],
+        node: u64,
+        position: [f64; 2],
+    },
+    /// A node of an axisymmetric model lies at negative radius.
+    #[error(
+        "model: axisymmetric model: node {node} lies at negative radius r = {radius} (the axis is x = r = 0)"
+    )]
+    NegativeRadius { node: u64, radius: f64 },
+    /// A support prescribes a non-zero radial displacement on the axis.
+    #[error(
+        "model: node {node} on the axis has a prescribed radial displacement {value}; it must be 0"
+    )]
+    AxisDisplacement { node: u64, value: f64 },
+    /// A support or load of group `group` reaches a node or boundary element (`entity`, at
+    /// `position`) that belongs to no body.
+    #[error("model: {role} '{group}': {}", off_body_message(entity, position))]
+    NotOnBody {
+        role: &'static str,
+        group: String,
+        entity: MeshEntity,
+        position: [f64; 2],
+    },
+    /// The physical surfaces of two bodies share element `element` (gmsh tag).
+    #[error(
+        "model: element {element} belongs to bodies '{first}' and '{second}': physical surfaces of bodies must \
+         not overlap"
+    )]
+    OverlappingBodies {
+        element: u64,
+        first: String,
+        second: String,
+    },
+    /// Element `element` (gmsh tag) of body `body` has a non-positive Jacobian determinant.
+    #[error(
+        "model: element {element} of body '{body}' is distorted or degenerate (Jacobian determinant \
+         {jacobian:.3e} ≤ 0; corners {corners:?}); check mid-side nodes and the mesh quality"
+    )]
+    DistortedElement {
+        element: u64,
+        body: String,
+        jacobian: f64,
+        corners: Vec<[f64; 2]>,
+    },
+    /// Supports and the nodes outside every body leave no unknown.
+    #[error("model: every degree of freedom is prescribed: nothing to solve")]
+    NothingToSolve,
+    /// A quantity of interest does not fit the model (used by the quantity evaluation).
     #[error("model: {0}")]
     Model(String),
     /// An external program (gmsh) failed.
@@ -59,9 +146,16 @@ pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
     /// Shorthand for an [`Error::Mesh`].
-    pub fn mesh(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
+    pub fn mesh(
+        path: impl Into<PathBuf>,
+        problem: MeshProblem,
+        entity: Option<MeshEntity>,
+        message: impl Into<String>,
+    ) -> Self {
         Error::Mesh {
             path: path.into(),
+            problem,
+            entity,
             message: message.into(),
         }
     }
@@ -74,6 +168,210 @@ impl Error {
         }
     }
 }
+
+/// What is wrong with a mesh file ([`Error::Mesh`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshProblem {
+    /// The file (or the `.geo` script) does not exist.
+    NotFound,
+    /// The file is empty.
+    Empty,
+    /// Not an MSH file, or its `$MeshFormat` header is unusable.
+    Header,
+    /// An MSH version other than 4.1.
+    Version,
+    /// The file is cut short.
+    Truncated,
+    /// Parametric node coordinates.
+    Parametric,
+    /// Corrupt or inconsistent content (parser error, section contents that disagree).
+    Corrupt,
+    /// The MSH parser (mshio) panicked on the file.
+    ParserPanic,
+    /// A section the reader needs is missing.
+    MissingSection,
+    /// The `$Nodes` or `$Elements` section is empty.
+    EmptySection,
+    /// More nodes than node indices.
+    TooManyNodes,
+    /// A node coordinate is not finite.
+    NonFinite,
+    /// A node lies off the x-y plane.
+    NotPlanar,
+    /// A node tag appears twice.
+    DuplicateNode,
+    /// An element references a node that is not in the file.
+    UnknownNode,
+    /// No quadratic surface cells.
+    NoCells,
+    /// A cell whose corners enclose no area.
+    Degenerate,
+    /// First-order elements: the mesh must be quadratic.
+    FirstOrder,
+    /// An element type the solver does not use.
+    UnsupportedElement,
+    /// The `$PhysicalNames` section is malformed.
+    PhysicalNames,
+}
+
+/// Where in a mesh file an [`Error::Mesh`] (or [`Error::NotOnBody`]) is: a node or an
+/// element by its gmsh tag, or a section.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshEntity {
+    Node(u64),
+    Element(u64),
+    /// A section by its tag, e.g. `"$Nodes"`, `"$MeshFormat"`.
+    Section(&'static str),
+}
+
+/// The kind of physical group a case entry needs ([`Error::Group`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GroupKind {
+    Surface,
+    Curve,
+    Point,
+    /// A curve or a point (supports, loads).
+    CurveOrPoint,
+}
+
+impl fmt::Display for GroupKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            GroupKind::Surface => "physical surface",
+            GroupKind::Curve => "physical curve",
+            GroupKind::Point => "physical point",
+            GroupKind::CurveOrPoint => "physical curve or point",
+        })
+    }
+}
+
+/// What is wrong with a physical group ([`Error::Group`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum GroupProblem {
+    /// No group of that name and kind; `available` lists the alternatives, e.g.
+    /// "surfaces: lower, upper".
+    Missing { available: String },
+    /// The name is used by a physical curve and a physical point.
+    Ambiguous,
+    /// The group is a `found`, but `purpose` ("a force", "a pressure or traction") needs the
+    /// expected kind.
+    WrongKind {
+        found: GroupKind,
+        purpose: &'static str,
+    },
+    /// The group has no elements.
+    Empty,
+}
+
+fn group_message(
+    mesh: &std::path::Path,
+    name: &str,
+    expected: GroupKind,
+    problem: &GroupProblem,
+) -> String {
+    let mesh = mesh.display();
+    match problem {
+        GroupProblem::Missing { available } => {
+            format!("no {expected} of that name in {mesh} ({available})")
+        }
+        GroupProblem::Ambiguous => format!(
+            "the name is used by a physical curve and a physical point in {mesh}; rename one"
+        ),
+        GroupProblem::WrongKind { found, purpose } => {
+            format!("{purpose} needs a {expected} group, and '{name}' is a {found}")
+        }
+        GroupProblem::Empty => format!(
+            "the {expected} has no elements in {mesh} (is it meshed, and are its elements saved?)"
+        ),
+    }
+}
+
+fn off_body_message(entity: &MeshEntity, position: &[f64; 2]) -> String {
+    match entity {
+        MeshEntity::Element(tag) => format!(
+            "boundary element {tag} (from {position:?}) is not an edge of any body's element"
+        ),
+        MeshEntity::Node(tag) => format!("node {tag} at {position:?} belongs to no body"),
+        MeshEntity::Section(s) => format!("{s} belongs to no body"),
+    }
+}
+
+/// Why the faces of a contact pair cannot be joined ([`Error::Topology`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TopologyProblem {
+    /// The mesh itself is inconsistent (node references out of range, missing node tags).
+    InvalidMesh,
+    /// The case defines no bodies.
+    NoBodies,
+    /// Side A and side B are the same curve.
+    SameCurve,
+    /// The two faces share nodes (a conforming mesh: use the Split recipe).
+    SharedNodes,
+    /// A line of a face is the edge of no body element.
+    NoOwner,
+    /// A line of a face is shared by two elements: the curve runs inside the bodies.
+    Interior,
+    /// The two faces are discretised differently.
+    Mismatch,
+    /// Both bodies lie on the same side of the contact.
+    Overlap,
+    /// The mesh has no cell of positive size to scale the tolerance.
+    NoScale,
+    /// A node has no partner on the other face.
+    Unpaired,
+    /// A node has several candidate partners, or two nodes the same one.
+    Ambiguous,
+    /// The faces of an Ordered pair have different node counts.
+    CountMismatch,
+    /// A curve branches (more than two lines meet at a node).
+    Branch,
+    /// A curve is a closed loop.
+    Closed,
+    /// A curve is not one connected chain.
+    Disconnected,
+    /// A body of a Split pair is not one of the case's bodies.
+    BodyNotInCase,
+    /// The two bodies of a Split pair are the same surface.
+    SameBody,
+    /// The two bodies of a Split pair share a surface entity.
+    SharedEntity,
+    /// The curve of a Split pair is not between the two bodies.
+    NotBetweenBodies,
+    /// Splitting would exceed the node numbering.
+    TooManyNodes,
+    /// The pair has no interface elements.
+    NoElements,
+}
+
+/// A constitutive parameter out of its range, as a material or interface-law constructor
+/// reports it: `name` is the parameter's key in the case file (`E`, `friction`). The model
+/// turns it into an [`Error::InvalidParameter`] with the full key path.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParameterError {
+    pub name: &'static str,
+    pub value: f64,
+    /// Why the value is wrong, e.g. "Young's modulus must be positive".
+    pub reason: String,
+}
+
+impl ParameterError {
+    /// `name = value` is wrong because of `reason`.
+    pub fn new(name: &'static str, value: f64, reason: impl Into<String>) -> Self {
+        Self {
+            name,
+            value,
+            reason: reason.into(),
+        }
+    }
+}
+
+impl fmt::Display for ParameterError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} = {}: {}", self.name, self.value, self.reason)
+    }
+}
+
+impl std::error::Error for ParameterError {}
 
 /// A load step that could not be made to converge: where it stopped and every attempt.
 #[derive(Clone, Debug)]

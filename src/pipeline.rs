@@ -19,7 +19,7 @@ use std::time::Instant;
 
 use crate::config::{Case, SolverSpec};
 use crate::mesh::{Mesh, gmsh, msh};
-use crate::model::Model;
+use crate::model::{Model, ModelSpec};
 use crate::output::csv::{CsvTable, write_csv};
 use crate::output::pvd::{PvdEntry, write_pvd};
 use crate::output::vtu::write_vtu;
@@ -118,10 +118,13 @@ pub fn load_mesh(case: &Case, out_dir: &Path) -> Result<Mesh> {
 /// Runs `case`, writing results to `out_dir`. `progress` shows a progress bar over the steps.
 pub fn run(case: &Case, out_dir: &Path, progress: bool) -> Result<RunSummary> {
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+    let spec = ModelSpec::new(case)?; // bad parameters fail before gmsh runs
     let t = Instant::now();
     let mesh = load_mesh(case, out_dir)?;
     let mesh_seconds = t.elapsed().as_secs_f64();
-    run_mesh(case, mesh, mesh_seconds, out_dir, progress, |_, _| Ok(()))
+    run_model(case, spec, mesh, mesh_seconds, out_dir, progress, |_, _| {
+        Ok(())
+    })
 }
 
 /// Runs `case` on an already loaded `mesh` (from [`load_mesh`], which took `mesh_seconds`),
@@ -133,11 +136,25 @@ pub fn run_mesh(
     mesh_seconds: f64,
     out_dir: &Path,
     progress: bool,
+    on_step: impl FnMut(&Model, &StepResult) -> Result<()>,
+) -> Result<RunSummary> {
+    let spec = ModelSpec::new(case)?;
+    run_model(case, spec, mesh, mesh_seconds, out_dir, progress, on_step)
+}
+
+/// [`run_mesh`] with the model's spec already made from `case` (by [`ModelSpec::new`]).
+pub fn run_model(
+    case: &Case,
+    spec: ModelSpec,
+    mesh: Mesh,
+    mesh_seconds: f64,
+    out_dir: &Path,
+    progress: bool,
     mut on_step: impl FnMut(&Model, &StepResult) -> Result<()>,
 ) -> Result<RunSummary> {
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
     let t = Instant::now();
-    let model = Model::build(mesh, case)?;
+    let model = Model::build(mesh, spec)?;
     let model_seconds = t.elapsed().as_secs_f64();
     tracing::info!(
         nodes = model.mesh.nodes.len(),
@@ -182,7 +199,7 @@ pub fn newton_settings(spec: &SolverSpec) -> NewtonSettings {
         force_tolerance: spec.force_tolerance,
         displacement_tolerance: spec.displacement_tolerance,
         max_cutbacks: spec.max_cutbacks,
-        contact_algorithm: spec.contact_algorithm,
+        contact_algorithm: spec.contact_algorithm.into(),
     }
 }
 

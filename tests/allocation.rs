@@ -26,7 +26,7 @@ use asperity::model::Model;
 use asperity::solver::mechanics::Mechanics;
 use asperity::solver::newton::{Newton, NewtonSettings, Problem, norm};
 use asperity::solver::stepping::Solution;
-use common::{add_curve_group, case, merge, tensor, uniform};
+use common::{add_curve_group, block_on_base, linear_coulomb, merge, settings, tensor, uniform};
 
 /// The system allocator, counting the allocations and reallocations of the threads that
 /// opted in (frees need no count: a free without an allocation is impossible).
@@ -135,36 +135,11 @@ fn frictional_model() -> (Model, NewtonSettings) {
     let mut block = tensor(&uniform(0.5, 2.5, 4), &uniform(1.0, 1.75, 2), "block");
     add_curve_group(&mut block, "block_bottom", |x| x[1] == 1.0);
     add_curve_group(&mut block, "block_top", |x| x[1] == 1.75);
-    let case = case(
-        r#"[analysis]
-        type = "plane_strain"
-        [[body]]
-        group = "base"
-        material = { E = 70000.0, nu = 0.33 }
-        [[body]]
-        group = "block"
-        material = { E = 70000.0, nu = 0.33 }
-        [[support]]
-        group = "ground"
-        ux = 0.0
-        uy = 0.0
-        [[support]]
-        group = "block_top"
-        ux = 0.01
-        factors = [1.0, 0.9, 1.5, 2.0, 1.9, 2.5]
-        [[load]]
-        group = "block_top"
-        pressure = 8.0
-        factors = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0]
-        [[contact]]
-        side_a = "base_top"
-        side_b = "block_bottom"
-        law = { type = "linear_coulomb", normal_stiffness = 1e4, tangential_stiffness = 1e3, friction = 0.25 }
-        [steps]
-        count = 6"#,
-    );
-    let model = Model::build(merge(base, block, false), &case).expect("model builds");
-    (model, NewtonSettings::from(case.solver))
+    let case = block_on_base(70000.0, 0.33, &[], linear_coulomb(1e4, 1e3, 0.25))
+        .pressed_and_pushed(8.0, 0.01, &[1.0, 0.9, 1.5, 2.0, 1.9, 2.5])
+        .case();
+    let model = common::model(merge(base, block, false), &case).expect("model builds");
+    (model, settings(&case))
 }
 
 /// What the run recorded: the iteration marks, the allocation count at the end of each step,

@@ -8,23 +8,11 @@ use common::*;
 fn cantilever_tip_deflection_matches_beam_theory() {
     let (l, h, t, e, nu, tau): (f64, f64, f64, f64, f64, f64) =
         (100.0, 10.0, 5.0, 210_000.0, 0.3, 2.0);
-    let case = case(&format!(
-        r#"[analysis]
-        type = "plane_stress"
-        thickness = {t}
-        [[body]]
-        group = "body"
-        material = {{ E = {e}, nu = {nu} }}
-        [[support]]
-        group = "s0"
-        ux = 0.0
-        uy = 0.0
-        [[load]]
-        group = "s1"
-        traction = [0.0, {}]
-        "#,
-        -tau
-    ));
+    let case = CaseBuilder::plane_stress(t)
+        .body("body", elastic(e, nu))
+        .support("s0", &[("ux", 0.0), ("uy", 0.0)])
+        .traction("s1", [0.0, -tau])
+        .case();
     let p = tau * h * t;
     let i = t * h.powi(3) / 12.0;
     let g = e / (2.0 * (1.0 + nu));

@@ -68,6 +68,40 @@ fn mesh_info_on_a_linear_mesh_explains_the_fix() {
     );
 }
 
+#[test]
+fn bad_mesh_files_are_explained_with_the_fix() {
+    for (name, words) in [
+        (
+            "msh22.msh",
+            &[
+                "MSH 2.2 is not supported",
+                "-format msh41",
+                "MshFileVersion",
+            ][..],
+        ),
+        (
+            "linear.msh",
+            &["first order", "-order 2", "SecondOrderIncomplete = 1"][..],
+        ),
+        (
+            "quad9.msh",
+            &["9-node", "type 10", "SecondOrderIncomplete = 1"][..],
+        ),
+        ("truncated.msh", &["truncated"][..]),
+        ("two_bodies.geo", &["not a gmsh MSH file"][..]),
+        (
+            "parametric.msh",
+            &["parametric", "Mesh.SaveParametric = 0"][..],
+        ),
+    ] {
+        let (ok, text) = asperity(&["mesh-info", &fixture(name)]);
+        assert!(!ok, "{name}: {text}");
+        for w in words.iter().chain(&[name]) {
+            assert!(text.contains(w), "{name}: message lacks `{w}`: {text}");
+        }
+    }
+}
+
 const ANALYSIS: &str = "[analysis]\ntype = \"plane_strain\"\n";
 
 #[test]

@@ -4,14 +4,13 @@
 //! Newton's convergence.
 mod common;
 
+use asperity::config::Case;
 use asperity::mesh::Mesh;
 use asperity::model::Model;
 use asperity::post::interface::{InterfaceOutput, resultants};
 use asperity::solver::stepping::Solution;
+use common::shrink_fit::{E, NU};
 use common::*;
-
-const E: f64 = 200_000.0;
-const NU: f64 = 0.3;
 
 /// Nodal contact pressure (−p_N) along the first pair.
 fn pressures(model: &Model, solution: &Solution) -> Vec<f64> {
@@ -24,66 +23,11 @@ fn pressures(model: &Model, solution: &Solution) -> Vec<f64> {
 
 mod shrink_fit {
     use super::*;
-
-    pub const B: f64 = 10.0;
-    const C: f64 = 20.0;
-    pub const L: f64 = 10.0;
-    pub const DELTA: f64 = 0.01;
-
-    /// Plane-strain compliance C = b (C_s + C_h) of a solid shaft in a hub (docs/theory.md, "Lamé cylinders and the shrink fit").
-    pub fn compliance() -> f64 {
-        let (e, nu) = (E / (1.0 - NU * NU), NU / (1.0 - NU));
-        let cs = (1.0 - nu) / e;
-        let ch = ((C * C + B * B) / (C * C - B * B) + nu) / e;
-        B * (cs + ch)
-    }
-
-    pub fn bodies(conforming: bool) -> Mesh {
-        let zs = uniform(0.0, L, 4);
-        let mut shaft = tensor(&uniform(0.0, B, 6), &zs, "shaft");
-        add_curve_group(&mut shaft, "shaft_ends", |x| x[1] == 0.0 || x[1] == L);
-        let mut hub = tensor(&uniform(B, C, 6), &zs, "hub");
-        add_curve_group(&mut hub, "hub_ends", |x| x[1] == 0.0 || x[1] == L);
-        if conforming {
-            add_curve_group(&mut shaft, "fit", |x| (x[0] - B).abs() < 1e-12);
-        } else {
-            add_curve_group(&mut shaft, "shaft_outer", |x| (x[0] - B).abs() < 1e-12);
-            add_curve_group(&mut hub, "hub_bore", |x| (x[0] - B).abs() < 1e-12);
-        }
-        merge(shaft, hub, conforming)
-    }
-
-    pub fn text(pairing: &str, k_n: f64) -> String {
-        format!(
-            r#"[analysis]
-            type = "axisymmetric"
-            [[body]]
-            group = "shaft"
-            material = {{ E = {E}, nu = {NU} }}
-            [[body]]
-            group = "hub"
-            material = {{ E = {E}, nu = {NU} }}
-            [[support]]
-            group = "shaft_ends"
-            uz = 0.0
-            [[support]]
-            group = "hub_ends"
-            uz = 0.0
-            [[contact]]
-            {pairing}
-            interference = {DELTA}
-            law = {{ type = "linear_coulomb", normal_stiffness = {k_n}, tangential_stiffness = {k_n}, friction = 0.2 }}
-            "#
-        )
-    }
+    pub use crate::common::shrink_fit::*;
 
     fn check(conforming: bool, k_n: f64) {
-        let pairing = if conforming {
-            "curve = \"fit\"\nbody_a = \"shaft\"\nbody_b = \"hub\""
-        } else {
-            "side_a = \"shaft_outer\"\nside_b = \"hub_bore\""
-        };
-        let (model, solution) = solve(bodies(conforming), &case(&text(pairing, k_n)));
+        let law = linear_coulomb(k_n, k_n, 0.2);
+        let (model, solution) = solve(mesh(conforming), &case(conforming, law));
         let lame = DELTA / compliance();
         let expected = DELTA / (compliance() + 1.0 / k_n);
         let p = pressures(&model, &solution);
@@ -158,30 +102,21 @@ mod flat_punch {
         );
         add_curve_group(&mut punch, "face", |x| (x[1] - depth).abs() < 1e-9);
         add_curve_group(&mut punch, "top", |x| (x[1] - depth - h).abs() < 1e-9);
-        let text = format!(
-            r#"[analysis]
-            type = "axisymmetric"
-            [[body]]
-            group = "foundation"
-            material = {{ E = {E}, nu = {NU} }}
-            [[body]]
-            group = "punch"
-            material = {{ E = {}, nu = {NU} }}
-            [[support]]
-            group = "base"
-            uz = 0.0
-            [[load]]
-            group = "top"
-            pressure = 1.0
-            [[contact]]
-            side_a = "surface"
-            side_b = "face"
-            integration = "{rule}"
-            law = {{ type = "linear_coulomb", normal_stiffness = {k_n}, tangential_stiffness = 1.0, friction = 0.0 }}
-            "#,
-            1000.0 * E
-        );
-        solve(merge(foundation, punch, false), &case(&text))
+        let case = CaseBuilder::axisymmetric()
+            .body("foundation", elastic(E, NU))
+            .body("punch", elastic(1000.0 * E, NU))
+            .support("base", &[("uz", 0.0)])
+            .pressure("top", 1.0)
+            .contact(
+                &[
+                    ("side_a", "surface".into()),
+                    ("side_b", "face".into()),
+                    ("integration", rule.into()),
+                ],
+                linear_coulomb(k_n, 1.0, 0.0),
+            )
+            .case();
+        solve(merge(foundation, punch, false), &case)
     }
 
     #[test]
@@ -220,7 +155,7 @@ mod flat_punch {
 /// Oscillation of a nodal pressure profile under the punch: the number of local extrema
 /// (sign changes of the first difference). The exact profile (Sneddon) increases
 /// monotonically from the axis to the edge, so every extremum is a spurious zig-zag, the
-/// known defect of fully integrated interface elements (paper §3.3.1).
+/// known defect of fully integrated interface elements (Buczkowski & Kleiber (1994), §3.3.1).
 fn extrema(model: &Model, solution: &Solution) -> usize {
     let out = InterfaceOutput::new(model);
     let p: Vec<f64> = out.tables(model, &solution.interface_committed)[0]
@@ -252,7 +187,6 @@ fn newton_cotes_contact_stress_is_smoother_than_gauss() {
 mod block {
     use super::*;
     use asperity::contact::ContactStatus;
-    use asperity::solver::newton::NewtonSettings;
     use asperity::solver::stepping::run_steps;
 
     /// A block [1, 3] × [1, 2] on a base [0, 4] × [0, 1] (plane strain), coincident nodes on
@@ -269,49 +203,22 @@ mod block {
         merge(base, block, false)
     }
 
-    fn text(extra: &str) -> String {
-        format!(
-            r#"[analysis]
-            type = "plane_strain"
-            [[body]]
-            group = "base"
-            material = {{ E = {E}, nu = {NU} }}
-            [[body]]
-            group = "block"
-            material = {{ E = {E}, nu = {NU} }}
-            [[support]]
-            group = "ground"
-            ux = 0.0
-            uy = 0.0
-            [[contact]]
-            name = "joint"
-            side_a = "base_top"
-            side_b = "block_bottom"
-            law = {{ type = "linear_coulomb", normal_stiffness = 1e4, tangential_stiffness = 1e3, friction = 0.3 }}
-            {extra}
-            "#
-        )
+    /// The block on the base with a named linear Coulomb joint.
+    fn case() -> CaseBuilder {
+        let name = [("name", "joint".into())];
+        block_on_base(E, NU, &name, linear_coulomb(1e4, 1e3, 0.3))
     }
 
     /// Steps: 1 press (p = 10 MPa), 2 small push (stick), 3 and 4 push beyond the limit
     /// (slide), 5 push back a little (elastic unloading).
     #[test]
     fn sticks_below_mu_n_slides_at_mu_n_and_keeps_its_slip_on_unloading() {
-        let case = case(&text(
-            r#"[[support]]
-            group = "block_top"
-            ux = 0.01
-            factors = [0.0, 0.1, 1.0, 2.0, 1.9]
-            [[load]]
-            group = "block_top"
-            pressure = 10.0
-            factors = [1.0, 1.0, 1.0, 1.0, 1.0]
-            [steps]
-            count = 5"#,
-        ));
-        let model = Model::build(mesh(), &case).unwrap();
+        let case = case()
+            .pressed_and_pushed(10.0, 0.01, &[0.0, 0.1, 1.0, 2.0, 1.9])
+            .case();
+        let model = model(mesh(), &case).unwrap();
         let mut seen = Vec::new();
-        run_steps(&model, &NewtonSettings::from(case.solver), |step| {
+        run_steps(&model, &settings(&case), |step| {
             let r = resultants(&model, &step.solution.interface_committed)[0];
             let states = &step.solution.interface_committed;
             let statuses: Vec<ContactStatus> = states.iter().map(|s| s.status).collect();
@@ -371,12 +278,9 @@ mod block {
 
     #[test]
     fn a_pulled_block_opens_and_carries_no_stress() {
-        let case = case(&text(
-            r#"[[support]]
-            group = "block_top"
-            ux = 0.0
-            uy = 0.05"#,
-        ));
+        let case = case()
+            .support("block_top", &[("ux", 0.0), ("uy", 0.05)])
+            .case();
         let (model, solution) = solve(mesh(), &case);
         for s in &solution.interface_committed {
             assert_eq!(s.status, ContactStatus::Open);
@@ -422,47 +326,29 @@ mod hertz {
         for (g, name) in [("s0", "block_sym"), ("t0", "face"), ("t1", "block_top")] {
             block.groups.iter_mut().find(|x| x.name == g).unwrap().name = name.into();
         }
-        let text = format!(
-            r#"[analysis]
-            type = "plane_strain"
-            [[body]]
-            group = "base"
-            material = {{ E = {E}, nu = {NU} }}
-            [[body]]
-            group = "block"
-            material = {{ E = {E}, nu = {NU} }}
-            [[support]]
-            group = "ground"
-            uy = 0.0
-            [[support]]
-            group = "base_sym"
-            ux = 0.0
-            [[support]]
-            group = "block_sym"
-            ux = 0.0
-            [[load]]
-            group = "block_top"
-            pressure = 20.0
-            [steps]
-            count = 2
-            [[contact]]
-            side_a = "base_top"
-            side_b = "face"
-            pairing = "ordered"
-            law = {{ type = "linear_coulomb", normal_stiffness = 1e7, tangential_stiffness = 1.0 }}
-            "#
-        );
-        let case = case(&text);
-        let model = Model::build(merge(base, block, false), &case).unwrap();
+        let case = CaseBuilder::plane_strain()
+            .body("base", elastic(E, NU))
+            .body("block", elastic(E, NU))
+            .support("ground", &[("uy", 0.0)])
+            .support("base_sym", &[("ux", 0.0)])
+            .support("block_sym", &[("ux", 0.0)])
+            .pressure("block_top", 20.0)
+            .steps(2)
+            .contact(
+                &[
+                    ("side_a", "base_top".into()),
+                    ("side_b", "face".into()),
+                    ("pairing", "ordered".into()),
+                ],
+                linear_coulomb(1e7, 1.0, 0.0),
+            )
+            .case();
+        let model = model(merge(base, block, false), &case).unwrap();
         let mut logs = Vec::new();
-        asperity::solver::stepping::run_steps(
-            &model,
-            &asperity::solver::newton::NewtonSettings::from(case.solver),
-            |step| {
-                logs.push(step.newton.residuals.clone());
-                Ok(0.0)
-            },
-        )
+        asperity::solver::stepping::run_steps(&model, &settings(&case), |step| {
+            logs.push(step.newton.residuals.clone());
+            Ok(0.0)
+        })
         .unwrap();
         for (k, residuals) in logs.iter().enumerate() {
             println!("step {}: relative residuals {residuals:?}", k + 1);
@@ -484,23 +370,27 @@ mod hertz {
 
 mod bad_input {
     use super::*;
+    use asperity::Error;
+    use asperity::error::TopologyProblem;
+    use asperity::model::ModelSpec;
 
-    fn error(text: &str, mesh: Mesh) -> String {
-        Model::build(mesh, &case(text)).unwrap_err().to_string()
+    /// The problem and node coordinates of the topology error of pair "j".
+    fn topology(case: &Case, mesh: Mesh) -> (TopologyProblem, Option<[f64; 2]>) {
+        let e = model(mesh, case).unwrap_err();
+        let Error::Topology {
+            pair,
+            problem,
+            node,
+            ..
+        } = e
+        else {
+            panic!("expected a topology error, got {e}")
+        };
+        assert_eq!(pair, "j");
+        let m = two_blocks(3);
+        let at = node.map(|t| m.nodes[m.node_tags.iter().position(|&x| x == t).unwrap()]);
+        (problem, at)
     }
-
-    const BODIES: &str = r#"[analysis]
-        type = "plane_strain"
-        [[body]]
-        group = "lower"
-        material = { E = 1000.0, nu = 0.3 }
-        [[body]]
-        group = "upper"
-        material = { E = 1000.0, nu = 0.3 }
-        "#;
-
-    const LAW: &str =
-        r#"law = { type = "linear_coulomb", normal_stiffness = 1e4, tangential_stiffness = 1e4 }"#;
 
     fn two_blocks(n_upper: usize) -> Mesh {
         let mut lower = tensor(&uniform(0.0, 2.0, 4), &uniform(0.0, 1.0, 2), "lower");
@@ -512,50 +402,61 @@ mod bad_input {
         merge(merge(lower, upper, false), free, false)
     }
 
-    fn pair(a: &str, b: &str) -> String {
-        format!("{BODIES}[[contact]]\nname = \"j\"\nside_a = \"{a}\"\nside_b = \"{b}\"\n{LAW}\n")
+    /// Two bodies joined by pair "j" between the curves `a` and `b`.
+    fn pair(a: &str, b: &str, normal_stiffness: f64) -> Case {
+        let faces = [
+            ("name", "j".into()),
+            ("side_a", a.into()),
+            ("side_b", b.into()),
+        ];
+        CaseBuilder::plane_strain()
+            .body("lower", elastic(1000.0, 0.3))
+            .body("upper", elastic(1000.0, 0.3))
+            .contact(&faces, linear_coulomb(normal_stiffness, 1e4, 0.0))
+            .case()
     }
 
     #[test]
     fn curves_that_do_not_match_are_reported_with_coordinates() {
-        let e = error(&pair("lower_top", "upper_bottom"), two_blocks(3));
-        assert!(
-            e.contains("contact 'j'") && e.contains("no coincident node") && e.contains("(0.333"),
-            "{e}"
-        );
+        let case = pair("lower_top", "upper_bottom", 1e4);
+        let (problem, at) = topology(&case, two_blocks(3));
+        assert_eq!(problem, TopologyProblem::Unpaired);
+        assert!((at.unwrap()[0] - 1.0 / 3.0).abs() < 1e-12, "{at:?}");
     }
 
     #[test]
     fn a_curve_of_no_body_is_reported() {
-        let e = error(&pair("loose_side", "upper_bottom"), two_blocks(4));
+        let case = pair("loose_side", "upper_bottom", 1e4);
+        let e = model(two_blocks(4), &case).unwrap_err();
         assert!(
-            e.contains("contact 'j'") && e.contains("loose_side") && e.contains("no body"),
+            matches!(e, Error::Topology { ref pair, problem: TopologyProblem::NoOwner, element: Some(_), .. } if pair == "j"),
             "{e}"
         );
+        assert!(e.to_string().contains("loose_side"), "{e}");
     }
 
     #[test]
     fn a_negative_stiffness_is_rejected_with_its_name() {
-        let text = pair("lower_top", "upper_bottom")
-            .replace("normal_stiffness = 1e4", "normal_stiffness = -1e4");
-        let err = asperity::config::Case::from_toml(
-            &format!("[mesh]\nfile = \"m.msh\"\n{text}"),
-            std::path::Path::new("c.toml"),
-        )
-        .unwrap_err()
-        .to_string();
-        assert!(
-            err.contains("normal_stiffness") && err.contains("positive") && err.contains("c.toml"),
-            "{err}"
+        let e = ModelSpec::new(&pair("lower_top", "upper_bottom", -1e4)).unwrap_err();
+        let Error::InvalidParameter {
+            path, key, value, ..
+        } = e
+        else {
+            panic!("expected an invalid parameter, got {e}")
+        };
+        assert_eq!(path, std::path::Path::new("test.toml"));
+        assert_eq!(
+            (key.as_str(), value.as_str()),
+            ("contact[0].law.normal_stiffness", "-10000")
         );
     }
 }
 
-/// The paper's law (issue: power-law compliance and slip-hardening friction) in whole models.
+/// The rough-joint law of Buczkowski & Kleiber (1994), Eqs. 1–5 (power-law compliance and
+/// slip-hardening friction), in whole models.
 mod rough_joint {
     use super::*;
     use asperity::contact::ContactStatus;
-    use asperity::solver::newton::NewtonSettings;
     use asperity::solver::stepping::run_steps;
 
     /// Shrink fit with u_N = c_N p^m: the pressure is the root of C p + c_N p^m = δ.
@@ -563,21 +464,14 @@ mod rough_joint {
     fn shrink_fit_pressure_is_the_root_of_the_compliance_equation() {
         use shrink_fit::*;
         for (c_n, m) in [(5e-4, 0.5), (1e-3, 1.0 / 3.0)] {
-            let law = format!(
-                r#"law = {{ type = "rough_joint", c_n = {c_n}, m = {m}, R = 1e-3, S = 0.5, mu_m = 0.2 }}"#
-            );
-            let text = text("side_a = \"shaft_outer\"\nside_b = \"hub_bore\"", 1.0)
-                .lines()
-                .map(|l| {
-                    if l.trim_start().starts_with("law =") {
-                        law.clone()
-                    } else {
-                        l.to_string()
-                    }
-                })
-                .collect::<Vec<_>>()
-                .join("\n");
-            let (model, solution) = solve(bodies(false), &case(&text));
+            let law = rough_joint(&[
+                ("c_n", c_n),
+                ("m", m),
+                ("R", 1e-3),
+                ("S", 0.5),
+                ("mu_m", 0.2),
+            ]);
+            let (model, solution) = solve(mesh(false), &case(false, law));
             // Root of C p + c_N p^m − δ by bisection on (0, δ/C).
             let c = compliance();
             let (mut lo, mut hi) = (0.0, DELTA / c);
@@ -603,41 +497,14 @@ mod rough_joint {
         }
     }
 
-    fn sliding_case(algorithm: &str) -> asperity::config::Case {
-        case(&format!(
-            r#"[analysis]
-            type = "plane_strain"
-            [[body]]
-            group = "base"
-            material = {{ E = {E}, nu = {NU} }}
-            [[body]]
-            group = "block"
-            material = {{ E = {E}, nu = {NU} }}
-            [[support]]
-            group = "ground"
-            ux = 0.0
-            uy = 0.0
-            [[support]]
-            group = "block_top"
-            ux = 0.004
-            factors = [0.0, 0.5, 1.0]
-            [[load]]
-            group = "block_top"
-            pressure = 10.0
-            factors = [1.0, 1.0, 1.0]
-            [steps]
-            count = 3
-            [solver]
-            contact_algorithm = "{algorithm}"
-            max_iterations = 200
-            force_tolerance = 1e-10
-            displacement_tolerance = 1e-10
-            [[contact]]
-            side_a = "base_top"
-            side_b = "block_bottom"
-            law = {{ type = "rough_joint", c_n = 1e-4, m = 0.5, R = 1e-3, S = 0.5, mu_m = 0.3, beta = 0.3, n = 100.0 }}
-            "#
-        ))
+    fn sliding_case(algorithm: &str) -> Case {
+        block_on_base(E, NU, &[], sliding_rough_joint())
+            .pressed_and_pushed(10.0, 0.004, &[0.0, 0.5, 1.0])
+            .set("solver", "contact_algorithm", algorithm)
+            .set("solver", "max_iterations", 200)
+            .set("solver", "force_tolerance", 1e-10)
+            .set("solver", "displacement_tolerance", 1e-10)
+            .case()
     }
 
     #[test]
@@ -645,10 +512,10 @@ mod rough_joint {
         let mut solutions = Vec::new();
         for algorithm in ["newton", "two_step", "elastic_contact"] {
             let case = sliding_case(algorithm);
-            let model = Model::build(block::mesh(), &case).unwrap();
+            let model = model(block::mesh(), &case).unwrap();
             let mut residuals = Vec::new();
             let t = std::time::Instant::now();
-            let (solution, stats) = run_steps(&model, &NewtonSettings::from(case.solver), |step| {
+            let (solution, stats) = run_steps(&model, &settings(&case), |step| {
                 residuals.push(step.newton.residuals.clone());
                 Ok(0.0)
             })

@@ -8,12 +8,11 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use asperity::config::Case;
-use asperity::config::parse_quantity;
+use asperity::Error;
+use asperity::config::{Case, QuantitySpec, parse_quantity};
 use asperity::model::Model;
 use asperity::post::interface::resultants;
 use asperity::post::quantities::evaluate;
-use asperity::solver::newton::NewtonSettings;
 use asperity::solver::stepping::run_steps;
 use asperity::study::{Criteria, analyse};
 use common::*;
@@ -165,40 +164,32 @@ fn quantity_sections_are_checked_against_the_case() {
     assert!(
         parse("name = \"r\"\nkind = \"reaction\"\nsupport = \"axis\"\ncomponent = \"r\"").is_ok()
     );
-    let e = parse("name = \"r\"\nkind = \"reaction\"\nsupport = \"top\"\ncomponent = \"z\"")
-        .unwrap_err()
-        .to_string();
+    // A quantity that does not fit the case is a case error naming the quantity and the key.
+    let message = |q: &str| match parse(q) {
+        Err(Error::Case { path, message }) if path == Path::new("c.toml") => message,
+        other => panic!("expected a case error, got {other:?}"),
+    };
+    let e = message("name = \"r\"\nkind = \"reaction\"\nsupport = \"top\"\ncomponent = \"z\"");
     assert!(e.contains("'top'") && e.contains("bottom, axis"), "{e}");
-    let e = parse("name = \"r\"\nkind = \"reaction\"\nsupport = \"bottom\"")
-        .unwrap_err()
-        .to_string();
+    let e = message("name = \"r\"\nkind = \"reaction\"\nsupport = \"bottom\"");
     assert!(e.contains("give `component`"), "{e}");
-    let e = parse("name = \"r\"\nkind = \"stick_zone\"\npair = \"p\"\nx = 1.0")
-        .unwrap_err()
-        .to_string();
+    let e = message("name = \"r\"\nkind = \"stick_zone\"\npair = \"p\"\nx = 1.0");
     assert!(e.contains("`x` does not apply"), "{e}");
-    let e = parse("name = \"r\"\nkind = \"reaction\"\nsupport = \"bottom\"\ncomponent = \"z\"\nrefrence = 1.0")
-        .unwrap_err()
-        .to_string();
+    let e = message(
+        "name = \"r\"\nkind = \"reaction\"\nsupport = \"bottom\"\ncomponent = \"z\"\nrefrence = 1.0",
+    );
     assert!(e.contains("refrence"), "{e}");
 }
 
-/// The shrink fit of tests/contact.rs (programmatic mesh, k_N = 1e4): p = δ / (C + 1/k_N).
+/// The shared shrink fit (`common::shrink_fit`) with k_N = 1e4: p = δ / (C + 1/k_N).
 mod shrink_fit {
     use super::*;
+    pub use crate::common::shrink_fit::*;
 
-    pub const B: f64 = 10.0;
-    pub const C: f64 = 20.0;
-    pub const L: f64 = 10.0;
-    pub const DELTA: f64 = 0.01;
     pub const K_N: f64 = 1e4;
-    const E: f64 = 200_000.0;
-    const NU: f64 = 0.3;
 
     pub fn pressure() -> f64 {
-        let (e, nu) = (E / (1.0 - NU * NU), NU / (1.0 - NU));
-        let compliance = B * ((1.0 - nu) / e + ((C * C + B * B) / (C * C - B * B) + nu) / e);
-        DELTA / (compliance + 1.0 / K_N)
+        DELTA / (compliance() + 1.0 / K_N)
     }
 
     /// Plane-strain Lamé displacement of the hub's outside under the bore pressure p.
@@ -206,47 +197,16 @@ mod shrink_fit {
         p * B * B * (1.0 + NU) * 2.0 * (1.0 - NU) * C / (E * (C * C - B * B))
     }
 
-    pub fn model() -> (Model, Case) {
-        let zs = uniform(0.0, L, 4);
-        let mut shaft = tensor(&uniform(0.0, B, 6), &zs, "shaft");
-        add_curve_group(&mut shaft, "shaft_ends", |x| x[1] == 0.0 || x[1] == L);
-        add_curve_group(&mut shaft, "shaft_outer", |x| (x[0] - B).abs() < 1e-12);
-        let mut hub = tensor(&uniform(B, C, 6), &zs, "hub");
-        add_curve_group(&mut hub, "hub_ends", |x| x[1] == 0.0 || x[1] == L);
-        add_curve_group(&mut hub, "hub_bore", |x| (x[0] - B).abs() < 1e-12);
-        add_point_group(&mut hub, "hub_corner", [C, 0.0]);
-        let text = format!(
-            r#"[analysis]
-            type = "axisymmetric"
-            [[body]]
-            group = "shaft"
-            material = {{ E = {E}, nu = {NU} }}
-            [[body]]
-            group = "hub"
-            material = {{ E = {E}, nu = {NU} }}
-            [[support]]
-            group = "shaft_ends"
-            uz = 0.0
-            [[support]]
-            group = "hub_ends"
-            uz = 0.0
-            [[contact]]
-            name = "fit"
-            side_a = "shaft_outer"
-            side_b = "hub_bore"
-            interference = {DELTA}
-            law = {{ type = "linear_coulomb", normal_stiffness = {K_N}, tangential_stiffness = {K_N}, friction = 0.2 }}
-            "#
-        );
-        let case = case(&text);
-        let model = Model::build(merge(shaft, hub, false), &case).expect("model builds");
+    pub fn model_and_case() -> (Model, Case) {
+        let case = case(false, linear_coulomb(K_N, K_N, 0.2));
+        let model = model(mesh(false), &case).expect("model builds");
         (model, case)
     }
 }
 
 #[test]
 fn quantities_are_evaluated_on_the_solved_model() {
-    let (model, case) = shrink_fit::model();
+    let (model, case) = shrink_fit::model_and_case();
     let quantities: Vec<_> = [
         "mean:contact_pressure:pair=fit,statistic=mean",
         "peak:contact_pressure:pair=fit,statistic=peak",
@@ -267,7 +227,7 @@ fn quantities_are_evaluated_on_the_solved_model() {
     .collect();
     let mut values = Vec::new();
     let mut resultant = [0.0; 4];
-    run_steps(&model, &NewtonSettings::from(case.solver), |step| {
+    run_steps(&model, &settings(&case), |step| {
         values = evaluate(&quantities, &model, step)?;
         resultant = resultants(&model, &step.solution.interface_committed)[0];
         Ok(0.0)
@@ -307,23 +267,24 @@ fn quantities_are_evaluated_on_the_solved_model() {
 
     // A coordinate outside the pair, and a point group that does not exist, are named.
     let mut bad = vec![parse_quantity("far:contact_pressure:pair=fit,statistic=at,y=20").unwrap()];
-    let e = run_steps(&model, &NewtonSettings::from(case.solver), |step| {
-        evaluate(&bad, &model, step)?;
-        Ok(0.0)
-    })
-    .unwrap_err()
-    .to_string();
+    let evaluation_error = |bad: &[QuantitySpec]| {
+        let e = run_steps(&model, &settings(&case), |step| {
+            evaluate(bad, &model, step)?;
+            Ok(0.0)
+        })
+        .unwrap_err();
+        match e {
+            Error::Model(message) => message,
+            other => panic!("expected a model error, got {other}"),
+        }
+    };
+    let e = evaluation_error(&bad);
     assert!(
         e.contains("'far'") && e.contains("outside pair 'fit'"),
         "{e}"
     );
     bad[0] = parse_quantity("nowhere:displacement:point=tip,component=x").unwrap();
-    let e = run_steps(&model, &NewtonSettings::from(case.solver), |step| {
-        evaluate(&bad, &model, step)?;
-        Ok(0.0)
-    })
-    .unwrap_err()
-    .to_string();
+    let e = evaluation_error(&bad);
     assert!(e.contains("'tip'") && e.contains("hub_corner"), "{e}");
 }
 

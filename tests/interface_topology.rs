@@ -4,15 +4,17 @@
 //!
 //! Orientation is checked independently of the implementation: for every element the normal
 //! n = rot90(b1 − b0) must point from the face into the centroid of the B cell that carries
-//! the B nodes, and away from the A cell carrying the A nodes (paper Eqs. 24–26: n from side
-//! B's geometry, u_N = (u^B − u^A)·n).
+//! the B nodes, and away from the A cell carrying the A nodes (Buczkowski & Kleiber (1994),
+//! Eqs. 24–26: n from side B's geometry, u_N = (u^B − u^A)·n).
 
 use std::collections::HashSet;
 use std::path::PathBuf;
 
+use asperity::Error;
+use asperity::error::{GroupKind, GroupProblem, TopologyProblem};
 use asperity::mesh::interface::*;
 use asperity::mesh::msh::read_msh;
-use asperity::mesh::{Cell, CellKind, Mesh};
+use asperity::mesh::{Cell, Mesh};
 
 fn read(name: &str) -> Mesh {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -43,11 +45,61 @@ fn split(curve: &str, a: &str, b: &str) -> Pairing {
     }
 }
 
-/// The error message of a call that must fail.
-fn error(mesh: &mut Mesh, pairing: &Pairing, name: &str, bodies: &[&str]) -> String {
+/// The error of a call that must fail.
+fn error(mesh: &mut Mesh, pairing: &Pairing, name: &str, bodies: &[&str]) -> Error {
     match insert_interface(mesh, pairing, name, bodies) {
         Ok(t) => panic!("expected an error, got {} elements", t.elements.len()),
-        Err(e) => e.to_string(),
+        Err(e) => e,
+    }
+}
+
+/// What a topology error of pair `name` names: the problem, the node's coordinates and the
+/// end points of the line element.
+type Named = (TopologyProblem, Option<[f64; 2]>, Option<[[f64; 2]; 2]>);
+
+fn topology(mesh: &Mesh, e: Error, name: &str) -> Named {
+    let Error::Topology {
+        pair,
+        problem,
+        node,
+        element,
+        ..
+    } = e
+    else {
+        panic!("expected a topology error, got {e}")
+    };
+    assert_eq!(pair, name);
+    let node = node.map(|t| mesh.nodes[mesh.node_tags.iter().position(|&n| n == t).unwrap()]);
+    let line = element.map(|t| {
+        let l = mesh.lines.iter().find(|l| l.tag == t).unwrap();
+        [x(mesh, l.nodes[0]), x(mesh, l.nodes[1])]
+    });
+    (problem, node, line)
+}
+
+/// The topology error of a call that must fail.
+fn topology_error(mesh: &mut Mesh, pairing: &Pairing, name: &str, bodies: &[&str]) -> Named {
+    let e = error(mesh, pairing, name, bodies);
+    topology(mesh, e, name)
+}
+
+/// The group error of a call that must fail: role, name, expected kind and the
+/// alternatives listed.
+fn group_error(
+    mesh: &mut Mesh,
+    pairing: &Pairing,
+    name: &str,
+    bodies: &[&str],
+) -> (String, String, GroupKind, String) {
+    match error(mesh, pairing, name, bodies) {
+        Error::Group {
+            role,
+            name,
+            expected,
+            problem: GroupProblem::Missing { available },
+            ..
+        } => (role, name, expected, available),
+        other => panic!("expected a missing group, got {other}"),
     }
 }
 
@@ -60,10 +112,7 @@ fn dist(p: [f64; 2], q: [f64; 2]) -> f64 {
 }
 
 fn corners(cell: &Cell) -> &[u32] {
-    match cell.kind {
-        CellKind::Quad8 => &cell.nodes[..4],
-        CellKind::Tri6 => &cell.nodes[..3],
-    }
+    &cell.nodes[..cell.kind.corner_count()]
 }
 
 /// Centroid of the corners of the cells of `bodies` containing all three `nodes`.
@@ -319,11 +368,8 @@ fn split_duplicates_the_curve_and_moves_body_b() {
 
     // The curve is no longer shared: splitting again fails and changes nothing.
     let after = mesh.clone();
-    let e = error(&mut mesh, &split("cut", "lower", "upper"), "cut", &bodies);
-    assert!(
-        e.contains("contact 'cut'") && e.contains("is not between bodies"),
-        "{e}"
-    );
+    let e = topology_error(&mut mesh, &split("cut", "lower", "upper"), "cut", &bodies);
+    assert_eq!(e.0, TopologyProblem::NotBetweenBodies);
     assert_eq!(mesh.nodes, after.nodes);
     assert_eq!(mesh.cells, after.cells);
     assert_eq!(mesh.lines, after.lines);
@@ -352,24 +398,26 @@ fn split_with_roles_swapped_moves_the_lower_body() {
 fn split_errors() {
     let bodies = ["lower", "upper"];
     let mut mesh = read("split.msh");
-    let e = error(&mut mesh, &split("base", "lower", "upper"), "s", &bodies);
-    assert!(
-        e.contains("contact 's'") && e.contains("curve 'base' is not between bodies"),
-        "{e}"
+    let (problem, _, line) =
+        topology_error(&mut mesh, &split("base", "lower", "upper"), "s", &bodies);
+    assert_eq!(problem, TopologyProblem::NotBetweenBodies);
+    assert!(line.unwrap().iter().all(|p| p[1] == 0.0), "{line:?}");
+    let (role, name, kind, available) =
+        group_error(&mut mesh, &split("crack", "lower", "upper"), "s", &bodies);
+    assert_eq!(
+        (role.as_str(), name.as_str(), kind),
+        ("contact 's': split curve", "crack", GroupKind::Curve)
     );
-    assert!(e.contains("(0, 0)") || e.contains("(2, 0)"), "{e}");
-    let e = error(&mut mesh, &split("crack", "lower", "upper"), "s", &bodies);
-    assert!(e.contains("'crack'") && e.contains("cut_lower"), "{e}");
-    let e = error(&mut mesh, &split("cut", "lower", "middle"), "s", &bodies);
-    assert!(
-        e.contains("'middle'") && e.contains("surfaces: lower, upper"),
-        "{e}"
+    assert!(available.contains("cut_lower"), "{available}");
+    let (role, name, kind, available) =
+        group_error(&mut mesh, &split("cut", "lower", "middle"), "s", &bodies);
+    assert_eq!(
+        (role.as_str(), name.as_str(), kind),
+        ("contact 's': body", "middle", GroupKind::Surface)
     );
-    let e = error(&mut mesh, &split("cut", "lower", "upper"), "s", &["lower"]);
-    assert!(
-        e.contains("body 'upper'") && e.contains("not one of the case's bodies"),
-        "{e}"
-    );
+    assert_eq!(available, "surfaces: lower, upper");
+    let e = topology_error(&mut mesh, &split("cut", "lower", "upper"), "s", &["lower"]);
+    assert_eq!(e.0, TopologyProblem::BodyNotInCase);
     assert_eq!(mesh.nodes.len(), read("split.msh").nodes.len());
 }
 
@@ -421,25 +469,18 @@ fn ordered_faces_with_a_gap() {
 fn ordered_errors() {
     let bodies = ["base", "punch"];
     let mut mesh = read("hertz_mismatch.msh");
-    let e = error(&mut mesh, &ordered("flat", "arc"), "hertz", &bodies);
-    assert!(
-        e.contains("contact 'hertz'")
-            && e.contains("'flat' has 21 nodes")
-            && e.contains("'arc' has 25 nodes"),
-        "{e}"
-    );
+    let e = topology_error(&mut mesh, &ordered("flat", "arc"), "hertz", &bodies);
+    assert_eq!(e.0, TopologyProblem::CountMismatch);
     let mut mesh = read("hertz.msh");
-    let e = error(&mut mesh, &ordered("free_top", "arc"), "hertz", &bodies);
-    assert!(
-        e.contains("side A curve 'free_top' is not one connected chain"),
-        "{e}"
-    );
-    // Faces with a gap are not coincident: the message points to the Ordered recipe.
-    let e = error(&mut mesh, &coincident("flat", "arc"), "hertz", &bodies);
-    assert!(
-        e.contains("no coincident node") && e.contains("Ordered"),
-        "{e}"
-    );
+    let (problem, _, line) =
+        topology_error(&mut mesh, &ordered("free_top", "arc"), "hertz", &bodies);
+    assert_eq!(problem, TopologyProblem::Disconnected);
+    let free_top = curve_nodes(&mesh, "free_top");
+    let on_free_top = |p: [f64; 2]| free_top.iter().any(|&n| x(&mesh, n) == p);
+    assert!(line.unwrap().iter().all(|&p| on_free_top(p)), "{line:?}");
+    // Faces with a gap are not coincident (the message points to the Ordered recipe).
+    let e = topology_error(&mut mesh, &coincident("flat", "arc"), "hertz", &bodies);
+    assert_eq!(e.0, TopologyProblem::Unpaired);
 }
 
 // ------------------------------------------------------------------------------------------
@@ -450,63 +491,59 @@ fn ordered_errors() {
 fn missing_groups_are_listed() {
     let mut mesh = read("contact_pair.msh");
     let bodies = ["lower", "upper"];
-    let e = error(
+    let (role, name, kind, available) = group_error(
         &mut mesh,
         &coincident("lower_top", "nope"),
         "joint",
         &bodies,
     );
-    assert!(
-        e.contains("contact 'joint'")
-            && e.contains("side B curve 'nope'")
-            && e.contains("lower_top, upper_bottom"),
-        "{e}"
+    assert_eq!(
+        (role.as_str(), name.as_str(), kind),
+        ("contact 'joint': side B curve", "nope", GroupKind::Curve)
     );
-    let e = error(
+    assert!(available.contains("lower_top, upper_bottom"), "{available}");
+    let (role, name, _, _) = group_error(
         &mut mesh,
         &ordered("nope", "upper_bottom"),
         "joint",
         &bodies,
     );
-    assert!(e.contains("side A curve 'nope'"), "{e}");
-    let e = error(
+    assert_eq!(
+        (role.as_str(), name.as_str()),
+        ("contact 'joint': side A curve", "nope")
+    );
+    let (role, name, kind, available) = group_error(
         &mut mesh,
         &coincident("lower_top", "upper_bottom"),
         "joint",
         &["lower", "ghost"],
     );
-    assert!(
-        e.contains("body 'ghost'") && e.contains("surfaces: lower, upper"),
-        "{e}"
+    assert_eq!(
+        (role.as_str(), name.as_str(), kind),
+        ("contact 'joint': body", "ghost", GroupKind::Surface)
     );
+    assert_eq!(available, "surfaces: lower, upper");
 }
 
 #[test]
 fn unpaired_nodes_name_counts_and_coordinates() {
     // upper_bottom has 7 mesh points (13 nodes), lower_top 9 (17 nodes).
     let mut mesh = read("contact_pair_mismatch.msh");
-    let e = error(
+    let (problem, node, _) = topology_error(
         &mut mesh,
         &coincident("lower_top", "upper_bottom"),
         "joint",
         &["lower", "upper"],
     );
-    assert!(
-        e.contains("contact 'joint'")
-            && e.contains("no coincident node")
-            && e.contains("has 17 nodes")
-            && e.contains("has 13")
-            && e.contains(", 1)")
-            && e.contains("node "),
-        "{e}"
-    );
-    let e = error(
+    assert_eq!(problem, TopologyProblem::Unpaired);
+    assert_eq!(node.unwrap()[1], 1.0);
+    let e = topology_error(
         &mut mesh,
         &ordered("lower_top", "upper_bottom"),
         "joint",
         &["lower", "upper"],
     );
-    assert!(e.contains("17 nodes") && e.contains("13 nodes"), "{e}");
+    assert_eq!(e.0, TopologyProblem::CountMismatch);
 }
 
 #[test]
@@ -516,12 +553,14 @@ fn curve_of_no_listed_body() {
         coincident("lower_top", "upper_bottom"),
         ordered("lower_top", "upper_bottom"),
     ] {
-        let e = error(&mut mesh, &pairing, "joint", &["lower"]);
+        let (problem, _, line) = topology_error(&mut mesh, &pairing, "joint", &["lower"]);
+        assert_eq!(problem, TopologyProblem::NoOwner);
+        let on_upper_bottom = curve_nodes(&mesh, "upper_bottom");
+        let line = line.unwrap();
+        assert!(line.iter().all(|p| p[1] == 1.0), "{line:?}");
         assert!(
-            e.contains("contact 'joint': side B curve 'upper_bottom' belongs to no body")
-                && e.contains("line element")
-                && e.contains(", 1) to ("),
-            "{e}"
+            line.iter()
+                .all(|&p| on_upper_bottom.iter().any(|&n| x(&mesh, n) == p))
         );
     }
 }
@@ -529,30 +568,21 @@ fn curve_of_no_listed_body() {
 #[test]
 fn conforming_faces_with_coincident_suggest_split() {
     let mut mesh = read("split.msh");
-    let e = error(
+    let (problem, node, _) = topology_error(
         &mut mesh,
         &coincident("cut_lower", "cut_upper"),
         "joint",
         &["lower", "upper"],
     );
-    assert!(
-        e.contains("contact 'joint'")
-            && e.contains("share nodes")
-            && e.contains("Split recipe")
-            && e.contains("curve = \"cut_lower\""),
-        "{e}"
-    );
-    assert!(e.contains(", 1)"), "{e}");
+    assert_eq!(problem, TopologyProblem::SharedNodes);
+    assert_eq!(node.unwrap()[1], 1.0);
     // Same name on both sides, on the old two_bodies fixture (one group for both faces).
     let mut mesh = read("two_bodies_ascii.msh");
-    let e = error(
+    let e = topology_error(
         &mut mesh,
         &coincident("contact", "contact"),
         "joint",
         &["body_a", "body_b"],
     );
-    assert!(
-        e.contains("same curve 'contact'") && e.contains("Split"),
-        "{e}"
-    );
+    assert_eq!(e.0, TopologyProblem::SameCurve);
 }

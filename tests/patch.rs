@@ -2,11 +2,10 @@
 //! reproduced exactly (to round-off), in plane stress, plane strain and axisymmetry.
 mod common;
 
+use asperity::config::AnalysisSpec;
 use asperity::material::elastic::LinearElastic;
 use asperity::material::{OutOfPlane, Voigt};
 use asperity::mesh::Mesh;
-use asperity::model::Model;
-use asperity::solver::newton::NewtonSettings;
 use asperity::solver::stepping::run_steps;
 use common::*;
 
@@ -19,36 +18,18 @@ const TOL: f64 = 1e-10;
 /// Constant in-plane stress applied as boundary tractions on the rectangle [0, 2] × [0, 1];
 /// u_y = 0 along y = 0 and u_x = 0 at the origin remove rigid-body motion, so the exact field
 /// is u_x = ε_xx x + γ_xy y, u_y = ε_yy y.
-fn traction_patch(analysis: &str, triangles: bool) {
+fn traction_patch(analysis: CaseBuilder, triangles: bool) {
     let (sxx, syy, sxy) = (100.0, -40.0, 25.0);
-    let text = format!(
-        r#"{analysis}
-        [[body]]
-        group = "body"
-        material = {{ E = {E}, nu = {NU} }}
-        [[support]]
-        group = "origin"
-        ux = 0.0
-        [[support]]
-        group = "t0"
-        uy = 0.0
-        [[load]]
-        group = "s0"
-        traction = [{}, {}]
-        [[load]]
-        group = "s1"
-        traction = [{sxx}, {sxy}]
-        [[load]]
-        group = "t0"
-        traction = [{}, {}]
-        [[load]]
-        group = "t1"
-        traction = [{sxy}, {syy}]
-        "#,
-        -sxx, -sxy, -sxy, -syy
-    );
-    let case = case(&text);
-    let out_of_plane = if case.analysis.is_plane_stress() {
+    let case = analysis
+        .body("body", elastic(E, NU))
+        .support("origin", &[("ux", 0.0)])
+        .support("t0", &[("uy", 0.0)])
+        .traction("s0", [-sxx, -sxy])
+        .traction("s1", [sxx, sxy])
+        .traction("t0", [-sxy, -syy])
+        .traction("t1", [sxy, syy])
+        .case();
+    let out_of_plane = if matches!(case.analysis, AnalysisSpec::PlaneStress { .. }) {
         OutOfPlane::StressFree
     } else {
         OutOfPlane::StrainGiven
@@ -88,63 +69,44 @@ fn traction_patch(analysis: &str, triangles: bool) {
 
 #[test]
 fn plane_stress_patch_quad8() {
-    traction_patch(
-        "[analysis]\ntype = \"plane_stress\"\nthickness = 2.5",
-        false,
-    );
+    traction_patch(CaseBuilder::plane_stress(2.5), false);
 }
 
 #[test]
 fn plane_stress_patch_tri6() {
-    traction_patch("[analysis]\ntype = \"plane_stress\"\nthickness = 2.5", true);
+    traction_patch(CaseBuilder::plane_stress(2.5), true);
 }
 
 #[test]
 fn plane_strain_patch_quad8() {
-    traction_patch("[analysis]\ntype = \"plane_strain\"", false);
+    traction_patch(CaseBuilder::plane_strain(), false);
 }
 
 #[test]
 fn plane_strain_patch_tri6() {
-    traction_patch("[analysis]\ntype = \"plane_strain\"", true);
+    traction_patch(CaseBuilder::plane_strain(), true);
 }
 
 /// Axisymmetric patch test u_r = c r, u_z = d z, prescribed on the whole boundary of a
 /// distorted mesh; the interior must follow exactly, with ε_rr = ε_θθ = c, ε_zz = d.
 fn axisymmetric_patch(mesh: Mesh) {
     let (c, d) = (1.2e-3, -0.7e-3);
-    let case = case(&format!(
-        r#"[analysis]
-        type = "axisymmetric"
-        [[body]]
-        group = "body"
-        material = {{ E = {E}, nu = {NU} }}
-        [[support]]
-        group = "s0"
-        ur = 0.0
-        uz = 0.0
-        [[support]]
-        group = "s1"
-        ur = 0.0
-        uz = 0.0
-        [[support]]
-        group = "t0"
-        ur = 0.0
-        uz = 0.0
-        [[support]]
-        group = "t1"
-        ur = 0.0
-        uz = 0.0
-        "#
-    ));
-    let mut model = Model::build(mesh, &case).unwrap();
+    let fixed = [("ur", 0.0), ("uz", 0.0)];
+    let case = CaseBuilder::axisymmetric()
+        .body("body", elastic(E, NU))
+        .support("s0", &fixed)
+        .support("s1", &fixed)
+        .support("t0", &fixed)
+        .support("t1", &fixed)
+        .case();
+    let mut model = model(mesh, &case).unwrap();
     // Replace the placeholder values by the exact field on every prescribed dof.
     let nodes = model.mesh.nodes.clone();
     for (dof, value, _) in &mut model.prescribed {
         let p = nodes[*dof / 2];
         *value = if *dof % 2 == 0 { c * p[0] } else { d * p[1] };
     }
-    let (solution, _) = run_steps(&model, &NewtonSettings::from(case.solver), |_| Ok(0.0)).unwrap();
+    let (solution, _) = run_steps(&model, &settings(&case), |_| Ok(0.0)).unwrap();
     let interior = (0..nodes.len()).filter(|&n| model.dofs.equation(2 * n).is_some());
     assert!(
         interior.clone().count() > 5,

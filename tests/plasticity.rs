@@ -5,9 +5,9 @@
 //! convergence on plastic steps.
 mod common;
 
-use asperity::model::Model;
+use asperity::Error;
+use asperity::model::ModelSpec;
 use asperity::post::reactions;
-use asperity::solver::newton::NewtonSettings;
 use asperity::solver::stepping::run_steps;
 use common::*;
 
@@ -39,36 +39,20 @@ fn thick_cylinder_yields_at_the_closed_form_pressure_and_collapses_at_p_l() {
     let mut mesh = tensor(&xs, &uniform(0.0, H, 1), "wall");
     add_curve_group(&mut mesh, "bore", |x| (x[0] - B).abs() < 1e-12);
     add_curve_group(&mut mesh, "ends", |x| x[1] == 0.0 || x[1] == H);
-    let list = |v: &[f64]| {
-        v.iter()
-            .map(|x| format!("{x}"))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let text = format!(
-        r#"[analysis]
-        type = "axisymmetric"
-        [[body]]
-        group = "wall"
-        material = {{ E = {E}, nu = {NU}, yield_stress = {SY} }}
-        [[support]]
-        group = "ends"
-        uz = 0.0
-        [[support]]
-        group = "bore"
-        ur = {u_e}
-        [steps]
-        factors = [{}]
-        "#,
-        list(&factors)
-    );
-    let case = case(&text);
-    let model = Model::build(mesh, &case).unwrap();
+    let mut material = elastic(E, NU);
+    material.insert("yield_stress".into(), SY.into());
+    let case = CaseBuilder::axisymmetric()
+        .body("wall", material)
+        .support("ends", &[("uz", 0.0)])
+        .support("bore", &[("ur", u_e)])
+        .step_factors(&factors)
+        .case();
+    let model = model(mesh, &case).unwrap();
     let mut curve = Vec::new();
     let mut orders = Vec::new();
     let mut external = vec![0.0; model.dofs.dof_count()];
     model.external_force(0.0, &mut external);
-    run_steps(&model, &NewtonSettings::from(case.solver), |step| {
+    run_steps(&model, &settings(&case), |step| {
         let r = reactions(&model, step.internal_force, &external)[1];
         let p = r[0] / (2.0 * std::f64::consts::PI * B * H);
         let yielding = step.solution.committed.iter().any(|s| s.yielding);
@@ -128,25 +112,39 @@ fn thick_cylinder_yields_at_the_closed_form_pressure_and_collapses_at_p_l() {
 
 #[test]
 fn bad_plastic_parameters_are_rejected_with_their_names() {
-    let base = |material: &str| {
-        format!(
-            "[mesh]\nfile = \"m.msh\"\n[analysis]\ntype = \"plane_strain\"\n[[body]]\ngroup = \"b\"\nmaterial = {{ {material} }}\n"
-        )
-    };
-    for (material, word) in [
-        ("E = 1000.0, nu = 0.3, yield_stress = -5.0", "yield_stress"),
+    for (parameters, key) in [
         (
-            "E = 1000.0, nu = 0.3, yield_stress = 5.0, hardening = -2000.0",
-            "hardening",
+            &[("yield_stress", -5.0)][..],
+            "body[0].material.yield_stress",
         ),
-        ("E = 1000.0, nu = 0.3, hardening = 10.0", "yield_stress"),
+        (
+            &[("yield_stress", 5.0), ("hardening", -2000.0)][..],
+            "body[0].material.hardening",
+        ),
+        (&[("hardening", 10.0)][..], "body[0].material.hardening"),
     ] {
-        let e = asperity::config::Case::from_toml(&base(material), std::path::Path::new("c.toml"))
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains(word) && e.contains("'b'") && e.contains("c.toml"),
-            "{material}: {e}"
+        let mut material = elastic(1000.0, 0.3);
+        for (k, v) in parameters {
+            material.insert(k.to_string(), (*v).into());
+        }
+        let case = CaseBuilder::plane_strain().body("b", material);
+        let e = case
+            .try_case()
+            .and_then(|case| ModelSpec::new(&case))
+            .unwrap_err();
+        let Error::InvalidParameter {
+            path,
+            key: named,
+            reason,
+            ..
+        } = e
+        else {
+            panic!("{parameters:?}: expected an invalid parameter, got {e}")
+        };
+        assert_eq!(
+            (path.as_path(), named.as_str()),
+            (std::path::Path::new("test.toml"), key)
         );
+        assert!(reason.contains("'b'"), "{reason}");
     }
 }

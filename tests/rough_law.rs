@@ -1,7 +1,7 @@
-//! The paper's interface law (§2) at one integration point: the friction curve (Eq. 4,
-//! Fig. 4), a cyclic tangential history at constant pressure against the closed form of
-//! docs/theory.md (Lambert W), the normal power law, and property tests of the
-//! return map and its consistent tangent.
+//! The rough-joint law of Buczkowski & Kleiber (1994), §2, at one integration point: the
+//! friction curve (Eq. 4, Fig. 4), a cyclic tangential history at constant pressure against
+//! the closed form of docs/theory.md (Lambert W), the normal power law, and property tests
+//! of the return map and its consistent tangent.
 use asperity::contact::rough::RoughJoint;
 use asperity::contact::{ContactStatus, InterfaceLaw, InterfaceState};
 use proptest::prelude::*;

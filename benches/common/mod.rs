@@ -1,7 +1,12 @@
-//! Shared by the benches: appending a result table, with the machine and date, to
-//! BENCHMARKS.md.
+//! Shared by the benches: the case builder of the tests (`tests/common/case.rs`) and
+//! appending a result table, with the machine and date, to BENCHMARKS.md.
 
 use std::io::Write;
+
+#[path = "../../tests/common/case.rs"]
+mod case;
+
+pub use case::*;
 
 /// The machine: CPU model and number of cores.
 fn machine() -> String {

@@ -1,18 +1,19 @@
-//! The case file (TOML): what to mesh or read, the analysis type, a material per body, the
-//! supports, the loads, the load steps and the output. Unknown keys are errors that name the
-//! key. Relative paths inside a case file are relative to the case file's folder.
+//! The case file (TOML) as plain data: what to mesh or read, the analysis type, a material per
+//! body, the supports, the loads, the contact pairs, the load steps, the solver settings, the
+//! output and the quantities of a study. Reading a case checks it once: unknown keys are
+//! errors that name the key, and values out of range are [`Error::InvalidParameter`]s with
+//! their key path. Nothing here builds or computes anything: [`crate::model::ModelSpec`]
+//! turns a case into materials, laws and loads. Relative paths inside a case file are
+//! relative to the case file's folder.
 //!
 //! The full reference, with an example, is in the README ("Case file reference").
 
 use std::collections::BTreeMap;
+use std::fmt::Display;
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use crate::contact::ContactAlgorithm;
-use crate::element::Analysis;
-use crate::element::interface6::InterfaceRule;
-use crate::mesh::interface::Pairing;
 use crate::{Error, Result};
 
 mod quantity;
@@ -24,7 +25,7 @@ pub use quantity::{Component, QuantityKind, QuantitySpec, Statistic, parse_quant
 #[serde(deny_unknown_fields)]
 pub struct Case {
     pub mesh: MeshSource,
-    pub analysis: Analysis,
+    pub analysis: AnalysisSpec,
     /// One entry per body (physical surface).
     #[serde(rename = "body")]
     pub bodies: Vec<BodySpec>,
@@ -72,6 +73,28 @@ fn one() -> f64 {
     1.0
 }
 
+/// The 2D idealisation (`[analysis]`).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum AnalysisSpec {
+    /// σ_zz = 0. `thickness` in mm.
+    PlaneStress { thickness: f64 },
+    /// ε_zz = 0. `thickness` in mm (default 1).
+    PlaneStrain {
+        #[serde(default = "one")]
+        thickness: f64,
+    },
+    /// Axisymmetric about the y axis: x = r, y = z.
+    Axisymmetric,
+}
+
+impl AnalysisSpec {
+    /// Whether this is an axisymmetric analysis.
+    pub fn is_axisymmetric(&self) -> bool {
+        matches!(self, AnalysisSpec::Axisymmetric)
+    }
+}
+
 /// A body: a physical surface and its material.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -94,25 +117,10 @@ pub struct MaterialSpec {
     pub yield_stress: Option<f64>,
     /// Linear isotropic hardening: the plastic modulus H in MPa, σ_y = σ_Y + H ε̄ᵖ (the slope
     /// of stress against plastic strain in uniaxial tension; the tangent modulus is
-    /// E_t = E H / (E + H)). The paper's hardening parameter h (Fig. 11) is this H.
+    /// E_t = E H / (E + H)). The hardening parameter h of Buczkowski & Kleiber (1994),
+    /// Fig. 11, is this H.
     /// Default 0 (perfectly plastic).
     pub hardening: Option<f64>,
-}
-
-impl MaterialSpec {
-    /// The constitutive model: linear elastic, or J2 plasticity when `yield_stress` is given.
-    pub fn build(&self) -> std::result::Result<Box<dyn crate::material::Material>, String> {
-        let elastic = crate::material::elastic::LinearElastic::new(self.e, self.nu)?;
-        match (self.yield_stress, self.hardening) {
-            (None, None) => Ok(Box::new(elastic)),
-            (None, Some(_)) => Err("`hardening` needs a `yield_stress`".into()),
-            (Some(sy), h) => Ok(Box::new(crate::material::j2::J2Plasticity::new(
-                elastic,
-                sy,
-                h.unwrap_or(0.0),
-            )?)),
-        }
-    }
 }
 
 /// Prescribed displacement components on the nodes of a physical curve or point. Values are
@@ -170,7 +178,7 @@ pub struct ContactSpec {
     pub body_b: Option<String>,
     /// Integration rule: `"newton_cotes"` (default, lumped) or `"gauss"`.
     #[serde(default)]
-    pub integration: InterfaceRule,
+    pub integration: IntegrationKind,
     /// Initial interference δ in mm (positive: the faces overlap by δ at the start, as in a
     /// shrink fit; negative: an initial gap). Added to the gap measured from the geometry.
     #[serde(default)]
@@ -184,6 +192,34 @@ pub struct ContactSpec {
 pub enum PairingKind {
     Coincident,
     Ordered,
+}
+
+/// The integration rule of a pair's interface elements.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IntegrationKind {
+    /// 3-point Newton-Cotes (Lobatto) at the nodes: lumped.
+    #[default]
+    NewtonCotes,
+    /// 3-point Gauss: consistent.
+    Gauss,
+}
+
+/// The faces of a contact pair, as the keys of a [`ContactSpec`] give them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Faces<'c> {
+    /// Two physical curves (`side_a`, `side_b`), paired by coordinates or in order.
+    Sides {
+        side_a: &'c str,
+        side_b: &'c str,
+        pairing: PairingKind,
+    },
+    /// One physical curve of a conforming mesh between two bodies, to be split.
+    Split {
+        curve: &'c str,
+        body_a: &'c str,
+        body_b: &'c str,
+    },
 }
 
 /// The interface law of a contact pair and its parameters.
@@ -201,16 +237,17 @@ pub enum LawSpec {
         #[serde(default)]
         friction: f64,
     },
-    /// The paper's law (§2): power-law normal compliance u_N = c_N p^m, tangential stiffness
-    /// k_T = p^S / R, slip-hardening friction μ_F = μ_m [1 − (1 − β) exp(−n ū)].
+    /// The rough-joint law of Buczkowski & Kleiber (1994), Eqs. 1–5: power-law normal
+    /// compliance u_N = c_N p^m, tangential stiffness k_T = p^S / R, slip-hardening friction
+    /// μ_F = μ_m [1 − (1 − β) exp(−n ū)].
     RoughJoint {
-        /// c_N in mm/MPa^m (the paper's values are in µm: multiply them by 1e-3).
+        /// c_N in mm/MPa^m (values given in µm/MPa^m: multiply them by 1e-3).
         c_n: f64,
         m: f64,
         /// Optional unloading curve (c_N, m); default: the loading curve.
         unloading_c_n: Option<f64>,
         unloading_m: Option<f64>,
-        /// R such that p^S / R is in MPa/mm (the paper's values × 1e-3), and S.
+        /// R such that p^S / R is in MPa/mm (values given per µm: × 1e-3), and S.
         #[serde(rename = "R")]
         r: f64,
         #[serde(rename = "S")]
@@ -237,53 +274,6 @@ fn default_starting_pressure() -> f64 {
     0.1
 }
 
-impl LawSpec {
-    /// The law object, or a message saying which parameter is wrong.
-    pub fn build(&self) -> std::result::Result<Box<dyn crate::contact::InterfaceLaw>, String> {
-        match *self {
-            LawSpec::LinearCoulomb {
-                normal_stiffness,
-                tangential_stiffness,
-                friction,
-            } => Ok(Box::new(crate::contact::linear::LinearCoulomb::new(
-                normal_stiffness,
-                tangential_stiffness,
-                friction,
-            )?)),
-            LawSpec::RoughJoint {
-                c_n,
-                m,
-                unloading_c_n,
-                unloading_m,
-                r,
-                s,
-                mu_m,
-                beta,
-                n,
-                starting_pressure,
-            } => {
-                let unloading = match (unloading_c_n, unloading_m) {
-                    (None, None) => None,
-                    (Some(c), Some(m)) => Some((c, m)),
-                    _ => return Err("give both unloading_c_n and unloading_m, or neither".into()),
-                };
-                let law = crate::contact::rough::RoughJoint {
-                    c_n,
-                    m,
-                    unloading,
-                    r,
-                    s,
-                    mu_m,
-                    beta,
-                    n,
-                    starting_pressure,
-                };
-                Ok(Box::new(crate::contact::rough::RoughJoint::new(law)?))
-            }
-        }
-    }
-}
-
 impl ContactSpec {
     /// The pair's name.
     pub fn name(&self) -> String {
@@ -297,9 +287,9 @@ impl ContactSpec {
         }
     }
 
-    /// The pairing recipe.
-    pub fn pairing(&self) -> std::result::Result<Pairing, String> {
-        let name = self.name();
+    /// The faces, or `None` when the keys do not describe them (checked when the case is
+    /// read).
+    pub fn faces(&self) -> Option<Faces<'_>> {
         match (
             &self.side_a,
             &self.side_b,
@@ -307,29 +297,19 @@ impl ContactSpec {
             &self.body_a,
             &self.body_b,
         ) {
-            (Some(a), Some(b), None, None, None) => {
-                Ok(match self.pairing.unwrap_or(PairingKind::Coincident) {
-                    PairingKind::Coincident => Pairing::Coincident {
-                        side_a: a.clone(),
-                        side_b: b.clone(),
-                    },
-                    PairingKind::Ordered => Pairing::Ordered {
-                        side_a: a.clone(),
-                        side_b: b.clone(),
-                    },
-                })
-            }
+            (Some(a), Some(b), None, None, None) => Some(Faces::Sides {
+                side_a: a,
+                side_b: b,
+                pairing: self.pairing.unwrap_or(PairingKind::Coincident),
+            }),
             (None, None, Some(c), Some(a), Some(b)) if self.pairing.is_none() => {
-                Ok(Pairing::Split {
-                    curve: c.clone(),
-                    body_a: a.clone(),
-                    body_b: b.clone(),
+                Some(Faces::Split {
+                    curve: c,
+                    body_a: a,
+                    body_b: b,
                 })
             }
-            _ => Err(format!(
-                "[[contact]] '{name}': give either side_a and side_b (with optional pairing), or curve, body_a and \
-                 body_b"
-            )),
+            _ => None,
         }
     }
 }
@@ -354,19 +334,18 @@ impl Default for Steps {
 }
 
 impl Steps {
-    /// The load factors of the schedule.
-    pub fn factors(&self) -> std::result::Result<Vec<f64>, String> {
+    /// The number of load steps (of a checked case).
+    pub fn len(&self) -> usize {
         match (&self.factors, self.count) {
-            (Some(_), Some(_)) => Err("[steps]: give either `count` or `factors`, not both".into()),
-            (Some(f), None) if f.is_empty() => Err("[steps]: `factors` is empty".into()),
-            (Some(f), None) if f.iter().any(|x| !x.is_finite()) => {
-                Err("[steps]: `factors` must be finite".into())
-            }
-            (Some(f), None) => Ok(f.clone()),
-            (None, Some(0)) => Err("[steps]: `count` must be at least 1".into()),
-            (None, Some(n)) => Ok((1..=n).map(|i| i as f64 / n as f64).collect()),
-            (None, None) => Ok(vec![1.0]),
+            (Some(f), _) => f.len(),
+            (None, Some(n)) => n,
+            (None, None) => 1,
         }
+    }
+
+    /// Whether there are no steps (never, in a checked case).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
     }
 }
 
@@ -390,7 +369,21 @@ pub struct SolverSpec {
     /// (normal stress frozen in the friction tangent, symmetric) or `"elastic_contact"`
     /// (elastic contact matrix).
     #[serde(default)]
-    pub contact_algorithm: ContactAlgorithm,
+    pub contact_algorithm: ContactAlgorithmKind,
+}
+
+/// The global algorithm for contact (`[solver] contact_algorithm`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactAlgorithmKind {
+    /// Full Newton with the consistent tangent.
+    #[default]
+    Newton,
+    /// The two-step scheme of Buczkowski & Kleiber (1994), §2.4 (normal stress frozen in the
+    /// friction tangent).
+    TwoStep,
+    /// The elastic contact matrix.
+    ElasticContact,
 }
 
 fn default_max_cutbacks() -> usize {
@@ -411,7 +404,7 @@ impl Default for SolverSpec {
             force_tolerance: default_tolerance(),
             displacement_tolerance: default_tolerance(),
             max_cutbacks: default_max_cutbacks(),
-            contact_algorithm: ContactAlgorithm::default(),
+            contact_algorithm: ContactAlgorithmKind::default(),
         }
     }
 }
@@ -450,15 +443,13 @@ impl Case {
 
     /// Parses case text; `path` is used for messages and to resolve relative paths.
     pub fn from_toml(text: &str, path: &Path) -> Result<Self> {
-        let err = |message: String| Error::Case {
+        let mut case: Case = toml::from_str(text).map_err(|e| Error::Case {
             path: path.to_path_buf(),
-            message,
-        };
-        let mut case: Case =
-            toml::from_str(text).map_err(|e| err(e.to_string().trim_end().to_string()))?;
+            message: e.to_string().trim_end().to_string(),
+        })?;
         case.path = path.to_path_buf();
         case.base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        case.validate().map_err(err)?;
+        case.validate()?;
         Ok(case)
     }
 
@@ -471,49 +462,77 @@ impl Case {
         }
     }
 
-    fn validate(&self) -> std::result::Result<(), String> {
+    /// An [`Error::Case`] of this case.
+    fn error(&self, message: impl Into<String>) -> Error {
+        Error::Case {
+            path: self.path.clone(),
+            message: message.into(),
+        }
+    }
+
+    /// An [`Error::InvalidParameter`] of this case.
+    pub fn invalid(
+        &self,
+        key: impl Into<String>,
+        value: impl Display,
+        reason: impl Into<String>,
+    ) -> Error {
+        Error::InvalidParameter {
+            path: self.path.clone(),
+            key: key.into(),
+            value: value.to_string(),
+            reason: reason.into(),
+        }
+    }
+
+    fn validate(&self) -> Result<()> {
         match (&self.mesh.file, &self.mesh.geo) {
             (Some(_), Some(_)) => {
-                return Err("[mesh]: give either `file` or `geo`, not both".into());
+                return Err(self.error("[mesh]: give either `file` or `geo`, not both"));
             }
             (None, None) => {
-                return Err("[mesh]: give `file` (an .msh file) or `geo` (a gmsh script)".into());
+                return Err(
+                    self.error("[mesh]: give `file` (an .msh file) or `geo` (a gmsh script)")
+                );
             }
             _ => {}
         }
         if !self.mesh.size.is_finite() || self.mesh.size <= 0.0 {
-            return Err(format!(
-                "[mesh]: size = {} must be positive",
-                self.mesh.size
-            ));
+            return Err(self.invalid("mesh.size", self.mesh.size, "must be positive"));
         }
         match self.analysis {
-            Analysis::PlaneStress { thickness } | Analysis::PlaneStrain { thickness }
+            AnalysisSpec::PlaneStress { thickness } | AnalysisSpec::PlaneStrain { thickness }
                 if thickness.is_nan() || thickness <= 0.0 =>
             {
-                return Err(format!(
-                    "[analysis]: thickness = {thickness} must be positive"
-                ));
+                return Err(self.invalid("analysis.thickness", thickness, "must be positive"));
             }
             _ => {}
         }
         if self.bodies.is_empty() {
-            return Err("no [[body]]: name at least one physical surface and its material".into());
+            return Err(
+                self.error("no [[body]]: name at least one physical surface and its material")
+            );
         }
-        for b in &self.bodies {
-            b.material
-                .build()
-                .map_err(|m| format!("[[body]] '{}': {m}", b.group))?;
+        for (i, b) in self.bodies.iter().enumerate() {
+            if let (None, Some(h)) = (b.material.yield_stress, b.material.hardening) {
+                return Err(self.invalid(
+                    format!("body[{i}].material.hardening"),
+                    h,
+                    format!("`hardening` needs a `yield_stress` (body '{}')", b.group),
+                ));
+            }
         }
-        for s in &self.supports {
+        for (i, s) in self.supports.iter().enumerate() {
             if s.ux.is_none() && s.uy.is_none() {
-                return Err(format!("[[support]] '{}': give ux and/or uy", s.group));
+                return Err(self.error(format!("[[support]] '{}': give ux and/or uy", s.group)));
             }
-            if s.ux.iter().chain(&s.uy).any(|v| !v.is_finite()) {
-                return Err(format!("[[support]] '{}': values must be finite", s.group));
+            for (key, value) in [("ux", s.ux), ("uy", s.uy)] {
+                if let Some(v) = value.filter(|v| !v.is_finite()) {
+                    return Err(self.invalid(format!("support[{i}].{key}"), v, "must be finite"));
+                }
             }
         }
-        for l in &self.loads {
+        for (i, l) in self.loads.iter().enumerate() {
             let given = [
                 l.pressure.is_some(),
                 l.traction.is_some(),
@@ -523,62 +542,116 @@ impl Case {
             .filter(|&&b| b)
             .count();
             if given != 1 {
-                return Err(format!(
+                return Err(self.error(format!(
                     "[[load]] '{}': give exactly one of pressure, traction, force",
                     l.group
-                ));
+                )));
             }
-            let values = l
-                .pressure
-                .into_iter()
-                .chain(l.traction.into_iter().flatten())
-                .chain(l.force.into_iter().flatten());
-            if values.clone().any(|v| !v.is_finite()) {
-                return Err(format!("[[load]] '{}': values must be finite", l.group));
+            let values = [
+                ("pressure", l.pressure.map(|p| vec![p])),
+                ("traction", l.traction.map(Vec::from)),
+                ("force", l.force.map(Vec::from)),
+            ];
+            for (key, value) in values {
+                if let Some(v) = value.filter(|v| v.iter().any(|x| !x.is_finite())) {
+                    let shown = if v.len() == 1 {
+                        v[0].to_string()
+                    } else {
+                        format!("{v:?}")
+                    };
+                    return Err(self.invalid(format!("load[{i}].{key}"), shown, "must be finite"));
+                }
             }
         }
-        for c in &self.contacts {
-            c.pairing()?;
-            c.law
-                .build()
-                .map_err(|m| format!("[[contact]] '{}': {m}", c.name()))?;
-            if !c.interference.is_finite() {
-                return Err(format!(
-                    "[[contact]] '{}': interference must be finite",
+        for (i, c) in self.contacts.iter().enumerate() {
+            if c.faces().is_none() {
+                return Err(self.error(format!(
+                    "[[contact]] '{}': give either side_a and side_b (with optional pairing), or curve, body_a \
+                     and body_b",
                     c.name()
+                )));
+            }
+            if let LawSpec::RoughJoint {
+                unloading_c_n,
+                unloading_m,
+                ..
+            } = c.law
+            {
+                let one = match (unloading_c_n, unloading_m) {
+                    (Some(v), None) => Some(("unloading_c_n", v)),
+                    (None, Some(v)) => Some(("unloading_m", v)),
+                    _ => None,
+                };
+                if let Some((key, v)) = one {
+                    return Err(self.invalid(
+                        format!("contact[{i}].law.{key}"),
+                        v,
+                        format!(
+                            "give both unloading_c_n and unloading_m, or neither (contact '{}')",
+                            c.name()
+                        ),
+                    ));
+                }
+            }
+            if !c.interference.is_finite() {
+                return Err(self.invalid(
+                    format!("contact[{i}].interference"),
+                    c.interference,
+                    "must be finite",
                 ));
             }
         }
-        let steps = self.steps.factors()?.len();
-        let own = self
-            .supports
-            .iter()
-            .map(|s| (&s.group, &s.factors, "support"));
-        for (group, factors, what) in
-            own.chain(self.loads.iter().map(|l| (&l.group, &l.factors, "load")))
-        {
+        match (&self.steps.factors, self.steps.count) {
+            (Some(_), Some(_)) => {
+                return Err(self.error("[steps]: give either `count` or `factors`, not both"));
+            }
+            (Some(f), None) if f.is_empty() => {
+                return Err(self.invalid("steps.factors", "[]", "must not be empty"));
+            }
+            (Some(f), None) if f.iter().any(|x| !x.is_finite()) => {
+                return Err(self.invalid("steps.factors", format!("{f:?}"), "must be finite"));
+            }
+            (None, Some(0)) => return Err(self.invalid("steps.count", 0, "must be at least 1")),
+            _ => {}
+        }
+        let steps = self.steps.len();
+        let own = self.supports.iter().map(|s| &s.factors).enumerate();
+        let own = own
+            .map(|(i, f)| (format!("support[{i}].factors"), f))
+            .chain(
+                self.loads
+                    .iter()
+                    .enumerate()
+                    .map(|(i, l)| (format!("load[{i}].factors"), &l.factors)),
+            );
+        for (key, factors) in own {
             if let Some(f) = factors
                 && (f.len() != steps || f.iter().any(|x| !x.is_finite()))
             {
-                return Err(format!(
-                    "[[{what}]] '{group}': `factors` needs one finite value per step ({steps}), got {}",
-                    f.len()
+                return Err(self.invalid(
+                    key,
+                    format!("{f:?}"),
+                    format!("needs one finite value per step ({steps}), got {}", f.len()),
                 ));
             }
         }
         let s = &self.solver;
-        let positive = |x: f64| x > 0.0;
-        if s.max_iterations == 0
-            || !positive(s.force_tolerance)
-            || !positive(s.displacement_tolerance)
-        {
-            return Err("[solver]: max_iterations and tolerances must be positive".into());
+        if s.max_iterations == 0 {
+            return Err(self.invalid("solver.max_iterations", 0, "must be positive"));
+        }
+        for (key, value) in [
+            ("solver.force_tolerance", s.force_tolerance),
+            ("solver.displacement_tolerance", s.displacement_tolerance),
+        ] {
+            if value.is_nan() || value <= 0.0 {
+                return Err(self.invalid(key, value, "must be positive"));
+            }
         }
         let mut names = std::collections::BTreeSet::new();
         for q in &self.quantities {
-            q.check(self)?;
+            q.check(self).map_err(|m| self.error(m))?;
             if !names.insert(&q.name) {
-                return Err(format!("[[quantity]] '{}' is defined twice", q.name));
+                return Err(self.error(format!("[[quantity]] '{}' is defined twice", q.name)));
             }
         }
         Ok(())
@@ -586,10 +659,11 @@ impl Case {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    const MINIMAL: &str = r#"
+    /// A minimal valid case: one plane-stress body "plate".
+    pub(crate) const MINIMAL: &str = r#"
         [mesh]
         file = "m.msh"
         [analysis]
@@ -600,38 +674,69 @@ mod tests {
         material = { E = 210000.0, nu = 0.3 }
     "#;
 
+    fn error(text: &str) -> Error {
+        Case::from_toml(text, Path::new("c.toml")).unwrap_err()
+    }
+
     #[test]
     fn minimal_case_parses_with_defaults() {
         let c = Case::from_toml(MINIMAL, Path::new("dir/c.toml")).unwrap();
-        assert_eq!(c.analysis, Analysis::PlaneStress { thickness: 2.0 });
-        assert_eq!(c.steps.factors().unwrap(), vec![1.0]);
+        assert_eq!(c.analysis, AnalysisSpec::PlaneStress { thickness: 2.0 });
+        assert_eq!(c.steps.len(), 1);
+        assert_eq!(c.solver.contact_algorithm, ContactAlgorithmKind::Newton);
         assert_eq!(c.resolve(Path::new("m.msh")), PathBuf::from("dir/m.msh"));
     }
 
     #[test]
     fn unknown_key_is_named() {
         let text = MINIMAL.replace("thickness = 2.0", "thickness = 2.0\nthicknes = 1");
-        let e = Case::from_toml(&text, Path::new("c.toml"))
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("thicknes") && e.contains("c.toml"), "{e}");
+        let Error::Case { path, message } = error(&text) else {
+            panic!("expected a case error")
+        };
+        assert!(
+            message.contains("thicknes") && path == Path::new("c.toml"),
+            "{message}"
+        );
     }
 
     #[test]
-    fn negative_modulus_names_the_body() {
-        let text = MINIMAL.replace("E = 210000.0", "E = -1.0");
-        let e = Case::from_toml(&text, Path::new("c.toml"))
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("plate") && e.contains("positive"), "{e}");
+    fn values_out_of_range_name_their_key() {
+        for (from, to, expected) in [
+            ("thickness = 2.0", "thickness = 0.0", "analysis.thickness"),
+            (
+                "nu = 0.3 }",
+                "nu = 0.3, hardening = 1.0 }",
+                "body[0].material.hardening",
+            ),
+            (
+                "nu = 0.3 }",
+                "nu = 0.3 }\n[steps]\ncount = 0",
+                "steps.count",
+            ),
+            (
+                "nu = 0.3 }",
+                "nu = 0.3 }\n[solver]\nforce_tolerance = 0.0",
+                "solver.force_tolerance",
+            ),
+        ] {
+            let Error::InvalidParameter { key, .. } = error(&MINIMAL.replace(from, to)) else {
+                panic!("expected an invalid parameter for {expected}")
+            };
+            assert_eq!(key, expected);
+        }
     }
 
     #[test]
-    fn step_counts_make_uniform_factors() {
+    fn step_counts_and_factors_give_the_number_of_steps() {
         let s = Steps {
             count: Some(4),
             factors: None,
         };
-        assert_eq!(s.factors().unwrap(), vec![0.25, 0.5, 0.75, 1.0]);
+        assert_eq!(s.len(), 4);
+        let s = Steps {
+            count: None,
+            factors: Some(vec![0.5, 1.0, 0.0]),
+        };
+        assert_eq!(s.len(), 3);
     }
 }

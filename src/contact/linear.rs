@@ -4,6 +4,7 @@
 //! p_T,n, and the returned stress is p_T = μ|p_N| sign(p_T^tr)).
 
 use super::{ContactStatus, InterfaceLaw, InterfaceState, InterfaceTangent, OPEN_TANGENT_FRACTION};
+use crate::error::ParameterError;
 
 /// Linear penalty-type interface with Coulomb friction.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -22,20 +23,28 @@ impl LinearCoulomb {
         normal_stiffness: f64,
         tangential_stiffness: f64,
         friction: f64,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, ParameterError> {
         let positive = |x: f64| x.is_finite() && x > 0.0;
         if !positive(normal_stiffness) {
-            return Err(format!(
-                "normal_stiffness = {normal_stiffness} must be positive (MPa/mm)"
+            return Err(ParameterError::new(
+                "normal_stiffness",
+                normal_stiffness,
+                "must be positive (MPa/mm)",
             ));
         }
         if !positive(tangential_stiffness) {
-            return Err(format!(
-                "tangential_stiffness = {tangential_stiffness} must be positive (MPa/mm)"
+            return Err(ParameterError::new(
+                "tangential_stiffness",
+                tangential_stiffness,
+                "must be positive (MPa/mm)",
             ));
         }
         if !(friction.is_finite() && friction >= 0.0) {
-            return Err(format!("friction = {friction} must be zero or positive"));
+            return Err(ParameterError::new(
+                "friction",
+                friction,
+                "must be zero or positive",
+            ));
         }
         Ok(Self {
             normal_stiffness,

@@ -38,6 +38,7 @@
 //! Stresses of the normal law always come from the exact total law.
 
 use super::{ContactStatus, InterfaceLaw, InterfaceState, InterfaceTangent, OPEN_TANGENT_FRACTION};
+use crate::error::ParameterError;
 
 /// The paper's rough-joint law (units mm, MPa: c_N in mm/MPa^m, R in mm·MPa^(S−1)... such
 /// that p^S / R is in MPa/mm, n in 1/mm).
@@ -61,13 +62,18 @@ pub struct RoughJoint {
 
 impl RoughJoint {
     /// Checks the parameters and names the first wrong one.
-    pub fn new(law: RoughJoint) -> Result<Self, String> {
-        let positive = |x: f64, name: &str| {
-            if x.is_finite() && x > 0.0 {
+    pub fn new(law: RoughJoint) -> Result<Self, ParameterError> {
+        let check = |ok: bool, name: &'static str, x: f64, reason: &str| {
+            if ok {
                 Ok(())
             } else {
-                Err(format!("{name} = {x} must be positive"))
+                Err(ParameterError::new(name, x, reason))
             }
+        };
+        let positive = |x: f64, name| check(x.is_finite() && x > 0.0, name, x, "must be positive");
+        let non_negative = |x: f64, name, unit: &str| {
+            let reason = format!("must be zero or positive{unit}");
+            check(x.is_finite() && x >= 0.0, name, x, &reason)
         };
         positive(law.c_n, "c_n")?;
         positive(law.m, "m")?;
@@ -76,18 +82,16 @@ impl RoughJoint {
             positive(m, "unloading_m")?;
         }
         positive(law.r, "R")?;
-        if !(law.s.is_finite() && law.s >= 0.0) {
-            return Err(format!("S = {} must be zero or positive", law.s));
-        }
-        if !(law.mu_m.is_finite() && law.mu_m >= 0.0) {
-            return Err(format!("mu_m = {} must be zero or positive", law.mu_m));
-        }
-        if !(law.beta.is_finite() && law.beta > 0.0 && law.beta <= 1.0) {
-            return Err(format!("beta = {} must lie in (0, 1]", law.beta));
-        }
-        if !(law.n.is_finite() && law.n >= 0.0) {
-            return Err(format!("n = {} must be zero or positive (1/mm)", law.n));
-        }
+        non_negative(law.s, "S", "")?;
+        non_negative(law.mu_m, "mu_m", "")?;
+        let beta = law.beta;
+        check(
+            beta.is_finite() && beta > 0.0 && beta <= 1.0,
+            "beta",
+            beta,
+            "must lie in (0, 1]",
+        )?;
+        non_negative(law.n, "n", " (1/mm)")?;
         positive(law.starting_pressure, "starting_pressure")?;
         Ok(law)
     }

@@ -1,6 +1,7 @@
 //! Isotropic linear elasticity.
 
 use super::{Material, OutOfPlane, PointState, Tangent, Voigt, ZZ};
+use crate::error::ParameterError;
 
 /// Isotropic linear-elastic material with Young's modulus `e` (MPa) and Poisson's ratio `nu`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -11,12 +12,20 @@ pub struct LinearElastic {
 
 impl LinearElastic {
     /// Checks the parameters: E > 0 and −1 < ν < 0.5.
-    pub fn new(e: f64, nu: f64) -> Result<Self, String> {
+    pub fn new(e: f64, nu: f64) -> Result<Self, ParameterError> {
         if !(e.is_finite() && e > 0.0) {
-            return Err(format!("Young's modulus E = {e} must be positive"));
+            return Err(ParameterError::new(
+                "E",
+                e,
+                "Young's modulus must be positive",
+            ));
         }
         if !(nu > -1.0 && nu < 0.5) {
-            return Err(format!("Poisson's ratio nu = {nu} must lie in (-1, 0.5)"));
+            return Err(ParameterError::new(
+                "nu",
+                nu,
+                "Poisson's ratio must lie in (-1, 0.5)",
+            ));
         }
         Ok(Self { e, nu })
     }

@@ -50,6 +50,7 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::elastic::LinearElastic;
 use super::{Material, OutOfPlane, PointState, Tangent, Voigt, ZZ, von_mises};
+use crate::error::ParameterError;
 
 /// Relative tolerance of the elastic/plastic decision: a trial state with
 /// q_tr − σ_y(ε̄ᵖ_n) ≤ `YIELD_TOL` · σ_y(ε̄ᵖ_n) is elastic. It keeps round-off from turning a
@@ -88,19 +89,29 @@ impl J2Plasticity {
     /// unique solution for every state under both out-of-plane conditions exactly when H is
     /// above minus the slowest rate; since E/(2(1 − ν)) ≤ E ≤ 3G for ν ≤ ½, this bound implies
     /// H > −E and H > −3G.
-    pub fn new(elastic: LinearElastic, yield_stress: f64, hardening: f64) -> Result<Self, String> {
+    pub fn new(
+        elastic: LinearElastic,
+        yield_stress: f64,
+        hardening: f64,
+    ) -> Result<Self, ParameterError> {
         let elastic = LinearElastic::new(elastic.e, elastic.nu)?;
         if !(yield_stress.is_finite() && yield_stress > 0.0) {
-            return Err(format!(
-                "yield_stress = {yield_stress} MPa must be positive and finite"
+            return Err(ParameterError::new(
+                "yield_stress",
+                yield_stress,
+                "the yield stress (MPa) must be positive and finite",
             ));
         }
         let bound = Self::min_hardening(&elastic);
         if !(hardening.is_finite() && hardening > bound) {
-            return Err(format!(
-                "hardening H = {hardening} MPa must be finite and greater than \
-                 -E/(2(1-nu)) = {bound} MPa (softening steeper than that has no unique \
-                 stress update; H <= -E is always rejected)"
+            return Err(ParameterError::new(
+                "hardening",
+                hardening,
+                format!(
+                    "the hardening modulus H (MPa) must be finite and greater than \
+                     -E/(2(1-nu)) = {bound} MPa (softening steeper than that has no unique \
+                     stress update; H <= -E is always rejected)"
+                ),
             ));
         }
         Ok(Self {

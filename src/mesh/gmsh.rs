@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use crate::error::MeshProblem;
 use crate::{Error, Result};
 
 /// Meshes `geo` in 2D into an MSH 4.1 file `out` with quadratic serendipity elements
@@ -16,7 +17,12 @@ pub fn mesh_geo(
     out: &Path,
 ) -> Result<PathBuf> {
     if !geo.is_file() {
-        return Err(Error::mesh(geo, "the .geo script does not exist"));
+        return Err(Error::mesh(
+            geo,
+            MeshProblem::NotFound,
+            None,
+            "the .geo script does not exist",
+        ));
     }
     if let Some(dir) = out.parent() {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;

@@ -1,4 +1,6 @@
-//! Mesh input: the raw gmsh mesh ([`Mesh`]) as read from an MSH 4.1 file.
+//! The mesh: the raw gmsh mesh ([`Mesh`]) as read from an MSH 4.1 file ([`msh`]) or made
+//! by gmsh ([`gmsh`]), its topology helpers ([`topology`]) and the contact interfaces cut
+//! into it ([`interface`]).
 //!
 //! The mesh is pure geometry and topology plus gmsh's physical groups; it knows nothing of
 //! materials or loads. [`crate::model`] turns a mesh and a case file into a model.
@@ -12,8 +14,12 @@
 pub mod gmsh;
 pub mod interface;
 pub mod msh;
+pub mod topology;
 
 use std::path::PathBuf;
+
+use crate::Error;
+use crate::error::{GroupKind, GroupProblem};
 
 /// Kind of a quadratic surface cell.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -30,6 +36,15 @@ impl CellKind {
         match self {
             CellKind::Quad8 => 8,
             CellKind::Tri6 => 6,
+        }
+    }
+
+    /// Number of corner nodes (the first nodes of a cell in gmsh order); the mid-side nodes
+    /// follow, one per corner edge.
+    pub fn corner_count(self) -> usize {
+        match self {
+            CellKind::Quad8 => 4,
+            CellKind::Tri6 => 3,
         }
     }
 }
@@ -82,6 +97,18 @@ pub struct PhysicalGroup {
     pub entities: Vec<i32>,
 }
 
+impl PhysicalGroup {
+    /// The kind of group its dimension makes it (dimension 3 counts as a surface: it is
+    /// never what a 2D case asks for).
+    pub fn kind(&self) -> GroupKind {
+        match self.dim {
+            0 => GroupKind::Point,
+            1 => GroupKind::Curve,
+            _ => GroupKind::Surface,
+        }
+    }
+}
+
 /// A 2D quadratic mesh as read from gmsh (z coordinates dropped).
 #[derive(Clone, Debug, Default)]
 pub struct Mesh {
@@ -124,6 +151,37 @@ impl Mesh {
         }
     }
 
+    /// An [`Error::Group`]: the group `name`, used by `role` ("body", "support", "contact 'p':
+    /// side A curve", ...), is not as `expected` because of `problem`.
+    pub fn group_error(
+        &self,
+        role: impl Into<String>,
+        name: &str,
+        expected: GroupKind,
+        problem: GroupProblem,
+    ) -> Error {
+        Error::Group {
+            mesh: self.path.clone(),
+            role: role.into(),
+            name: name.into(),
+            expected,
+            problem,
+        }
+    }
+
+    /// An [`Error::Group`] for the missing group `name`, listing the groups of the expected
+    /// kind (e.g. "surfaces: lower, upper").
+    pub fn missing_group(&self, role: impl Into<String>, name: &str, expected: GroupKind) -> Error {
+        let list = |dim, kind| format!("{kind}: {}", self.group_names(dim));
+        let available = match expected {
+            GroupKind::Surface => list(2, "surfaces"),
+            GroupKind::Curve => list(1, "curves"),
+            GroupKind::Point => list(0, "points"),
+            GroupKind::CurveOrPoint => format!("{}; {}", list(1, "curves"), list(0, "points")),
+        };
+        self.group_error(role, name, expected, GroupProblem::Missing { available })
+    }
+
     /// Cells in the surface group `group`.
     pub fn cells_in<'a>(
         &'a self,
@@ -160,14 +218,9 @@ impl Mesh {
             .cells
             .iter()
             .map(|c| {
-                let corners = match c.kind {
-                    CellKind::Quad8 => 4,
-                    CellKind::Tri6 => 3,
-                };
-                (0..corners)
-                    .map(|i| {
-                        let a = self.nodes[c.nodes[i] as usize];
-                        let b = self.nodes[c.nodes[(i + 1) % corners] as usize];
+                topology::cell_edges(c.kind, &c.nodes)
+                    .map(|(a, b, _)| {
+                        let (a, b) = (self.nodes[a as usize], self.nodes[b as usize]);
                         ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
                     })
                     .fold(0.0, f64::max)

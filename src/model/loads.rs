@@ -1,15 +1,14 @@
 //! Loads: the load histories (amplitudes) and the consistent nodal forces of pressures,
 //! tractions and point forces.
 
-use std::collections::HashMap;
-
-use super::{Model, boundary_group};
-use crate::config::LoadSpec;
+use super::{LineLoad, Load, LoadKind, Model, boundary_group};
 use crate::element::Analysis;
 use crate::element::quadrature::GAUSS3;
 use crate::element::set::ContinuumSet;
 use crate::element::shape::line3;
-use crate::mesh::{CellKind, Line3, Mesh};
+use crate::error::{GroupKind, GroupProblem, MeshEntity};
+use crate::mesh::Mesh;
+use crate::mesh::topology::EdgeIndex;
 use crate::{Error, Result};
 
 /// Load histories ("amplitudes"): amplitude 0 is the case's `[steps]` schedule, and every
@@ -78,91 +77,98 @@ impl Model {
     }
 }
 
-/// Finds, for a boundary line, the model cell it bounds, to orient its outward normal.
-pub(super) struct EdgeIndex {
-    /// (smaller end node, larger end node) → whether a cell traverses the edge from the
-    /// smaller to the larger node counter-clockwise.
-    edges: HashMap<(u32, u32), bool>,
-}
-
-impl EdgeIndex {
-    pub(super) fn new(continuum: &ContinuumSet) -> Self {
-        let mut edges = HashMap::new();
-        for c in &continuum.cells {
-            let corners = if c.kind == CellKind::Quad8 { 4 } else { 3 };
-            for i in 0..corners {
-                let (a, b) = (c.nodes[i], c.nodes[(i + 1) % corners]);
-                edges.insert((a.min(b), a.max(b)), a < b);
-            }
+/// The external nodal forces of the loads at load factor 1: (dof, force, amplitude), load
+/// after load (adding their own histories to `schedule`, in order).
+pub(super) fn nodal_loads(
+    mesh: &Mesh,
+    analysis: Analysis,
+    continuum: &ContinuumSet,
+    specs: &[Load],
+    in_body: &[bool],
+    schedule: &mut Schedule,
+) -> Result<Vec<(usize, f64, usize)>> {
+    // The edges of the body cells that may carry a line load orient its outward normal.
+    let mut wanted = vec![false; mesh.nodes.len()];
+    for group in specs.iter().filter_map(|l| mesh.group(1, &l.group)) {
+        for line in mesh.lines_in(group) {
+            wanted[line.nodes[0] as usize] = true;
+            wanted[line.nodes[1] as usize] = true;
         }
-        Self { edges }
     }
-
-    /// The line's nodes ordered so the body lies to the left (counter-clockwise boundary
-    /// traversal), or `None` if no body cell has this edge.
-    fn oriented(&self, line: &Line3) -> Option<[u32; 3]> {
-        let [a, b, m] = line.nodes;
-        let forward = *self.edges.get(&(a.min(b), a.max(b)))?;
-        Some(if forward == (a < b) {
-            [a, b, m]
-        } else {
-            [b, a, m]
-        })
+    let cells = continuum.cells.iter().enumerate();
+    let edges = EdgeIndex::new(
+        cells.map(|(i, c)| (i, c.body as usize, c.kind, &c.nodes)),
+        &wanted,
+    );
+    let mut nodal_loads = Vec::new();
+    let mut load = vec![0.0; 2 * mesh.nodes.len()];
+    for spec in specs {
+        load.fill(0.0);
+        add_load(mesh, analysis, &edges, spec, in_body, &mut load)?;
+        let amplitude = schedule.add(&spec.factors);
+        nodal_loads.extend(
+            load.iter()
+                .enumerate()
+                .filter(|(_, f)| **f != 0.0)
+                .map(|(d, f)| (d, *f, amplitude)),
+        );
     }
+    Ok(nodal_loads)
 }
 
 /// Adds the consistent nodal forces of a load at load factor 1.
-pub(super) fn add_load(
+fn add_load(
     mesh: &Mesh,
-    analysis: &Analysis,
+    analysis: Analysis,
     edges: &EdgeIndex,
-    spec: &LoadSpec,
+    spec: &Load,
     in_body: &[bool],
     load: &mut [f64],
 ) -> Result<()> {
     let group = boundary_group(mesh, &spec.group, "load")?;
-    if let Some(force) = spec.force {
-        if group.dim != 0 {
-            return Err(Error::Model(format!(
-                "load '{}': a force needs a physical point group",
-                spec.group
-            )));
-        }
-        for n in mesh.points_in(group) {
-            if !in_body[n as usize] {
-                return Err(Error::Model(format!(
-                    "load '{}': point node {} belongs to no body",
-                    spec.group, mesh.node_tags[n as usize]
-                )));
+    let wrong_kind = |expected, purpose| {
+        let found = group.kind();
+        let problem = GroupProblem::WrongKind { found, purpose };
+        mesh.group_error("load", &spec.group, expected, problem)
+    };
+    let line_load = match spec.kind {
+        LoadKind::Point(force) => {
+            if group.dim != 0 {
+                return Err(wrong_kind(GroupKind::Point, "a force"));
             }
-            load[2 * n as usize] += force[0];
-            load[2 * n as usize + 1] += force[1];
+            for n in mesh.points_in(group) {
+                if !in_body[n as usize] {
+                    return Err(Error::NotOnBody {
+                        role: "load",
+                        group: spec.group.clone(),
+                        entity: MeshEntity::Node(mesh.node_tags[n as usize]),
+                        position: mesh.nodes[n as usize],
+                    });
+                }
+                load[2 * n as usize] += force[0];
+                load[2 * n as usize + 1] += force[1];
+            }
+            return Ok(());
         }
-        return Ok(());
-    }
+        LoadKind::Line(line_load) => line_load,
+    };
     if group.dim != 1 {
-        return Err(Error::Model(format!(
-            "load '{}': pressure and traction need a physical curve",
-            spec.group
-        )));
+        return Err(wrong_kind(GroupKind::Curve, "a pressure or traction"));
     }
     let mut count = 0;
     for line in mesh.lines_in(group) {
-        let nodes = edges.oriented(line).ok_or_else(|| {
-            let p = mesh.nodes[line.nodes[0] as usize];
-            Error::Model(format!(
-                "load '{}': boundary element {} (from {p:?}) is not an edge of any body's element",
-                spec.group, line.tag
-            ))
+        let nodes = edges.oriented(line).ok_or_else(|| Error::NotOnBody {
+            role: "load",
+            group: spec.group.clone(),
+            entity: MeshEntity::Element(line.tag),
+            position: mesh.nodes[line.nodes[0] as usize],
         })?;
-        add_line_load(mesh, analysis, nodes, spec, load);
+        add_line_load(mesh, analysis, nodes, line_load, load);
         count += 1;
     }
     if count == 0 {
-        return Err(Error::Model(format!(
-            "load '{}': the curve group has no elements",
-            spec.group
-        )));
+        let problem = GroupProblem::Empty;
+        return Err(mesh.group_error("load", &spec.group, GroupKind::Curve, problem));
     }
     Ok(())
 }
@@ -172,9 +178,9 @@ pub(super) fn add_load(
 /// axisymmetry: degree 5).
 fn add_line_load(
     mesh: &Mesh,
-    analysis: &Analysis,
+    analysis: Analysis,
     nodes: [u32; 3],
-    spec: &LoadSpec,
+    line_load: LineLoad,
     load: &mut [f64],
 ) {
     let x: Vec<[f64; 2]> = nodes.iter().map(|&n| mesh.nodes[n as usize]).collect();
@@ -188,13 +194,12 @@ fn add_line_load(
         }
         // Tangent (dx, dy) runs counter-clockwise around the body, so (dy, −dx) is the
         // outward normal scaled by ds/dξ.
-        let t = match (spec.pressure, spec.traction) {
-            (Some(p), _) => [-p * dy, p * dx],
-            (None, Some([tx, ty])) => {
+        let t = match line_load {
+            LineLoad::Pressure(p) => [-p * dy, p * dx],
+            LineLoad::Traction([tx, ty]) => {
                 let ds = (dx * dx + dy * dy).sqrt();
                 [tx * ds, ty * ds]
             }
-            (None, None) => unreachable!("validated: a line load has pressure or traction"),
         };
         let m = w * analysis.measure(px);
         for i in 0..3 {

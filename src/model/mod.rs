@@ -1,30 +1,32 @@
-//! The model: a mesh together with bodies and their materials, supports, loads and the
-//! degree-of-freedom numbering. Built once from a [`Mesh`] and a [`Case`]; the solver only
-//! reads it.
+//! The model: a mesh together with bodies and their materials, supports, loads, contact
+//! interfaces and the degree-of-freedom numbering. Built once from a [`Mesh`] and a
+//! [`ModelSpec`] (which [`ModelSpec::new`] makes from a case file); the solver only reads it.
 //!
 //! Physical groups are referred to by name: bodies are physical surfaces, supports and loads
 //! are physical curves or points (see the README's naming convention).
 
 mod constraints;
 mod loads;
+mod spec;
 
 pub use constraints::{AXIS_SUPPORT, Support};
 pub use loads::Schedule;
+pub use spec::{Body, Contact, LineLoad, Load, LoadKind, ModelSpec, Prescribed, load_factors};
 
 use crate::assembly::{Coloring, DofMap, SparsityPattern};
-use crate::config::Case;
 use crate::element::Analysis;
 use crate::element::continuum::min_jacobian;
 use crate::element::interface6::{InterfaceElement, InterfaceRule};
 use crate::element::set::{ContactPair, ContinuumCell, ContinuumSet, ElementSet, InterfaceSet};
-use crate::material::Material;
+use crate::error::{GroupKind, GroupProblem, TopologyProblem};
 use crate::mesh::interface::{InterfaceTopology, insert_interface};
-use crate::mesh::{CellKind, Mesh, PhysicalGroup};
+use crate::mesh::topology::model_size;
+use crate::mesh::{Mesh, PhysicalGroup};
 use crate::{Error, Result};
-use constraints::{axis_support, support_nodes};
-use loads::{EdgeIndex, add_load};
+use constraints::{Constraints, prescribe};
+use loads::nodal_loads;
 
-/// Everything the solver needs, built from a mesh and a case.
+/// Everything the solver needs, built from a mesh and a [`ModelSpec`].
 #[derive(Debug)]
 pub struct Model {
     pub mesh: Mesh,
@@ -50,124 +52,36 @@ pub struct Model {
 }
 
 impl Model {
-    /// Builds the model of `case` on `mesh`.
-    pub fn build(mut mesh: Mesh, case: &Case) -> Result<Self> {
-        let analysis = case.analysis;
+    /// Builds the model of `spec` on `mesh`: the contact interfaces (which may split the
+    /// mesh), the bodies' elements, the supports, the loads, and the numbering.
+    pub fn build(mut mesh: Mesh, spec: ModelSpec) -> Result<Self> {
+        let ModelSpec {
+            analysis,
+            bodies,
+            supports,
+            loads,
+            contacts,
+            factors,
+        } = spec;
         // Interfaces first: splitting a conforming curve re-points body B's cells.
-        let body_names: Vec<&str> = case.bodies.iter().map(|b| b.group.as_str()).collect();
-        let mut topologies = Vec::new();
-        for spec in &case.contacts {
-            let pairing = spec.pairing().map_err(Error::Model)?;
-            topologies.push(insert_interface(
-                &mut mesh,
-                &pairing,
-                &spec.name(),
-                &body_names,
-            )?);
-        }
-        let (bodies, continuum) = build_continuum(&mesh, case)?;
-        let node_count = mesh.nodes.len();
-        let mut in_body = vec![false; node_count];
-        for c in &continuum.cells {
-            for &n in &c.nodes[..c.kind.node_count()] {
-                in_body[n as usize] = true;
-            }
-        }
+        let topologies = insert_interfaces(&mut mesh, &bodies, &contacts)?;
+        let (bodies, continuum) = build_continuum(&mesh, analysis, bodies)?;
+        let in_body = nodes_in_bodies(&continuum, mesh.nodes.len());
         let scale = model_scale(&mesh);
-        let interface = build_interface(&mesh, case, topologies, scale)?;
-
-        let factors = case.steps.factors().map_err(Error::Model)?;
+        let interface = build_interface(&mesh, analysis, contacts, topologies, scale)?;
         let mut schedule = Schedule::new(factors);
-        // Per dof: (value, amplitude, index of the support that set it).
-        let mut prescribed: Vec<Option<(f64, usize, usize)>> = vec![None; 2 * node_count];
-        let mut supports = Vec::new();
-        for (i, spec) in case.supports.iter().enumerate() {
-            let amplitude = schedule.add(&spec.factors);
-            let nodes = support_nodes(&mesh, spec, &in_body)?;
-            let mut dofs = Vec::new();
-            for n in nodes {
-                for (c, value) in [spec.ux, spec.uy].into_iter().enumerate() {
-                    let Some(value) = value else { continue };
-                    let dof = 2 * n as usize + c;
-                    match prescribed[dof] {
-                        Some((v, k, j))
-                            if (v != 0.0 || value != 0.0)
-                                && (k != amplitude
-                                    || (v - value).abs() > 1e-12 * v.abs().max(value.abs())) =>
-                        {
-                            return Err(Error::Model(format!(
-                                "supports '{}' and '{}' prescribe different {} displacement histories ({v} and \
-                                 {value} at factor 1) at node {} ({:?})",
-                                case.supports[j].group,
-                                spec.group,
-                                ["x", "y"][c],
-                                mesh.node_tags[n as usize],
-                                mesh.nodes[n as usize]
-                            )));
-                        }
-                        Some(_) => {}
-                        None => {
-                            prescribed[dof] = Some((value, amplitude, i));
-                            dofs.push(dof);
-                        }
-                    }
-                }
-            }
-            supports.push(Support {
-                name: spec.group.clone(),
-                dofs,
-            });
-        }
-        if analysis.is_axisymmetric() {
-            supports.push(axis_support(
-                &mesh,
-                &in_body,
-                scale,
-                &mut prescribed,
-                supports.len(),
-            )?);
-        }
-        // Nodes outside every body carry no stiffness: hold them so the system stays regular.
-        let mut fixed: Vec<bool> = prescribed.iter().map(Option::is_some).collect();
-        for (n, &used) in in_body.iter().enumerate() {
-            if !used {
-                fixed[2 * n] = true;
-                fixed[2 * n + 1] = true;
-            }
-        }
-        let prescribed = prescribed
-            .iter()
-            .enumerate()
-            .filter_map(|(d, p)| p.map(|(v, k, _)| (d, v, k)))
-            .collect();
-
-        let mut nodal_loads = Vec::new();
-        let mut load = vec![0.0; 2 * node_count];
-        let edges = EdgeIndex::new(&continuum);
-        for spec in &case.loads {
-            load.fill(0.0);
-            add_load(&mesh, &analysis, &edges, spec, &in_body, &mut load)?;
-            let amplitude = schedule.add(&spec.factors);
-            nodal_loads.extend(
-                load.iter()
-                    .enumerate()
-                    .filter(|(_, f)| **f != 0.0)
-                    .map(|(d, f)| (d, *f, amplitude)),
-            );
-        }
-
-        let dofs = DofMap::new(&fixed);
-        if dofs.free_count() == 0 {
-            return Err(Error::Model(
-                "every degree of freedom is prescribed: nothing to solve".into(),
-            ));
-        }
-        let connectivity = (0..continuum.len())
-            .map(|e| continuum.nodes(e))
-            .chain((0..interface.len()).map(|e| interface.nodes(e)));
-        let pattern = SparsityPattern::new(node_count, &dofs, connectivity);
-        let continuum_coloring = Coloring::new(&continuum, node_count);
-        let interface_coloring = Coloring::new(&interface, node_count);
+        let Constraints {
+            supports,
+            prescribed,
+        } = prescribe(&mesh, analysis, &supports, &in_body, scale, &mut schedule)?;
+        let nodal_loads =
+            nodal_loads(&mesh, analysis, &continuum, &loads, &in_body, &mut schedule)?;
+        let Numbering {
+            dofs,
+            pattern,
+            continuum_coloring,
+            interface_coloring,
+        } = numbering(&prescribed, &in_body, &continuum, &interface)?;
         Ok(Self {
             mesh,
             analysis,
@@ -186,50 +100,120 @@ impl Model {
     }
 }
 
+/// The interface topology of every contact pair, in order (splitting the mesh where a pair
+/// asks for it).
+fn insert_interfaces(
+    mesh: &mut Mesh,
+    bodies: &[Body],
+    contacts: &[Contact],
+) -> Result<Vec<InterfaceTopology>> {
+    let names: Vec<&str> = bodies.iter().map(|b| b.group.as_str()).collect();
+    contacts
+        .iter()
+        .map(|c| insert_interface(mesh, &c.pairing, &c.name, &names))
+        .collect()
+}
+
+/// Which nodes belong to a body cell.
+fn nodes_in_bodies(continuum: &ContinuumSet, node_count: usize) -> Vec<bool> {
+    let mut in_body = vec![false; node_count];
+    for c in &continuum.cells {
+        for &n in &c.nodes[..c.kind.node_count()] {
+            in_body[n as usize] = true;
+        }
+    }
+    in_body
+}
+
+/// The degree-of-freedom numbering and what depends on it.
+struct Numbering {
+    dofs: DofMap,
+    pattern: SparsityPattern,
+    continuum_coloring: Coloring,
+    interface_coloring: Coloring,
+}
+
+/// Numbers the free dofs (nodes outside every body carry no stiffness and are held, so the
+/// system stays regular) and makes the sparsity pattern and element colourings.
+fn numbering(
+    prescribed: &[(usize, f64, usize)],
+    in_body: &[bool],
+    continuum: &ContinuumSet,
+    interface: &InterfaceSet,
+) -> Result<Numbering> {
+    let node_count = in_body.len();
+    let mut fixed = vec![false; 2 * node_count];
+    for &(dof, _, _) in prescribed {
+        fixed[dof] = true;
+    }
+    for (n, &used) in in_body.iter().enumerate() {
+        if !used {
+            fixed[2 * n] = true;
+            fixed[2 * n + 1] = true;
+        }
+    }
+    let dofs = DofMap::new(&fixed);
+    if dofs.free_count() == 0 {
+        return Err(Error::NothingToSolve);
+    }
+    let connectivity = (0..continuum.len())
+        .map(|e| continuum.nodes(e))
+        .chain((0..interface.len()).map(|e| interface.nodes(e)));
+    let pattern = SparsityPattern::new(node_count, &dofs, connectivity);
+    Ok(Numbering {
+        pattern,
+        continuum_coloring: Coloring::new(continuum, node_count),
+        interface_coloring: Coloring::new(interface, node_count),
+        dofs,
+    })
+}
+
 /// The interface elements of all contact pairs.
 ///
-/// Axis (paper §3.3.1): with Newton-Cotes integration a point on the axis r = 0 has zero
-/// area, so the pair on the axis would carry no stiffness. The paper moves the first
+/// Axis (Buczkowski & Kleiber (1994), §3.3.1): with Newton-Cotes integration a point on the
+/// axis r = 0 has zero area, so the pair on the axis would carry no stiffness. They move the first
 /// interface element off the axis; the equivalent used here integrates every element that
 /// touches the axis with 3-point Gauss instead, whose points lie off the axis: the axis pair
 /// is then coupled to its neighbours with positive stiffness (∫ N₀² 2πr ds > 0), and the rest
 /// of the interface keeps the lumped rule.
 fn build_interface(
     mesh: &Mesh,
-    case: &Case,
+    analysis: Analysis,
+    contacts: Vec<Contact>,
     topologies: Vec<InterfaceTopology>,
     scale: f64,
 ) -> Result<InterfaceSet> {
     let mut elements = Vec::new();
     let mut pairs = Vec::new();
-    for (p, (spec, topology)) in case.contacts.iter().zip(topologies).enumerate() {
-        let name = spec.name();
-        let law = spec
-            .law
-            .build()
-            .map_err(|m| Error::Model(format!("contact '{name}': {m}")))?;
+    for (p, (contact, topology)) in contacts.into_iter().zip(topologies).enumerate() {
+        let Contact {
+            name,
+            rule,
+            interference,
+            law,
+            ..
+        } = contact;
         let start = elements.len();
         for (nodes, offsets) in topology.elements.iter().zip(&topology.offsets) {
             let b_coords = [3, 4, 5].map(|i| mesh.nodes[nodes[i] as usize]);
-            let on_axis = case.analysis.is_axisymmetric()
-                && b_coords.iter().any(|x| x[0].abs() <= 1e-9 * scale);
-            let rule = if on_axis {
-                InterfaceRule::Gauss
-            } else {
-                spec.integration
-            };
+            let on_axis =
+                analysis.is_axisymmetric() && b_coords.iter().any(|x| x[0].abs() <= 1e-9 * scale);
             elements.push(InterfaceElement {
                 nodes: *nodes,
                 b_coords,
                 offsets: *offsets,
                 pair: p as u32,
-                rule,
+                rule: if on_axis { InterfaceRule::Gauss } else { rule },
             });
         }
         if elements.len() == start {
-            return Err(Error::Model(format!(
-                "contact '{name}': no interface elements were found"
-            )));
+            return Err(Error::Topology {
+                pair: name,
+                problem: TopologyProblem::NoElements,
+                node: None,
+                element: None,
+                message: "no interface elements were found".into(),
+            });
         }
         tracing::info!(
             "contact '{name}': {} interface elements, {}",
@@ -239,75 +223,64 @@ fn build_interface(
         pairs.push(ContactPair {
             name,
             law,
-            interference: spec.interference,
+            interference,
             elements: start..elements.len(),
         });
     }
     Ok(InterfaceSet {
-        analysis: case.analysis,
+        analysis,
         elements,
         pairs,
     })
 }
 
-/// Largest coordinate extent of the mesh (for relative tolerances).
+/// Largest coordinate extent of the mesh (for relative tolerances), never zero.
 fn model_scale(mesh: &Mesh) -> f64 {
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in &mesh.nodes {
-        for c in 0..2 {
-            lo[c] = lo[c].min(p[c]);
-            hi[c] = hi[c].max(p[c]);
-        }
-    }
-    (hi[0] - lo[0]).max(hi[1] - lo[1]).max(f64::MIN_POSITIVE)
+    model_size(&mesh.nodes).max(f64::MIN_POSITIVE)
 }
 
 /// The physical curve or point called `name` (a name used for both is ambiguous).
-pub(super) fn boundary_group<'m>(
-    mesh: &'m Mesh,
-    name: &str,
-    what: &str,
-) -> Result<&'m PhysicalGroup> {
+fn boundary_group<'m>(mesh: &'m Mesh, name: &str, role: &str) -> Result<&'m PhysicalGroup> {
     match (mesh.group(1, name), mesh.group(0, name)) {
         (Some(g), None) | (None, Some(g)) => Ok(g),
-        (Some(_), Some(_)) => Err(Error::Model(format!(
-            "{what} '{name}': the name is used by a physical curve and a physical point in {}; rename one",
-            mesh.path.display()
-        ))),
-        (None, None) => Err(Error::Model(format!(
-            "{what} '{name}': no physical curve or point of that name in {} (curves: {}; points: {})",
-            mesh.path.display(),
-            mesh.group_names(1),
-            mesh.group_names(0)
-        ))),
+        (Some(_), Some(_)) => {
+            Err(mesh.group_error(role, name, GroupKind::CurveOrPoint, GroupProblem::Ambiguous))
+        }
+        (None, None) => Err(mesh.missing_group(role, name, GroupKind::CurveOrPoint)),
     }
 }
 
-fn build_continuum(mesh: &Mesh, case: &Case) -> Result<(Vec<String>, ContinuumSet)> {
+/// The continuum elements of the bodies, with their materials, and the body names. Checks
+/// that the bodies' surfaces exist, do not overlap, and hold only elements with a positive
+/// Jacobian.
+fn build_continuum(
+    mesh: &Mesh,
+    analysis: Analysis,
+    bodies: Vec<Body>,
+) -> Result<(Vec<String>, ContinuumSet)> {
     let mut owner: Vec<Option<u32>> = vec![None; mesh.cells.len()];
-    let mut bodies = Vec::new();
-    let mut materials: Vec<Box<dyn Material>> = Vec::new();
+    let mut names: Vec<String> = Vec::new();
+    let mut materials = Vec::new();
     let mut cells = Vec::new();
-    for (b, spec) in case.bodies.iter().enumerate() {
-        let group = mesh.group(2, &spec.group).ok_or_else(|| {
-            Error::Model(format!(
-                "body '{}': no physical surface of that name in {} (surfaces: {})",
-                spec.group,
-                mesh.path.display(),
-                mesh.group_names(2)
-            ))
-        })?;
-        let material = spec
-            .material
-            .build()
-            .map_err(|m| Error::Model(format!("body '{}': {m}", spec.group)))?;
+    for (
+        b,
+        Body {
+            group: name,
+            material,
+        },
+    ) in bodies.into_iter().enumerate()
+    {
+        let group = mesh
+            .group(2, &name)
+            .ok_or_else(|| mesh.missing_group("body", &name, GroupKind::Surface))?;
         let before = cells.len();
         for (i, cell) in mesh.cells_in(group) {
             if let Some(other) = owner[i] {
-                return Err(Error::Model(format!(
-                    "element {} belongs to bodies '{}' and '{}': physical surfaces of bodies must not overlap",
-                    cell.tag, case.bodies[other as usize].group, spec.group
-                )));
+                return Err(Error::OverlappingBodies {
+                    element: cell.tag,
+                    first: names[other as usize].clone(),
+                    second: name,
+                });
             }
             owner[i] = Some(b as u32);
             let mut coords = [[0.0; 2]; 8];
@@ -316,13 +289,12 @@ fn build_continuum(mesh: &Mesh, case: &Case) -> Result<(Vec<String>, ContinuumSe
             }
             let det = min_jacobian(cell.kind, &coords);
             if det.is_nan() || det <= 0.0 {
-                return Err(Error::Model(format!(
-                    "element {} of body '{}' is distorted or degenerate (Jacobian determinant {det:.3e} ≤ 0; corners \
-                     {:?}); check mid-side nodes and the mesh quality",
-                    cell.tag,
-                    spec.group,
-                    &coords[..if cell.kind == CellKind::Quad8 { 4 } else { 3 }]
-                )));
+                return Err(Error::DistortedElement {
+                    element: cell.tag,
+                    body: name,
+                    jacobian: det,
+                    corners: coords[..cell.kind.corner_count()].to_vec(),
+                });
             }
             cells.push(ContinuumCell {
                 kind: cell.kind,
@@ -333,19 +305,17 @@ fn build_continuum(mesh: &Mesh, case: &Case) -> Result<(Vec<String>, ContinuumSe
             });
         }
         if cells.len() == before {
-            return Err(Error::Model(format!(
-                "body '{}': the physical surface has no elements",
-                spec.group
-            )));
+            let problem = GroupProblem::Empty;
+            return Err(mesh.group_error("body", &name, GroupKind::Surface, problem));
         }
-        bodies.push(spec.group.clone());
-        tracing::info!("body '{}': {}", spec.group, material.describe());
+        tracing::info!("body '{name}': {}", material.describe());
+        names.push(name);
         materials.push(material);
     }
     for g in mesh
         .groups
         .iter()
-        .filter(|g| g.dim == 2 && !bodies.contains(&g.name))
+        .filter(|g| g.dim == 2 && !names.contains(&g.name))
     {
         tracing::warn!(
             "physical surface '{}' is not a body in the case file; its elements are ignored",
@@ -353,9 +323,9 @@ fn build_continuum(mesh: &Mesh, case: &Case) -> Result<(Vec<String>, ContinuumSe
         );
     }
     Ok((
-        bodies,
+        names,
         ContinuumSet {
-            analysis: case.analysis,
+            analysis,
             cells,
             materials,
         },

@@ -11,6 +11,7 @@ use crate::contact::InterfaceState;
 use crate::element::interface6::interface_point;
 use crate::element::set::INTERFACE_POINTS;
 use crate::element::shape::line3;
+use crate::mesh::topology::directed_chains;
 use crate::model::Model;
 use crate::output::csv::CsvTable;
 use crate::output::{Field, FieldValues, Grid};
@@ -92,12 +93,15 @@ impl InterfaceOutput {
         let mut pairs = Vec::new();
         for pair in &model.interface.pairs {
             let elements = &model.interface.elements[pair.elements.clone()];
-            let chain = chain_order(
-                elements
-                    .iter()
-                    .map(|e| [e.nodes[3], e.nodes[4], e.nodes[5]])
-                    .collect(),
-            );
+            // Side B's lines, walked b0 → b1; separate pieces are concatenated.
+            let lines: Vec<[u32; 3]> = elements
+                .iter()
+                .map(|e| [e.nodes[3], e.nodes[4], e.nodes[5]])
+                .collect();
+            let chain: Vec<u32> = directed_chains(&lines)
+                .into_iter()
+                .flat_map(|c| c.nodes)
+                .collect();
             let mut arc = Vec::with_capacity(chain.len());
             let mut s = 0.0;
             for (k, &n) in chain.iter().enumerate() {
@@ -275,38 +279,4 @@ pub fn resultants(model: &Model, states: &[InterfaceState]) -> Vec<[f64; 4]> {
         }
     }
     out
-}
-
-/// Orders quadratic edges [b0, b1, mid] (walked b0 → b1) into chains along the curve:
-/// b0, mid, b1, mid, ... Several separate pieces are concatenated; a closed loop starts
-/// anywhere.
-fn chain_order(edges: Vec<[u32; 3]>) -> Vec<u32> {
-    use std::collections::HashMap;
-    let by_start: HashMap<u32, usize> = edges.iter().enumerate().map(|(i, e)| (e[0], i)).collect();
-    let ends: std::collections::HashSet<u32> = edges.iter().map(|e| e[1]).collect();
-    let mut used = vec![false; edges.len()];
-    let mut order = Vec::with_capacity(2 * edges.len() + 1);
-    // Open chains first (starting where no edge ends), then any remaining loops.
-    let starts: Vec<usize> = (0..edges.len())
-        .filter(|&i| !ends.contains(&edges[i][0]))
-        .chain(0..edges.len())
-        .collect();
-    for start in starts {
-        if used[start] {
-            continue;
-        }
-        let piece = order.len();
-        order.push(edges[start][0]);
-        let mut current = Some(start);
-        while let Some(i) = current.filter(|&i| !used[i]) {
-            used[i] = true;
-            order.push(edges[i][2]);
-            order.push(edges[i][1]);
-            current = by_start.get(&edges[i][1]).copied();
-        }
-        if order.len() - piece > 3 && order[piece] == order[order.len() - 1] {
-            order.pop(); // a closed loop lists its first node once
-        }
-    }
-    order
 }

@@ -1,13 +1,15 @@
-//! Programmatic quadratic meshes and helpers for the solver tests, so that they need no gmsh
-//! and can distort meshes at will.
+//! Shared fixtures of the integration tests: programmatic quadratic meshes (so that the
+//! tests need no gmsh and can distort meshes at will), the case builder ([`case`]) and
+//! helpers to solve and measure.
 #![allow(dead_code)]
 
-use std::path::Path;
+mod case;
+
+pub use case::*;
 
 use asperity::config::Case;
 use asperity::mesh::{Cell, CellKind, Line3, Mesh, PhysicalGroup, PointElement};
 use asperity::model::Model;
-use asperity::solver::newton::NewtonSettings;
 use asperity::solver::stepping::{Solution, run_steps};
 
 /// Builds a structured quad8 (or tri6, `triangles = true`) mesh of the map
@@ -175,17 +177,10 @@ pub fn quarter_annulus(a: f64, b: f64, nr: usize, nt: usize) -> Mesh {
     })
 }
 
-/// Parses a case (mesh section is a placeholder: the mesh is given directly).
-pub fn case(body: &str) -> Case {
-    let text = format!("[mesh]\nfile = \"generated.msh\"\n{body}");
-    Case::from_toml(&text, Path::new("test.toml")).expect("valid test case")
-}
-
 /// Builds the model and solves all steps.
 pub fn solve(mesh: Mesh, case: &Case) -> (Model, Solution) {
-    let model = Model::build(mesh, case).expect("model builds");
-    let (solution, _) =
-        run_steps(&model, &NewtonSettings::from(case.solver), |_| Ok(0.0)).expect("solves");
+    let model = model(mesh, case).expect("model builds");
+    let (solution, _) = run_steps(&model, &settings(case), |_| Ok(0.0)).expect("solves");
     (model, solution)
 }
 
@@ -363,4 +358,73 @@ pub fn graded(start: f64, length: f64, n: usize, ratio: f64) -> Vec<f64> {
 /// Uniform points from `a` to `b` with `n` intervals.
 pub fn uniform(a: f64, b: f64, n: usize) -> Vec<f64> {
     (0..=n).map(|i| a + (b - a) * i as f64 / n as f64).collect()
+}
+
+/// The shrink fit of a solid shaft (radius B) in a hub (outer radius C), both of length L,
+/// axisymmetric with the ends held axially (plane strain), the faces overlapping by DELTA:
+/// the mesh (programmatic, 6 quad8 through each wall) and the case, with the pair called
+/// "fit". Closed form in docs/theory.md ("Lamé cylinders and the shrink fit").
+pub mod shrink_fit {
+    use super::*;
+    use toml::{Table, Value};
+
+    pub const B: f64 = 10.0;
+    pub const C: f64 = 20.0;
+    pub const L: f64 = 10.0;
+    pub const DELTA: f64 = 0.01;
+    pub const E: f64 = 200_000.0;
+    pub const NU: f64 = 0.3;
+
+    /// Plane-strain compliance C = b (C_s + C_h) of the solid shaft in the hub: the contact
+    /// pressure of rigid faces is δ / C.
+    pub fn compliance() -> f64 {
+        let (e, nu) = (E / (1.0 - NU * NU), NU / (1.0 - NU));
+        let cs = (1.0 - nu) / e;
+        let ch = ((C * C + B * B) / (C * C - B * B) + nu) / e;
+        B * (cs + ch)
+    }
+
+    /// Shaft and hub: one conforming mesh with the curve "fit" between them, or two meshes
+    /// with coincident faces "shaft_outer" and "hub_bore". Also the curves "shaft_ends",
+    /// "hub_ends" and the point "hub_corner" at (C, 0).
+    pub fn mesh(conforming: bool) -> Mesh {
+        let zs = uniform(0.0, L, 4);
+        let mut shaft = tensor(&uniform(0.0, B, 6), &zs, "shaft");
+        add_curve_group(&mut shaft, "shaft_ends", |x| x[1] == 0.0 || x[1] == L);
+        let mut hub = tensor(&uniform(B, C, 6), &zs, "hub");
+        add_curve_group(&mut hub, "hub_ends", |x| x[1] == 0.0 || x[1] == L);
+        if conforming {
+            add_curve_group(&mut shaft, "fit", |x| (x[0] - B).abs() < 1e-12);
+        } else {
+            add_curve_group(&mut shaft, "shaft_outer", |x| (x[0] - B).abs() < 1e-12);
+            add_curve_group(&mut hub, "hub_bore", |x| (x[0] - B).abs() < 1e-12);
+        }
+        add_point_group(&mut hub, "hub_corner", [C, 0.0]);
+        merge(shaft, hub, conforming)
+    }
+
+    /// The case on [`mesh`]`(conforming)` with the interface `law`.
+    pub fn case(conforming: bool, law: Table) -> Case {
+        let faces: Vec<(&str, Value)> = if conforming {
+            vec![
+                ("curve", "fit".into()),
+                ("body_a", "shaft".into()),
+                ("body_b", "hub".into()),
+            ]
+        } else {
+            vec![
+                ("side_a", "shaft_outer".into()),
+                ("side_b", "hub_bore".into()),
+            ]
+        };
+        let mut keys = vec![("name", "fit".into()), ("interference", DELTA.into())];
+        keys.extend(faces);
+        CaseBuilder::axisymmetric()
+            .body("shaft", elastic(E, NU))
+            .body("hub", elastic(E, NU))
+            .support("shaft_ends", &[("uz", 0.0)])
+            .support("hub_ends", &[("uz", 0.0)])
+            .contact(&keys, law)
+            .case()
+    }
 }

@@ -5,13 +5,17 @@ use std::collections::HashMap;
 
 use super::{COINCIDENT_TOLERANCE, Ctx, InterfaceTopology, Sides};
 use crate::Result;
+use crate::error::TopologyProblem;
 
 /// Pairs every B node with the A node at the same place (hash grid, linear time), then makes
 /// one element per B line.
 pub(super) fn coincident(ctx: &Ctx, s: &Sides) -> Result<InterfaceTopology> {
     let tolerance = COINCIDENT_TOLERANCE * ctx.mesh.typical_size();
     if !(tolerance > 0.0 && tolerance.is_finite()) {
-        return Err(ctx.err("the mesh has no cells of positive size to scale the tolerance"));
+        return Err(ctx.err(
+            TopologyProblem::NoScale,
+            "the mesh has no cells of positive size to scale the tolerance",
+        ));
     }
     let partner = pair_by_coordinates(ctx, s, tolerance)?;
     let mut topology = InterfaceTopology::default();
@@ -64,52 +68,72 @@ fn pair_by_coordinates(ctx: &Ctx, s: &Sides, tolerance: f64) -> Result<HashMap<u
         }
         match candidates.as_slice() {
             [] => {
-                return Err(ctx.err(format!(
-                    "side B curve '{}': {} has no coincident node on side A curve '{}' \
-                     (tolerance {tolerance:.1e} mm; {counts}): the faces are not meshed alike; \
-                     give both curves the same points, or use the Ordered recipe for faces \
-                     with a gap",
-                    s.b_name,
-                    ctx.node(b),
-                    s.a_name
-                )));
+                return Err(ctx.err_at(
+                    TopologyProblem::Unpaired,
+                    Some(b),
+                    None,
+                    format!(
+                        "side B curve '{}': {} has no coincident node on side A curve '{}' \
+                         (tolerance {tolerance:.1e} mm; {counts}): the faces are not meshed \
+                         alike; give both curves the same points, or use the Ordered recipe for \
+                         faces with a gap",
+                        s.b_name,
+                        ctx.node(b),
+                        s.a_name
+                    ),
+                ));
             }
             [a] => {
                 if let Some(&other) = partner_of_a.get(a) {
-                    return Err(ctx.err(format!(
-                        "pairing is ambiguous: {} and {} of side B curve '{}' both coincide \
-                         with {} of side A curve '{}' (tolerance {tolerance:.1e} mm)",
-                        ctx.node(other),
-                        ctx.node(b),
-                        s.b_name,
-                        ctx.node(*a),
-                        s.a_name
-                    )));
+                    return Err(ctx.err_at(
+                        TopologyProblem::Ambiguous,
+                        Some(*a),
+                        None,
+                        format!(
+                            "pairing is ambiguous: {} and {} of side B curve '{}' both coincide \
+                             with {} of side A curve '{}' (tolerance {tolerance:.1e} mm)",
+                            ctx.node(other),
+                            ctx.node(b),
+                            s.b_name,
+                            ctx.node(*a),
+                            s.a_name
+                        ),
+                    ));
                 }
                 partner_of_a.insert(*a, b);
                 partner.insert(b, *a);
             }
             [first, second, ..] => {
-                return Err(ctx.err(format!(
-                    "pairing is ambiguous: {} of side B curve '{}' coincides with {} and {} \
-                     of side A curve '{}' (tolerance {tolerance:.1e} mm)",
-                    ctx.node(b),
-                    s.b_name,
-                    ctx.node(*first),
-                    ctx.node(*second),
-                    s.a_name
-                )));
+                return Err(ctx.err_at(
+                    TopologyProblem::Ambiguous,
+                    Some(b),
+                    None,
+                    format!(
+                        "pairing is ambiguous: {} of side B curve '{}' coincides with {} and {} \
+                         of side A curve '{}' (tolerance {tolerance:.1e} mm)",
+                        ctx.node(b),
+                        s.b_name,
+                        ctx.node(*first),
+                        ctx.node(*second),
+                        s.a_name
+                    ),
+                ));
             }
         }
     }
     if let Some(&a) = s.a_nodes.iter().find(|a| !partner_of_a.contains_key(a)) {
-        return Err(ctx.err(format!(
-            "side A curve '{}': {} has no coincident node on side B curve '{}' (unpaired; \
-             tolerance {tolerance:e} mm; {counts}): the faces are not meshed alike",
-            s.a_name,
-            ctx.node(a),
-            s.b_name
-        )));
+        return Err(ctx.err_at(
+            TopologyProblem::Unpaired,
+            Some(a),
+            None,
+            format!(
+                "side A curve '{}': {} has no coincident node on side B curve '{}' (unpaired; \
+                 tolerance {tolerance:e} mm; {counts}): the faces are not meshed alike",
+                s.a_name,
+                ctx.node(a),
+                s.b_name
+            ),
+        ));
     }
     Ok(partner)
 }

@@ -4,9 +4,11 @@
 
 use std::collections::{HashMap, HashSet};
 
-use super::{Ctx, EdgeIndex, EdgeUse, InterfaceTopology, cell_edges, key};
+use super::{Ctx, InterfaceTopology};
 use crate::Result;
+use crate::error::TopologyProblem;
 use crate::mesh::Mesh;
+use crate::mesh::topology::{EdgeUse, cell_edges, edge_key};
 
 /// What [`apply_split`] will do, fully checked.
 pub(super) struct SplitPlan {
@@ -37,26 +39,35 @@ pub(super) fn plan_split(
     let group_b = ctx.surface(body_b)?;
     for body in [body_a, body_b] {
         if !bodies.contains(&body) {
-            return Err(ctx.err(format!(
-                "body '{body}' of the split curve '{curve}' is not one of the case's bodies ({})",
-                bodies.join(", ")
-            )));
+            return Err(ctx.err(
+                TopologyProblem::BodyNotInCase,
+                format!(
+                    "body '{body}' of the split curve '{curve}' is not one of the case's bodies ({})",
+                    bodies.join(", ")
+                ),
+            ));
         }
     }
     if body_a == body_b {
-        return Err(ctx.err(format!(
-            "body_a and body_b are the same surface '{body_a}'; the Split recipe separates two \
-             different physical surfaces"
-        )));
+        return Err(ctx.err(
+            TopologyProblem::SameBody,
+            format!(
+                "body_a and body_b are the same surface '{body_a}'; the Split recipe separates \
+                 two different physical surfaces"
+            ),
+        ));
     }
     if let Some(e) = group_a
         .entities
         .iter()
         .find(|e| group_b.entities.contains(e))
     {
-        return Err(ctx.err(format!(
-            "bodies '{body_a}' and '{body_b}' share surface entity {e}; they must not overlap"
-        )));
+        return Err(ctx.err(
+            TopologyProblem::SharedEntity,
+            format!(
+                "bodies '{body_a}' and '{body_b}' share surface entity {e}; they must not overlap"
+            ),
+        ));
     }
     // Body index 0 = A, 1 = B; cells of other surfaces are ignored.
     let mut body_of = HashMap::new();
@@ -65,12 +76,7 @@ pub(super) fn plan_split(
             body_of.insert(e, b);
         }
     }
-    let mut wanted = vec![false; ctx.mesh.nodes.len()];
-    for l in &lines {
-        wanted[l.nodes[0] as usize] = true;
-        wanted[l.nodes[1] as usize] = true;
-    }
-    let edges = EdgeIndex::new(ctx.mesh, &body_of, &wanted);
+    let edges = ctx.edges(&body_of, lines.iter());
     let mut a_sides = Vec::with_capacity(lines.len());
     for l in &lines {
         let uses = edges.find(l.nodes[0], l.nodes[1], l.nodes[2]);
@@ -79,24 +85,34 @@ pub(super) fn plan_split(
         let (ua, ub) = match (in_a.as_slice(), in_b.as_slice()) {
             ([ua], [ub]) => (ua, ub),
             _ => {
-                return Err(ctx.err(format!(
-                    "curve '{curve}' is not between bodies '{body_a}' and '{body_b}': its {} \
-                     is an edge of {} element(s) of '{body_a}' and {} of '{body_b}' (exactly \
-                     one of each is needed)",
-                    ctx.line(l),
-                    in_a.len(),
-                    in_b.len()
-                )));
+                return Err(ctx.err_at(
+                    TopologyProblem::NotBetweenBodies,
+                    None,
+                    Some(l.tag),
+                    format!(
+                        "curve '{curve}' is not between bodies '{body_a}' and '{body_b}': its {} \
+                         is an edge of {} element(s) of '{body_a}' and {} of '{body_b}' \
+                         (exactly one of each is needed)",
+                        ctx.line(l),
+                        in_a.len(),
+                        in_b.len()
+                    ),
+                ));
             }
         };
         if ua.from == ub.from {
-            return Err(ctx.err(format!(
-                "bodies '{body_a}' and '{body_b}' lie on the same side of curve '{curve}' at \
-                 its {} (elements {} and {}): the bodies overlap",
-                ctx.line(l),
-                ctx.mesh.cells[ua.cell].tag,
-                ctx.mesh.cells[ub.cell].tag
-            )));
+            return Err(ctx.err_at(
+                TopologyProblem::Overlap,
+                None,
+                Some(l.tag),
+                format!(
+                    "bodies '{body_a}' and '{body_b}' lie on the same side of curve '{curve}' \
+                     at its {} (elements {} and {}): the bodies overlap",
+                    ctx.line(l),
+                    ctx.mesh.cells[ua.cell].tag,
+                    ctx.mesh.cells[ub.cell].tag
+                ),
+            ));
         }
         a_sides.push([ub.from, ub.to, ub.mid]);
     }
@@ -119,11 +135,14 @@ pub(super) fn plan_split(
         .is_some()
         && ctx.mesh.nodes.len() + duplicated.len() < u32::MAX as usize;
     let (Some(first_tag), true) = (first_tag, fits) else {
-        return Err(ctx.err(format!(
-            "no room for {} more nodes (largest node tag {max_tag}, {} nodes)",
-            duplicated.len(),
-            ctx.mesh.nodes.len()
-        )));
+        return Err(ctx.err(
+            TopologyProblem::TooManyNodes,
+            format!(
+                "no room for {} more nodes (largest node tag {max_tag}, {} nodes)",
+                duplicated.len(),
+                ctx.mesh.nodes.len()
+            ),
+        ));
     };
     Ok(SplitPlan {
         duplicated,
@@ -178,9 +197,9 @@ pub(super) fn apply_split(mesh: &mut Mesh, plan: SplitPlan) -> InterfaceTopology
             }
         }
         if touched {
-            for (from, to, mid) in cell_edges(cell) {
+            for (from, to, mid) in cell_edges(cell.kind, &cell.nodes) {
                 if from >= first_new || to >= first_new || mid >= first_new {
-                    b_edges.insert((key(from, to), mid));
+                    b_edges.insert((edge_key(from, to), mid));
                 }
             }
         }
@@ -192,7 +211,7 @@ pub(super) fn apply_split(mesh: &mut Mesh, plan: SplitPlan) -> InterfaceTopology
             continue;
         }
         let moved = line.nodes.map(|n| copy.get(&n).copied().unwrap_or(n));
-        if b_edges.contains(&(key(moved[0], moved[1]), moved[2])) {
+        if b_edges.contains(&(edge_key(moved[0], moved[1]), moved[2])) {
             line.nodes = moved;
         }
     }

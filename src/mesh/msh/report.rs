@@ -3,7 +3,7 @@
 use std::collections::HashSet;
 use std::fmt::Write as _;
 
-use super::model_size;
+use crate::mesh::topology::BoundingBox;
 use crate::mesh::{CellKind, Mesh};
 
 /// A human-readable report of `mesh` for `asperity mesh-info`: sizes, element counts, the
@@ -27,14 +27,8 @@ pub fn describe(mesh: &Mesh) -> String {
     );
     let _ = writeln!(out, "lines: {}", mesh.lines.len());
     let _ = writeln!(out, "points: {}", mesh.points.len());
-    if !mesh.nodes.is_empty() {
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for p in &mesh.nodes {
-            for k in 0..2 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
+    let bounding_box = BoundingBox::of(&mesh.nodes);
+    if let Some(BoundingBox { lo, hi }) = bounding_box {
         let _ = writeln!(
             out,
             "bounding box: x [{}, {}], y [{}, {}]; typical element size {:.4}",
@@ -125,7 +119,7 @@ pub fn describe(mesh: &Mesh) -> String {
         ));
     }
 
-    let size = model_size(&mesh.nodes);
+    let size = bounding_box.map_or(0.0, |b| b.size());
     let tolerance = 1e-12 * size * size;
     let (mut degenerate, mut clockwise) = (Vec::new(), Vec::new());
     for c in &mesh.cells {

@@ -5,6 +5,11 @@
 
 use std::collections::HashMap;
 
+use super::Fault;
+use crate::error::{MeshEntity, MeshProblem};
+
+const HEADER: Option<MeshEntity> = Some(MeshEntity::Section("$MeshFormat"));
+
 /// Whether the file looks cut short: a complete MSH file ends with a `$End...` line. Lets
 /// the parse error say "truncated" rather than leave the user guessing.
 pub(super) fn looks_truncated(bytes: &[u8]) -> bool {
@@ -34,7 +39,15 @@ pub(super) struct Binary {
 
 /// Reads and checks the `$MeshFormat` header. Doing this before mshio gives precise messages
 /// (MSH 2.2, not an MSH file) and avoids mshio's panics on unusual `size_t` sizes.
-pub(super) fn read_header(bytes: &[u8]) -> std::result::Result<Header, String> {
+pub(super) fn read_header(bytes: &[u8]) -> Result<Header, Fault> {
+    let bad = |message: String| Fault::new(MeshProblem::Header, HEADER, message);
+    let incomplete = || {
+        Fault::new(
+            MeshProblem::Truncated,
+            HEADER,
+            "the $MeshFormat header is incomplete (truncated file?)",
+        )
+    };
     let start = bytes
         .iter()
         .position(|b| !b.is_ascii_whitespace())
@@ -47,14 +60,16 @@ pub(super) fn read_header(bytes: &[u8]) -> std::result::Result<Header, String> {
     };
     let first_end = line_end(start);
     if trim(&bytes[start..first_end]) != b"$MeshFormat" {
-        return Err("not a gmsh MSH file (it does not start with $MeshFormat)".into());
+        return Err(bad(
+            "not a gmsh MSH file (it does not start with $MeshFormat)".into(),
+        ));
     }
     let second = (first_end + 1).min(bytes.len());
     let second_end = line_end(second);
     let text = String::from_utf8_lossy(&bytes[second..second_end]);
     let fields: Vec<&str> = text.split_whitespace().collect();
     if fields.len() < 3 {
-        return Err("the $MeshFormat header is incomplete (truncated file?)".into());
+        return Err(incomplete());
     }
     let version = fields[0];
     if version != "4.1" {
@@ -63,37 +78,43 @@ pub(super) fn read_header(bytes: &[u8]) -> std::result::Result<Header, String> {
         } else {
             format!("MSH version {version}")
         };
-        return Err(format!(
-            "{kind} is not supported: re-mesh with gmsh -format msh41 or \
-             Mesh.MshFileVersion = 4.1"
+        return Err(Fault::new(
+            MeshProblem::Version,
+            HEADER,
+            format!(
+                "{kind} is not supported: re-mesh with gmsh -format msh41 or \
+                 Mesh.MshFileVersion = 4.1"
+            ),
         ));
     }
     let size_t: usize = fields[2].parse().map_err(|_| {
-        format!(
+        bad(format!(
             "invalid data size `{}` in the $MeshFormat header",
             fields[2]
-        )
+        ))
     })?;
     let mut pos = (second_end + 1).min(bytes.len());
     let binary = match fields[1] {
         "0" => None,
         "1" => {
             if size_t != 4 && size_t != 8 {
-                return Err(format!(
+                return Err(bad(format!(
                     "binary MSH files with {size_t}-byte size_t values are not supported \
                      (gmsh writes 8)"
-                ));
+                )));
             }
             let one: [u8; 4] = bytes
                 .get(pos..pos + 4)
                 .and_then(|b| b.try_into().ok())
-                .ok_or("the $MeshFormat header is incomplete (truncated file?)")?;
+                .ok_or_else(incomplete)?;
             let little_endian = if i32::from_le_bytes(one) == 1 {
                 true
             } else if i32::from_be_bytes(one) == 1 {
                 false
             } else {
-                return Err("cannot detect the byte order of the binary MSH file".into());
+                return Err(bad(
+                    "cannot detect the byte order of the binary MSH file".into()
+                ));
             };
             pos += 4;
             Some(Binary {
@@ -102,13 +123,18 @@ pub(super) fn read_header(bytes: &[u8]) -> std::result::Result<Header, String> {
             })
         }
         other => {
-            return Err(format!(
+            return Err(bad(format!(
                 "invalid file type `{other}` in the $MeshFormat header (0 ascii, 1 binary)"
-            ));
+            )));
         }
     };
-    let end = find_line(bytes, pos, b"$EndMeshFormat")
-        .ok_or("the $MeshFormat header has no $EndMeshFormat (truncated file?)")?;
+    let end = find_line(bytes, pos, b"$EndMeshFormat").ok_or_else(|| {
+        Fault::new(
+            MeshProblem::Truncated,
+            HEADER,
+            "the $MeshFormat header has no $EndMeshFormat (truncated file?)",
+        )
+    })?;
     Ok(Header {
         binary,
         body_start: end,
@@ -117,12 +143,9 @@ pub(super) fn read_header(bytes: &[u8]) -> std::result::Result<Header, String> {
 
 /// Checks the counts in the `$Nodes` and `$Elements` headers: mshio computes `count - 1` on
 /// them, which panics (debug builds) when a section declares zero entries.
-pub(super) fn check_section_counts(
-    bytes: &[u8],
-    header: &Header,
-) -> std::result::Result<(), String> {
-    for (section, what) in [(&b"$Nodes"[..], "nodes"), (&b"$Elements"[..], "elements")] {
-        let Some(at) = find_line(bytes, header.body_start, section) else {
+pub(super) fn check_section_counts(bytes: &[u8], header: &Header) -> Result<(), Fault> {
+    for (section, what) in [("$Nodes", "nodes"), ("$Elements", "elements")] {
+        let Some(at) = find_line(bytes, header.body_start, section.as_bytes()) else {
             continue; // missing sections are reported after parsing
         };
         let mut cursor = Cursor {
@@ -132,9 +155,12 @@ pub(super) fn check_section_counts(
         };
         let _blocks = cursor.size_t();
         if cursor.size_t() == Some(0) {
-            return Err(format!(
-                "the {} section contains no {what}: the mesh is empty (was it meshed?)",
-                String::from_utf8_lossy(section)
+            return Err(Fault::new(
+                MeshProblem::EmptySection,
+                Some(MeshEntity::Section(section)),
+                format!(
+                    "the {section} section contains no {what}: the mesh is empty (was it meshed?)"
+                ),
             ));
         }
     }
@@ -160,11 +186,14 @@ impl NodeTags {
 /// mshio keeps the tags only when they are sparse; dense tags may still be permuted with
 /// respect to the file order, so we always read them here. Only called after mshio parsed the
 /// file successfully, so the section structure is known to be sound.
-pub(super) fn read_node_tags(
-    bytes: &[u8],
-    header: &Header,
-) -> std::result::Result<Vec<NodeTags>, String> {
-    let broken = || "cannot read the node tags of the $Nodes section (corrupt file?)".to_string();
+pub(super) fn read_node_tags(bytes: &[u8], header: &Header) -> Result<Vec<NodeTags>, Fault> {
+    let broken = || {
+        Fault::new(
+            MeshProblem::Corrupt,
+            Some(MeshEntity::Section("$Nodes")),
+            "cannot read the node tags of the $Nodes section (corrupt file?)",
+        )
+    };
     let at = find_line(bytes, header.body_start, b"$Nodes").ok_or_else(broken)?;
     let mut c = Cursor {
         bytes,
@@ -205,25 +234,35 @@ pub(super) fn read_node_tags(
 pub(super) fn read_physical_names(
     bytes: &[u8],
     from: usize,
-) -> std::result::Result<HashMap<(u8, i32), String>, String> {
+) -> Result<HashMap<(u8, i32), String>, Fault> {
+    let fault = |message: String| {
+        Fault::new(
+            MeshProblem::PhysicalNames,
+            Some(MeshEntity::Section("$PhysicalNames")),
+            message,
+        )
+    };
     let mut names = HashMap::new();
     let Some(start) = find_line(bytes, from, b"$PhysicalNames") else {
         return Ok(names);
     };
     let end = find_line(bytes, start, b"$EndPhysicalNames")
-        .ok_or("the $PhysicalNames section has no $EndPhysicalNames")?;
+        .ok_or_else(|| fault("the $PhysicalNames section has no $EndPhysicalNames".into()))?;
     // `end` is just after the end tag line: cut the tag line off.
     let body = &bytes[start..end];
     let body = &body[..body.len() - trailing_line_len(body)];
     let text = String::from_utf8_lossy(body);
     let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
-    let count: usize = lines
-        .next()
-        .and_then(|l| l.parse().ok())
-        .ok_or("the $PhysicalNames section does not start with the number of names")?;
+    let count: usize = lines.next().and_then(|l| l.parse().ok()).ok_or_else(|| {
+        fault("the $PhysicalNames section does not start with the number of names".into())
+    })?;
     let mut found = 0;
     for line in lines {
-        let bad = || format!("malformed $PhysicalNames line `{line}` (expected: dim tag \"name\")");
+        let bad = || {
+            fault(format!(
+                "malformed $PhysicalNames line `{line}` (expected: dim tag \"name\")"
+            ))
+        };
         let mut fields = line.splitn(3, char::is_whitespace);
         let dim: u8 = fields.next().and_then(|s| s.parse().ok()).ok_or_else(bad)?;
         let tag: i32 = fields
@@ -239,9 +278,9 @@ pub(super) fn read_physical_names(
         found += 1;
     }
     if found != count {
-        return Err(format!(
+        return Err(fault(format!(
             "the $PhysicalNames section announces {count} names but contains {found}"
-        ));
+        )));
     }
     Ok(names)
 }
@@ -371,8 +410,14 @@ pub(super) enum TagIndex {
 impl TagIndex {
     const NONE: u32 = u32::MAX;
 
-    pub(super) fn new(tags: &[u64]) -> std::result::Result<Self, String> {
-        let duplicate = |t: u64| format!("node tag {t} appears twice in the $Nodes section");
+    pub(super) fn new(tags: &[u64]) -> Result<Self, Fault> {
+        let duplicate = |t: u64| {
+            Fault::new(
+                MeshProblem::DuplicateNode,
+                Some(MeshEntity::Node(t)),
+                format!("node tag {t} appears twice in the $Nodes section"),
+            )
+        };
         let (Some(&min), Some(&max)) = (tags.iter().min(), tags.iter().max()) else {
             return Ok(TagIndex::Dense {
                 min: 0,

@@ -1,0 +1,359 @@
+//! What a model is built from ([`ModelSpec`]): the case's analysis, bodies with their
+//! materials, supports, loads and contact pairs with their laws, converted from the case
+//! file's plain data. Every material and interface law is built here, exactly once, and so
+//! checked before any mesh exists; [`Model::build`](super::Model::build) consumes the spec.
+
+use crate::config::{
+    AnalysisSpec, Case, ContactAlgorithmKind, Faces, IntegrationKind, LawSpec, MaterialSpec,
+    PairingKind, Steps,
+};
+use crate::contact::linear::LinearCoulomb;
+use crate::contact::rough::RoughJoint;
+use crate::contact::{ContactAlgorithm, InterfaceLaw};
+use crate::element::Analysis;
+use crate::element::interface6::InterfaceRule;
+use crate::error::ParameterError;
+use crate::material::Material;
+use crate::material::elastic::LinearElastic;
+use crate::material::j2::J2Plasticity;
+use crate::mesh::interface::Pairing;
+use crate::{Error, Result};
+
+/// The bodies, supports, loads and contact pairs of a case, with built materials and laws.
+#[derive(Debug)]
+pub struct ModelSpec {
+    pub analysis: Analysis,
+    pub bodies: Vec<Body>,
+    /// Supports in case-file order.
+    pub supports: Vec<Prescribed>,
+    pub loads: Vec<Load>,
+    pub contacts: Vec<Contact>,
+    /// The global load factor at the end of each step.
+    pub factors: Vec<f64>,
+}
+
+/// A body: a physical surface and its material.
+#[derive(Debug)]
+pub struct Body {
+    pub group: String,
+    pub material: Box<dyn Material>,
+}
+
+/// Prescribed displacement components on the nodes of a physical curve or point, at load
+/// factor 1.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Prescribed {
+    pub group: String,
+    /// (u_x, u_y); `None` leaves the component free.
+    pub values: [Option<f64>; 2],
+    /// The support's own load factor per step, if it has its own history.
+    pub factors: Option<Vec<f64>>,
+}
+
+/// A load at load factor 1.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Load {
+    pub group: String,
+    pub kind: LoadKind,
+    /// The load's own factor per step, if it has its own history.
+    pub factors: Option<Vec<f64>>,
+}
+
+/// What a load applies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LoadKind {
+    /// A distributed load on the lines of a physical curve.
+    Line(LineLoad),
+    /// A force (F_x, F_y) in N at each node of a physical point group.
+    Point([f64; 2]),
+}
+
+/// A distributed load on a curve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LineLoad {
+    /// Normal pressure in MPa, positive pushing into the body.
+    Pressure(f64),
+    /// Traction vector (t_x, t_y) in MPa.
+    Traction([f64; 2]),
+}
+
+/// A contact pair: how its faces are found, the integration rule, the initial interference
+/// and the interface law.
+#[derive(Debug)]
+pub struct Contact {
+    pub name: String,
+    pub pairing: Pairing,
+    pub rule: InterfaceRule,
+    pub interference: f64,
+    pub law: Box<dyn InterfaceLaw>,
+}
+
+impl ModelSpec {
+    /// Converts a (checked) case, building each body's material and each pair's law. A
+    /// parameter out of its range is an [`Error::InvalidParameter`] naming its key in the
+    /// case (`body[0].material.nu`, `contact[1].law.friction`).
+    pub fn new(case: &Case) -> Result<Self> {
+        let invalid = |prefix: &str, owner: &str, e: ParameterError| {
+            case.invalid(
+                format!("{prefix}.{}", e.name),
+                e.value,
+                format!("{} ({owner})", e.reason),
+            )
+        };
+        let bodies = case
+            .bodies
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                let material = build_material(&b.material).map_err(|e| {
+                    invalid(
+                        &format!("body[{i}].material"),
+                        &format!("body '{}'", b.group),
+                        e,
+                    )
+                })?;
+                Ok(Body {
+                    group: b.group.clone(),
+                    material,
+                })
+            })
+            .collect::<Result<_>>()?;
+        let contacts = case
+            .contacts
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let name = c.name();
+                let law = build_law(&c.law).map_err(|e| {
+                    invalid(
+                        &format!("contact[{i}].law"),
+                        &format!("contact '{name}'"),
+                        e,
+                    )
+                })?;
+                let pairing = c.faces().map(pairing).ok_or_else(|| Error::Case {
+                    path: case.path.clone(),
+                    message: format!("[[contact]] '{name}': the faces are not given"),
+                })?;
+                Ok(Contact {
+                    name,
+                    pairing,
+                    rule: c.integration.into(),
+                    interference: c.interference,
+                    law,
+                })
+            })
+            .collect::<Result<_>>()?;
+        let supports = case
+            .supports
+            .iter()
+            .map(|s| Prescribed {
+                group: s.group.clone(),
+                values: [s.ux, s.uy],
+                factors: s.factors.clone(),
+            })
+            .collect();
+        let loads = case
+            .loads
+            .iter()
+            .map(|l| {
+                let kind = match (l.pressure, l.traction, l.force) {
+                    (Some(p), _, _) => LoadKind::Line(LineLoad::Pressure(p)),
+                    (None, Some(t), _) => LoadKind::Line(LineLoad::Traction(t)),
+                    (None, None, Some(f)) => LoadKind::Point(f),
+                    (None, None, None) => {
+                        return Err(Error::Case {
+                            path: case.path.clone(),
+                            message: format!("[[load]] '{}': no load is given", l.group),
+                        });
+                    }
+                };
+                Ok(Load {
+                    group: l.group.clone(),
+                    kind,
+                    factors: l.factors.clone(),
+                })
+            })
+            .collect::<Result<_>>()?;
+        Ok(Self {
+            analysis: case.analysis.into(),
+            bodies,
+            supports,
+            loads,
+            contacts,
+            factors: load_factors(&case.steps),
+        })
+    }
+}
+
+/// The constitutive model of a body: linear elastic, or J2 plasticity when a yield stress
+/// is given.
+fn build_material(spec: &MaterialSpec) -> std::result::Result<Box<dyn Material>, ParameterError> {
+    let elastic = LinearElastic::new(spec.e, spec.nu)?;
+    Ok(match spec.yield_stress {
+        None => Box::new(elastic),
+        Some(sy) => Box::new(J2Plasticity::new(
+            elastic,
+            sy,
+            spec.hardening.unwrap_or(0.0),
+        )?),
+    })
+}
+
+/// The interface law of a pair.
+fn build_law(spec: &LawSpec) -> std::result::Result<Box<dyn InterfaceLaw>, ParameterError> {
+    Ok(match *spec {
+        LawSpec::LinearCoulomb {
+            normal_stiffness,
+            tangential_stiffness,
+            friction,
+        } => Box::new(LinearCoulomb::new(
+            normal_stiffness,
+            tangential_stiffness,
+            friction,
+        )?),
+        LawSpec::RoughJoint {
+            c_n,
+            m,
+            unloading_c_n,
+            unloading_m,
+            r,
+            s,
+            mu_m,
+            beta,
+            n,
+            starting_pressure,
+        } => Box::new(RoughJoint::new(RoughJoint {
+            c_n,
+            m,
+            unloading: unloading_c_n.zip(unloading_m),
+            r,
+            s,
+            mu_m,
+            beta,
+            n,
+            starting_pressure,
+        })?),
+    })
+}
+
+/// The pairing recipe of a pair's faces.
+fn pairing(faces: Faces) -> Pairing {
+    match faces {
+        Faces::Sides {
+            side_a,
+            side_b,
+            pairing: PairingKind::Coincident,
+        } => Pairing::Coincident {
+            side_a: side_a.into(),
+            side_b: side_b.into(),
+        },
+        Faces::Sides {
+            side_a,
+            side_b,
+            pairing: PairingKind::Ordered,
+        } => Pairing::Ordered {
+            side_a: side_a.into(),
+            side_b: side_b.into(),
+        },
+        Faces::Split {
+            curve,
+            body_a,
+            body_b,
+        } => Pairing::Split {
+            curve: curve.into(),
+            body_a: body_a.into(),
+            body_b: body_b.into(),
+        },
+    }
+}
+
+/// The global load factor at the end of each step: the given factors, or `count` equal
+/// steps from 1/count to 1.
+pub fn load_factors(steps: &Steps) -> Vec<f64> {
+    match (&steps.factors, steps.count) {
+        (Some(f), _) => f.clone(),
+        (None, Some(n)) => (1..=n).map(|i| i as f64 / n as f64).collect(),
+        (None, None) => vec![1.0],
+    }
+}
+
+impl From<AnalysisSpec> for Analysis {
+    fn from(spec: AnalysisSpec) -> Self {
+        match spec {
+            AnalysisSpec::PlaneStress { thickness } => Analysis::PlaneStress { thickness },
+            AnalysisSpec::PlaneStrain { thickness } => Analysis::PlaneStrain { thickness },
+            AnalysisSpec::Axisymmetric => Analysis::Axisymmetric,
+        }
+    }
+}
+
+impl From<IntegrationKind> for InterfaceRule {
+    fn from(kind: IntegrationKind) -> Self {
+        match kind {
+            IntegrationKind::NewtonCotes => InterfaceRule::NewtonCotes,
+            IntegrationKind::Gauss => InterfaceRule::Gauss,
+        }
+    }
+}
+
+impl From<ContactAlgorithmKind> for ContactAlgorithm {
+    fn from(kind: ContactAlgorithmKind) -> Self {
+        match kind {
+            ContactAlgorithmKind::Newton => ContactAlgorithm::Newton,
+            ContactAlgorithmKind::TwoStep => ContactAlgorithm::TwoStep,
+            ContactAlgorithmKind::ElasticContact => ContactAlgorithm::ElasticContact,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::tests::MINIMAL as CASE;
+    use std::path::Path;
+
+    fn spec(text: &str) -> Result<ModelSpec> {
+        ModelSpec::new(&Case::from_toml(text, Path::new("c.toml"))?)
+    }
+
+    #[test]
+    fn step_counts_make_uniform_factors() {
+        let s = Steps {
+            count: Some(4),
+            factors: None,
+        };
+        assert_eq!(load_factors(&s), vec![0.25, 0.5, 0.75, 1.0]);
+        assert_eq!(spec(CASE).unwrap().factors, vec![1.0]);
+    }
+
+    #[test]
+    fn a_bad_material_parameter_names_its_key_and_body() {
+        let Err(Error::InvalidParameter {
+            path,
+            key,
+            value,
+            reason,
+        }) = spec(&CASE.replace("E = 210000.0", "E = -1.0"))
+        else {
+            panic!("expected an invalid parameter")
+        };
+        assert_eq!(
+            (path.as_path(), key.as_str(), value.as_str()),
+            (Path::new("c.toml"), "body[0].material.E", "-1")
+        );
+        assert!(reason.contains("'plate'"), "{reason}");
+    }
+
+    #[test]
+    fn a_bad_law_parameter_names_its_key() {
+        let text = format!(
+            "{CASE}[[contact]]\nside_a = \"a\"\nside_b = \"b\"\nlaw = {{ type = \"linear_coulomb\", \
+             normal_stiffness = 1.0, tangential_stiffness = 1.0, friction = -0.1 }}\n"
+        );
+        let Err(Error::InvalidParameter { key, .. }) = spec(&text) else {
+            panic!("expected an invalid parameter")
+        };
+        assert_eq!(key, "contact[0].law.friction");
+    }
+}
