@@ -1,78 +1,130 @@
-"""Shared helpers of the example pipelines: run case files in parallel, read the results,
-write reports. Used by pipelines/<example>.py scripts; see README "Examples".
+"""Shared helpers of the example pipelines: build case variants, run case files in parallel,
+read the results (summary.json and the CSV tables), write reports. Used by
+pipelines/<example>.py scripts; see README "Examples".
 
 A pipeline script typically:
-    cases = [variant(template, out_dir / "a.toml", {"mu_m = 0.2": "mu_m = 0.1"}), ...]
-    run_cases([(case, out_dir / "a"), ...])   # mesh size: variant(..., size=...)
+    cases = [variant(template, out_dir / "a.toml", {"contact[0].law.mu_m": 0.1}), ...]
+    summaries = run_cases([(case, out_dir / "a"), ...])   # mesh size: variant(..., size=...)
     history = read_history(out_dir / "a"); contact = read_contact(out_dir / "a", "joint")
+    summaries[0]["totals"]["iterations"]                   # summary.json of the run (README "Output")
     write_report(out_dir / "REPORT.md", "Title", [("Section", "markdown text"), ...])
+
+Nothing is read from what `asperity` prints: a run's numbers come from its summary.json and
+CSV files.
 """
 from __future__ import annotations
 
 import csv
+import json
 import os
-import re
 import subprocess
 import sys
+import tomllib
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
+import tomli_w
 
 ROOT = Path(__file__).resolve().parent.parent
 BINARY = ROOT / "target" / "release" / "asperity"
+PHASES = ["mesh", "model", "symbolic", "assembly", "factorisation", "solve", "output"]
 
 
-def variant(template: Path, path: Path, replacements: dict[str, str] | None = None, size: float | None = None) -> Path:
-    """Writes a copy of the case `template` to `path` with textual `replacements` applied
-    (each key must occur in the template, so a renamed parameter cannot be missed silently)
-    and, if given, the mesh size factor replaced. Relative paths inside the case are made
-    absolute so the copy works from any folder."""
-    text = template.read_text()
-    for old, new in (replacements or {}).items():
-        if old not in text:
-            raise ValueError(f"{template}: '{old}' not found for a variant")
-        text = text.replace(old, new)
+def _key_path(key: str) -> list[str | int]:
+    """`contact[0].law.R` -> ["contact", 0, "law", "R"]; `steps.factors[-1]` -> [..., -1]."""
+    parts: list[str | int] = []
+    for name in key.split("."):
+        name, *indices = name.split("[")
+        if name:
+            parts.append(name)
+        parts += [int(i.rstrip("]")) for i in indices]
+    return parts
+
+
+def _set(case: dict, key: str, value, create: bool, where: Path) -> None:
+    """Sets `key` (a path as in `_key_path`) of the parsed case; the key must exist unless
+    `create`, so that a renamed parameter cannot be missed silently."""
+    *parents, last = _key_path(key)
+    node = case
+    try:
+        for part in parents:
+            node = node[part]
+        if not create:
+            node[last]
+    except (KeyError, IndexError, TypeError):
+        raise ValueError(f"{where}: no `{key}` for a variant") from None
+    node[last] = value
+
+
+def variant(template: Path, path: Path, changes: dict | None = None, size: float | None = None,
+            new: dict | None = None) -> Path:
+    """Writes a copy of the case `template` to `path` with the values of `changes` replaced
+    (keys are paths into the case: `contact[0].law.R`, `body[1].material.hardening`,
+    `steps.factors[-1]`; each must exist in the template), the keys of `new` added, and,
+    if given, the mesh size factor replaced. The case is parsed with tomllib and written
+    with tomli_w (comments are not kept). Relative mesh paths are made absolute so the copy
+    works from any folder."""
+    case = tomllib.loads(template.read_text())
+    for key, value in (changes or {}).items():
+        _set(case, key, value, False, template)
+    for key, value in (new or {}).items():
+        _set(case, key, value, True, template)
     if size is not None:
-        text, count = re.subn(r"(?m)^size\s*=.*$", f"size = {size}", text)
-        if count != 1:
-            raise ValueError(f"{template}: expected one 'size =' line in [mesh]")
+        _set(case, "mesh.size", float(size), False, template)
     base = template.resolve().parent
-
-    def absolute(match: re.Match) -> str:
-        key, value = match.group(1), match.group(2)
-        return f'{key} = "{(base / value).resolve()}"'
-
-    text = re.sub(r'(?m)^(geo|file)\s*=\s*"([^"/][^"]*)"', absolute, text)
+    for key in ("geo", "file"):
+        if key in case["mesh"]:
+            case["mesh"][key] = str((base / case["mesh"][key]).resolve())
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text)
+    path.write_text(tomli_w.dumps(case))
     return path
 
 
-def run_cases(runs: list[tuple[Path, Path]], jobs: int | None = None, fail_fast: bool = True) -> list[str]:
+def read_summary(out: Path) -> dict:
+    """summary.json of a run (README "Output")."""
+    return json.loads((out / "summary.json").read_text())
+
+
+def run_cases(runs: list[tuple[Path, Path]], jobs: int | None = None, fail_fast: bool = True) -> list[dict]:
     """Runs `asperity run CASE --out DIR` for every (case, out) pair, as many at a time as
-    there are cores, and returns each run's summary. Stops the pipeline with the run's error
-    message if one fails, or, with `fail_fast=False`, returns "FAILED: <message>" for it."""
+    there are cores, and returns each run's summary.json. Stops the pipeline with the run's
+    error if one fails, or, with `fail_fast=False`, returns its summary (status "failed",
+    "error"; a run that stopped before writing one gets {"status": "failed", "error": what
+    it reported})."""
     if not BINARY.exists():
         sys.exit(f"{BINARY} not found: build it with `cargo build --release` (the Makefile does)")
     jobs = jobs or os.cpu_count() or 1
 
-    def one(run: tuple[Path, Path]) -> str:
+    def one(run: tuple[Path, Path]) -> dict:
         case, out = run
+        (out / "summary.json").unlink(missing_ok=True)  # never read a previous run's
         done = subprocess.run([str(BINARY), "run", str(case), "--out", str(out)], capture_output=True, text=True)
-        if done.returncode != 0:
-            message = done.stderr.strip() or done.stdout.strip()
-            if not fail_fast:
-                return f"FAILED: {message}"
-            raise RuntimeError(f"{case}: {message}")
-        (out / "summary.txt").write_text(done.stdout)
-        return done.stdout
+        try:
+            summary = read_summary(out)
+        except FileNotFoundError:
+            # Stopped before the run began (e.g. an invalid case): only its message is known.
+            summary = {"status": "failed", "error": done.stderr.strip() or done.stdout.strip()}
+        if done.returncode != 0 and fail_fast:
+            raise RuntimeError(f"{case}: {summary.get('error')}")
+        return summary
 
     with ThreadPoolExecutor(max_workers=jobs) as pool:
         try:
             return list(pool.map(one, runs))
         except RuntimeError as error:
             sys.exit(f"run failed: {error}")
+
+
+def phase_seconds(summary: dict) -> dict[str, float]:
+    """Seconds of each phase of a converged run, in milliseconds' precision (as printed)."""
+    return {p: round(summary["seconds"][p], 3) for p in PHASES}
+
+
+def rust_exp(value: float, digits: int = 2) -> str:
+    """`value` as Rust's `{:.2e}` writes it (as `asperity` prints residuals): 1.50e-13, 2.00e0."""
+    mantissa, exponent = f"{value:.{digits}e}".split("e")
+    return f"{mantissa}e{int(exponent)}"
 
 
 def read_csv(path: Path) -> dict[str, np.ndarray]:
@@ -96,11 +148,6 @@ def read_contact(out: Path, pair: str, step: int | None = None) -> dict[str, np.
     if step is not None:
         files = [out / f"contact_{pair}_{step:04d}.csv"]
     return read_csv(files[-1])
-
-
-def summary_line(summary: str, prefix: str) -> str:
-    """The line of a run summary that starts with `prefix` (e.g. 'steps:')."""
-    return next((l for l in summary.splitlines() if l.startswith(prefix)), "")
 
 
 def write_report(path: Path, title: str, sections: list[tuple[str, str]]) -> None:

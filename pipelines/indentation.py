@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import re
 import subprocess
 import sys
 import time
@@ -45,7 +44,7 @@ from vtkmodules.vtkCommonCore import vtkLogger  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from asperity_tools import (  # noqa: E402
-    BINARY, ROOT, read_contact, read_history, run_cases, summary_line, table, variant, write_report,
+    BINARY, ROOT, phase_seconds, read_contact, read_history, run_cases, rust_exp, table, variant, write_report,
 )
 
 pv.OFF_SCREEN = True
@@ -81,18 +80,17 @@ def plan(out: Path, size: float, quick: bool) -> dict[str, dict]:
     set (1), hardening mu_m = beta = 0.1, is friction model (c) (the same case), and Fig. 10's
     ideal Coulomb mu_m = 0.1 is model (a): those runs are reused, not repeated."""
     cases = out / "cases"
-    law_a = "mu_m = 0.1, beta = 1.0, n = 275.0"
     runs = {
         "model_a": dict(study="friction_models", label="(a) ideal Coulomb, μm = 0.1, β = 1, R = 0.05e-3",
                         short="(a) ideal Coulomb μm = 0.1",
                         changes={}),
         "model_b": dict(study="friction_models", label="(b) regularised Coulomb, μm = 0.1, β = 1, R = 1.0e-3",
                         short="(b) regularised μm = 0.1",
-                        changes={"R = 5.0e-5": "R = 1.0e-3"}),
+                        changes={"contact[0].law.R": 1.0e-3}),
         "model_c": dict(study="friction_models",
                         label="(c) hardening Coulomb, μm = 0.1, β = 0.1, R = 0.05e-3 (adhesion set 1)",
                         short="(c) hardening μm = β = 0.1",
-                        changes={law_a: "mu_m = 0.1, beta = 0.1, n = 275.0"}),
+                        changes={"contact[0].law.beta": 0.1}),
         "adhesion_mu0.2": dict(study="adhesion_zones",
                                label="hardening μm = 0.2, β = 0.2, R = 0.05e-3 (adhesion set 2)",
                                short="hardening μm = β = 0.2",
@@ -102,7 +100,7 @@ def plan(out: Path, size: float, quick: bool) -> dict[str, dict]:
     }
     for h in (HARDENING_QUICK if quick else HARDENING):
         runs[f"hardening_{h:g}"] = dict(study="hardening_sweep", label=f"h = {h:g} MPa", h=h,
-                                        changes={"hardening = 1000.0": f"hardening = {h}"})
+                                        changes={f"body[{FOUNDATION}].material.hardening": h})
     for name, run in runs.items():
         run["case"] = variant(STUDIES / f"{run['study']}.toml", cases / f"{name}.toml", run["changes"], size=size)
         run["out"] = out / name
@@ -412,38 +410,44 @@ def verdict(ok: bool) -> str:
     return "**agrees**" if ok else "**differs**"
 
 
-def solver_row(name: str, summary: str) -> list:
-    steps = summary_line(summary, "steps:")
-    model = summary_line(summary, "model:")
-    times = summary_line(summary, "time [s]:")
-    total = sum(float(v) for v in re.findall(r"[a-z+]+ ([0-9.]+)", times.removeprefix("time [s]:")))
-    num = lambda pattern, text: (re.search(pattern, text) or [None, "?"])[1]  # noqa: E731
-    return [name, num(r"(\d+) unknowns", model), num(r"in (\d+) increments", steps),
-            num(r"\((\d+) cut-backs", steps), num(r"(\d+) Newton iterations", steps),
-            num(r"(\d+) unsymmetric solves", steps), num(r"(\d+) BiCGSTAB", steps),
-            num(r"residual ([0-9.e+-]+)", steps), f"{total:.1f}"]
+def solver_row(name: str, summary: dict) -> list:
+    """Counters of a run's summary.json and its solver time (the sum of the phases)."""
+    t = summary["totals"]
+    total = sum(phase_seconds(summary).values())
+    return [name, summary["model"]["unknowns"], t["increments"], t["cutbacks"], t["iterations"],
+            t["unsymmetric_solves"], t["krylov_iterations"], rust_exp(summary["final_residual"]), f"{total:.1f}"]
 
 
-def main() -> None:
+# --- the steps of the pipeline ---------------------------------------------------------------
+# (name, load factor) of the rows of the zone table and picture.
+ZONE_ROWS = [(n, f) for n in ("model_a", "model_b", "model_c", "coulomb_mu0.2", "adhesion_mu0.2") for f in (1.0, 2.0)]
+
+
+def parse_args() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "indentation")
     parser.add_argument("--size", type=float, default=None, help="mesh size factor (default 1, --quick 2.5)")
     parser.add_argument("--quick", action="store_true", help="coarse mesh and three hardening values (CI)")
     parser.add_argument("--jobs", type=int, default=None, help="runs at a time (default: all cores)")
-    args = parser.parse_args()
-    out = args.out.resolve()
-    size = args.size if args.size is not None else (2.5 if args.quick else 1.0)
-    out.mkdir(parents=True, exist_ok=True)
-    runs = plan(out, size, args.quick)
+    return parser.parse_args()
 
+
+def solve(runs: dict, jobs: int | None, size: float) -> float:
+    """Runs every case in parallel, keeps each run's summary.json; returns the wall time."""
     started = time.perf_counter()
-    summaries = run_cases([(r["case"], r["out"]) for r in runs.values()], jobs=args.jobs)
+    summaries = run_cases([(r["case"], r["out"]) for r in runs.values()], jobs=jobs)
     solve_seconds = time.perf_counter() - started
     print(f"{len(runs)} runs in {solve_seconds:.1f} s (size factor {size})", flush=True)
-
-    # Read and check every run.
-    for (name, run), summary in zip(runs.items(), summaries):
+    for run, summary in zip(runs.values(), summaries):
         run["summary"] = summary
+    return solve_seconds
+
+
+def read_and_check(runs: dict) -> None:
+    """Reads every run's history and contact tables at the load factors of its study, checks
+    the equilibrium, finds the stick/slip zones, and checks the paper's case: the hardening
+    model with mu_m = 0.2 at r = 2."""
+    for name, run in runs.items():
         run["history"] = history = read_history(run["out"])
         run["equilibrium"] = check_history(name, history)
         run["steps"] = {}
@@ -453,10 +457,13 @@ def main() -> None:
             run["steps"][f] = step = step_at(history, f, name)
             run["contact"][f] = contact_at(run["out"], step)
         run["zones"] = {f: zones(c) for f, c in run["contact"].items()}
-    # The paper's case: the hardening model with mu_m = 0.2 at r = 2.
     check_annulus(f"adhesion_mu0.2 ({runs['adhesion_mu0.2']['label']})", 2.0, runs["adhesion_mu0.2"]["zones"][2.0])
 
-    # First yield of the foundation (the paper's r = 1 for the ideal Coulomb model, mu = 0.2).
+
+def first_yields(runs: dict) -> tuple[float, float]:
+    """The load factors of first yield of the foundation for the ideal Coulomb model with
+    mu = 0.2 (the paper's r = 1) and with mu = 0.1 (model a); reads both models' contact
+    tables at the first."""
     yield_step, yield_factor = first_yield(runs["coulomb_mu0.2"]["out"], runs["coulomb_mu0.2"]["history"])
     if yield_step < 0:
         fail("coulomb_mu0.2: the foundation never yields up to r = 2")
@@ -464,8 +471,12 @@ def main() -> None:
         step = step_at(runs[name]["history"], yield_factor, name)
         runs[name]["contact"][yield_factor] = contact_at(runs[name]["out"], step)
     yield_a = first_yield(runs["model_a"]["out"], runs["model_a"]["history"])[1]
+    return yield_factor, yield_a
 
-    # Fig. 11.
+
+def hardening_sweep(runs: dict) -> list[dict]:
+    """Fig. 11: per hardening value the foundation's top deflection at the sweep load (centre,
+    edge, mean under the punch), the load path of the centre, and the plastic zone."""
     sweep = []
     for name, run in runs.items():
         if run["study"] != "hardening_sweep":
@@ -481,31 +492,35 @@ def main() -> None:
                           eps=float(np.max(grid.point_data["equivalent_plastic_strain"])),
                           plastic=int(np.asarray(grid.cell_data["plastic"]).sum())))
     sweep.sort(key=lambda s: s["h"])
+    return sweep
 
-    # Pictures.
+
+def pictures(out: Path, runs: dict, sweep: list[dict], yield_factor: float, jobs: int | None) -> None:
+    """The figures of the paper and the field pictures of every run."""
     tangential_plot(out / "tangential_stress_r1.png", runs, 1.0)
     tangential_plot(out / "tangential_stress_r2.png", runs, 2.0)
     normalised_plot(out / "normalised_contact_stress.png", runs,
                     [(f"first yield in this mesh, r = {yield_factor:g}", yield_factor),
                      ("r = 1 (the paper's initiation of plastic deformation)", 1.0)])
     deflection_plot(out / "deflection_vs_hardening.png", sweep)
-    zone_rows = [(n, f) for n in ("model_a", "model_b", "model_c", "coulomb_mu0.2", "adhesion_mu0.2")
-                 for f in (1.0, 2.0)]
-    zones_plot(out / "stick_slip_zones.png", runs, zone_rows)
-    pictures = [(str(run["out"]), str(out / f"fields_{name}.png"), int(run["history"]["step"][-1]),
-                 f"{name}: {run['label']}, load factor {run['history']['load_factor'][-1]:g}")
-                for name, run in runs.items()]
-    with ProcessPoolExecutor(max_workers=min(len(pictures), args.jobs or 8)) as pool:
-        list(pool.map(fields_picture, pictures))
+    zones_plot(out / "stick_slip_zones.png", runs, ZONE_ROWS)
+    fields = [(str(run["out"]), str(out / f"fields_{name}.png"), int(run["history"]["step"][-1]),
+               f"{name}: {run['label']}, load factor {run['history']['load_factor'][-1]:g}")
+              for name, run in runs.items()]
+    with ProcessPoolExecutor(max_workers=min(len(fields), jobs or 8)) as pool:
+        list(pool.map(fields_picture, fields))
 
-    # Report.
+
+# --- the report ------------------------------------------------------------------------------
+def setup_section(runs: dict, size: float, solve_seconds: float) -> str:
     nodes = runs["model_a"]["zones"][1.0]["nodes"]
-    setup = f"""
+    model = runs["model_a"]["summary"]["model"]
+    return f"""
 Paper §4.3 (Figs. 7–11): an elastic cylindrical punch (2a = 20 mm, h = 20 mm) pressed into an
 elasto-plastic foundation (2A = 80 mm, H = 40 mm), axisymmetric, E = 70 000 MPa, ν = 0.33 for
 both, foundation J2 with σ_Y = {SIGMA_Y:g} MPa. Mesh `geo/indentation.geo` at size factor {size:g}:
 {nodes} interface nodes along 0 ≤ r ≤ a (quadratic elements graded toward the punch corner),
-{summary_line(runs['model_a']['summary'], 'model:').removeprefix('model: ')}. Foundation
+{model['nodes']} nodes, {model['elements']} elements, {model['unknowns']} unknowns. Foundation
 bottom u_z = 0, outer surface free, punch held by the contact only.
 
 Load: uniform pressure 1.6 r p0 on the punch top, p0 = 20π MPa (misprint 6 in `docs/theory.md`,
@@ -520,25 +535,30 @@ outward (+r) and the punch inward; p_N < 0 in compression.
 Runs ({len(runs)}, in parallel on {os.cpu_count()} cores, {solve_seconds:.1f} s wall time; {binary_identity()}):
 """ + table(["run", "study file", "what"], [[n, f"indentation/{r['study']}.toml", r["label"]] for n, r in runs.items()])
 
-    equilibrium = ("Largest relative error over all steps of the vertical interface resultant −∫p_N dA, of "
-                   "the force on the foundation (`interface_force_on_b_y`) and of the foundation's support "
-                   f"reaction against the applied load Q = p π a² (check: ≤ {EQUILIBRIUM_TOL:g}).\n\n" + table(
-                       ["run", "interface ∫p_N dA", "force on foundation", "support reaction"],
-                       [[n, r["equilibrium"]["normal"], r["equilibrium"]["on_b"], r["equilibrium"]["support"]]
-                        for n, r in runs.items()]))
 
+def equilibrium_section(runs: dict) -> str:
+    return ("Largest relative error over all steps of the vertical interface resultant −∫p_N dA, of "
+            "the force on the foundation (`interface_force_on_b_y`) and of the foundation's support "
+            f"reaction against the applied load Q = p π a² (check: ≤ {EQUILIBRIUM_TOL:g}).\n\n" + table(
+                ["run", "interface ∫p_N dA", "force on foundation", "support reaction"],
+                [[n, r["equilibrium"]["normal"], r["equilibrium"]["on_b"], r["equilibrium"]["support"]]
+                 for n, r in runs.items()]))
+
+
+def zones_section(runs: dict) -> str:
+    nodes = runs["model_a"]["zones"][1.0]["nodes"]
     zone_table = table(
         ["run", "r", "stick", "slip", "inner stick zone to r/a", "first slip at r/a", "slip in r ≥ 0.9a",
          "corner", "status from the axis (= stick, ~ slip)"],
         [[runs[n]["label"], f, z["stick"], z["slip"], dash(z["inner_stick_to"]), dash(z["first_slip"]), z["outer_slip"],
-          z["corner"], f"`{z['status']}`"] for n, f in zone_rows for z in [runs[n]["zones"][f]]])
+          z["corner"], f"`{z['status']}`"] for n, f in ZONE_ROWS for z in [runs[n]["zones"][f]]])
 
-    z = {(n, f): runs[n]["zones"][f] for n, f in zone_rows}
+    z = {(n, f): runs[n]["zones"][f] for n, f in ZONE_ROWS}
     all_slide_r1 = all(z[(n, 1.0)]["off_axis_stick"] == 0 for n in ("model_c", "adhesion_mu0.2"))
     all_slide_r2 = z[("model_c", 2.0)]["off_axis_stick"] == 0
     ann, ann_c = z[("adhesion_mu0.2", 2.0)], z[("coulomb_mu0.2", 2.0)]
     ext = [(f, z[("model_c", f)]["slip"], z[("model_b", f)]["slip"]) for f in (1.0, 2.0)]
-    statements = f"""
+    return f"""
 Status of every node of the contact (r = 0 … a, {nodes} nodes; `contact_status` of the step,
 1 stick, 2 slip) at r = 1 and r = 2. The node on the axis has u_T = 0 by symmetry, so "all
 nodes slide" is read as "all nodes off the axis slide". The paper's mesh is coarser (it
@@ -569,13 +589,15 @@ Paper statements (the hardening models of the adhesion study unless named):
    (b) to r/a = {dash(z[('model_b', 1.0)]['inner_stick_to'])}.
 """
 
+
+def tangential_section(runs: dict) -> str:
     def pt_row(n: str, f: float) -> list:
         c = runs[n]["contact"][f]
         k = step_at(runs[n]["history"], f, n) - 1
         return [runs[n]["label"], f, float(c["contact_shear_stress"].max()), float(c["contact_shear_stress"].min()),
                 float(c["contact_shear_stress"][-1]), float(c["contact_normal_stress"][-1]),
                 float(runs[n]["history"][f"{PAIR}_tangential_force"][k])]
-    tangential = """
+    return """
 Figs. 8–9: `tangential_stress_r1.png`, `tangential_stress_r2.png`. The paper finds the
 tangential stresses insensitive to the slip model and decreasing, with a change of sign, as
 the load grows.
@@ -583,17 +605,22 @@ the load grows.
 """ + table(["model", "r", "max p_T [MPa]", "min p_T [MPa]", "p_T at r = a", "p_N at r = a", "∫p_T dA [N]"],
             [pt_row(n, f) for n in ("model_a", "model_b", "model_c") for f in (1.0, 2.0)])
 
-    fy = f"""
+
+def first_yield_section(yield_factor: float, yield_a: float) -> str:
+    return f"""
 The foundation first yields (a `plastic` cell) at load factor r = {yield_factor:g} for the ideal
 Coulomb model with μm = 0.2 and at r = {yield_a:g} with μm = 0.1 (steps of 0.1; the paper's r = 1
 is its first yield with μm = 0.2 in its coarser mesh — the corner singularity makes this
 load mesh-dependent). `normalised_contact_stress.png` shows both loads.
 """
+
+
+def deflection_section(sweep: list[dict]) -> str:
     sweep_table = table(["h [MPa]", "centre deflection [µm]", "edge deflection [µm]", "mean under punch [µm]",
                          "max ε̄ᵖ", "plastic cells"],
                         [[f"{s['h']:g}", -s["uz"][0] * 1e3, -s["edge"] * 1e3, -s["mean"] * 1e3, s["eps"], s["plastic"]]
                          for s in sweep])
-    deflection = f"""
+    return f"""
 Deflection −u_z of the foundation's upper face (foundation nodes at z = H) at Q = 4.6 π a² p0
 (top pressure {SWEEP_FACTOR * TOP_PRESSURE:.1f} MPa = {SWEEP_FACTOR * TOP_PRESSURE / SIGMA_Y:.2f} σ_Y), ideal
 Coulomb μm = 0.2 (the paper does not name the interface law of Fig. 11; our choice), for
@@ -605,22 +632,46 @@ strains), which the largest plastic strains below exceed.
 
 {sweep_table}
 """
-    stats = table(["run", "unknowns", "increments", "cut-backs", "Newton it.", "unsym. solves", "BiCGSTAB it.",
-                   "final residual", "solver time [s]"],
-                  [solver_row(n, r["summary"]) for n, r in runs.items()])
-    files = """
+
+
+def statistics_section(runs: dict) -> str:
+    return table(["run", "unknowns", "increments", "cut-backs", "Newton it.", "unsym. solves", "BiCGSTAB it.",
+                  "final residual", "solver time [s]"],
+                 [solver_row(n, r["summary"]) for n, r in runs.items()])
+
+
+FILES = """
 `tangential_stress_r1.png`, `tangential_stress_r2.png` (Figs. 8–9), `normalised_contact_stress.png`
 (Fig. 10), `deflection_vs_hardening.png` (Fig. 11), `stick_slip_zones.png`, `fields_<run>.png`
 (von Mises and ε̄ᵖ on the deformed shape near the punch, last step); per run `<run>/results.pvd`
-(ParaView), `<run>/contact_interface_NNNN.csv`, `<run>/history.csv`, `<run>/summary.txt`; the
+(ParaView), `<run>/contact_interface_NNNN.csv`, `<run>/history.csv`, `<run>/summary.json`; the
 case files actually run in `cases/`.
 """
+
+
+def report(out: Path, runs: dict, sweep: list[dict], size: float, solve_seconds: float,
+           yields: tuple[float, float]) -> None:
     write_report(out / "REPORT.md", "Indentation of an elastic punch into an elasto-plastic foundation (paper §4.3)",
-                 [("Set-up", setup), ("Vertical equilibrium", equilibrium),
-                  ("Stick and slip zones against the paper", statements),
-                  ("Tangential contact stress (Figs. 8–9)", tangential), ("First yield", fy),
-                  ("Deflection against hardening (Fig. 11)", deflection),
-                  ("Solver statistics (from each run's summary.txt)", stats), ("Files", files)])
+                 [("Set-up", setup_section(runs, size, solve_seconds)), ("Vertical equilibrium", equilibrium_section(runs)),
+                  ("Stick and slip zones against the paper", zones_section(runs)),
+                  ("Tangential contact stress (Figs. 8–9)", tangential_section(runs)),
+                  ("First yield", first_yield_section(*yields)),
+                  ("Deflection against hardening (Fig. 11)", deflection_section(sweep)),
+                  ("Solver statistics (from each run's summary.json)", statistics_section(runs)), ("Files", FILES)])
+
+
+def main() -> None:
+    args = parse_args()
+    out = args.out.resolve()
+    size = args.size if args.size is not None else (2.5 if args.quick else 1.0)
+    out.mkdir(parents=True, exist_ok=True)
+    runs = plan(out, size, args.quick)
+    solve_seconds = solve(runs, args.jobs, size)
+    read_and_check(runs)
+    yields = first_yields(runs)
+    sweep = hardening_sweep(runs)
+    pictures(out, runs, sweep, yields[0], args.jobs)
+    report(out, runs, sweep, size, solve_seconds, yields)
     print(f"results: {out} (REPORT.md, *.png; <run>/results.pvd for ParaView)")
 
 

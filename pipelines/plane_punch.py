@@ -26,7 +26,6 @@ Coulomb (the paper's statement).
 from __future__ import annotations
 
 import argparse
-import re
 import subprocess
 import sys
 import time
@@ -41,7 +40,9 @@ import numpy as np  # noqa: E402
 import pyvista as pv  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from asperity_tools import ROOT, read_contact, read_history, run_cases, summary_line, table, variant, write_report  # noqa: E402
+from asperity_tools import (  # noqa: E402
+    ROOT, phase_seconds, read_contact, read_history, run_cases, rust_exp, table, variant, write_report,
+)
 
 pv.OFF_SCREEN = True
 
@@ -86,23 +87,6 @@ def case_parameters(case: Path) -> dict:
         "law": contact["law"], "steps": spec["steps"]["count"],
         "material": spec["body"][0]["material"],
     }
-
-
-def parse_summary(summary: str) -> dict:
-    """Numbers of a run summary (model size, Krylov iterations, phase times)."""
-    out = {}
-    if m := re.search(r"(\d+) unknowns", summary_line(summary, "model:")):
-        out["unknowns"] = int(m.group(1))
-    if m := re.search(r"(\d+) elements", summary_line(summary, "model:")):
-        out["elements"] = int(m.group(1))
-    steps = summary_line(summary, "steps:")
-    for key, pattern in [("cutbacks", r"\((\d+) cut-backs\)"), ("unsymmetric", r"(\d+) unsymmetric"),
-                         ("krylov", r"(\d+) BiCGSTAB"), ("residual", r"final relative residual ([0-9.eE+-]+)")]:
-        if m := re.search(pattern, steps):
-            out[key] = float(m.group(1)) if key == "residual" else int(m.group(1))
-    times = dict(re.findall(r"([a-z+]+) ([0-9.]+)", summary_line(summary, "time [s]:")))
-    out["times"] = {k: float(v) for k, v in times.items()}
-    return out
 
 
 def slip_figure(path: Path, results: dict, a: float) -> None:
@@ -252,7 +236,7 @@ def main() -> None:
                 fail(f"{out / name}: contact table of step {step} missing ({error})")
             require(contacts[step], CONTACT_COLUMNS, f"{out / name}/contact_{PAIR}_{step:04d}.csv")
         results[name] = {"history": history, "steps": contacts, "contact": contacts[steps[-1]],
-                         "summary": parse_summary(summaries[name])}
+                         "summary": summaries[name]}
         done = subprocess.run([sys.executable, str(ROOT / "pipelines" / "plot_fields.py"), str(out / name)],
                               capture_output=True, text=True)
         if done.returncode != 0:
@@ -321,11 +305,12 @@ def main() -> None:
     stat_rows = []
     for name, r in results.items():
         h, s = r["history"], r["summary"]
-        times = s.get("times", {})
-        stat_rows.append([MODELS[name], s.get("elements", "?"), s.get("unknowns", "?"), len(h["step"]),
-                          int(h["increments"].sum()), s.get("cutbacks", "?"), int(h["iterations"].sum()),
-                          s.get("unsymmetric", "?"), s.get("krylov", "?"), s.get("residual", "?"),
-                          times.get("assembly", "?"), times.get("solve", "?"), float(sum(times.values()))])
+        times, totals = phase_seconds(s), s["totals"]
+        stat_rows.append([MODELS[name], s["model"]["elements"], s["model"]["unknowns"], len(h["step"]),
+                          int(h["increments"].sum()), totals["cutbacks"], int(h["iterations"].sum()),
+                          totals["unsymmetric_solves"], totals["krylov_iterations"],
+                          float(rust_exp(s["final_residual"])), times["assembly"], times["solve"],
+                          float(sum(times.values()))])
 
     g = geometry
     worst_equilibrium = max(max(row[3:]) for row in eq_rows)
@@ -403,7 +388,7 @@ vertical force the foundation exerts on the punch, and the bottom reaction (tole
 {table(["model", "elements", "unknowns", "steps", "increments", "cut-backs", "Newton iterations", "unsymmetric solves", "BiCGSTAB iterations", "final residual", "assembly [s]", "solve [s]", "total [s]"], stat_rows)}
 
 Both runs together (in parallel): {wall:.1f} s wall time. Per-run summaries:
-`coulomb/summary.txt`, `hardening/summary.txt`.
+`coulomb/summary.json`, `hardening/summary.json`.
 """),
         ("Solver notes", """
 - Most of the run time is spent in BiCGSTAB on the unsymmetric tangent (about 25-35

@@ -9,19 +9,26 @@
 //!   interface, listed in `results.pvd` as a second part;
 //! - `contact_<pair>_NNNN.csv`: the contact fields along each pair's curve;
 //! - `history.csv`: per step the load factor, increments, Newton iterations, final residual,
-//!   the reaction force of every support and the resultant forces of every contact pair.
+//!   the reaction force of every support and the resultant forces of every contact pair;
+//! - `summary.json` ([`Summary`]): the model size, every converged step, totals and timings,
+//!   and whether the run converged or failed (with the error), for scripts.
 //!
-//! Every file is rewritten after each converged step, so a run that stops early leaves the
-//! results of all converged steps on disk.
+//! Every file but `summary.json` is rewritten after each converged step, so a run that stops
+//! early leaves the results of all converged steps on disk; `summary.json` is written at the
+//! end, also when a run fails.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::config::{Case, SolverSpec};
+use crate::element::Analysis;
 use crate::mesh::{Mesh, gmsh, msh};
 use crate::model::{Model, ModelSpec};
 use crate::output::csv::{CsvTable, write_csv};
 use crate::output::pvd::{PvdEntry, write_pvd};
+use crate::output::summary::{
+    ContactResultant, Force, ModelSize, Named, Status, StepSummary, Summary,
+};
 use crate::output::vtu::write_vtu;
 use crate::post::interface::{InterfaceOutput, resultants};
 use crate::post::{BodyPoints, body_grid, reactions};
@@ -117,19 +124,35 @@ pub fn load_mesh(case: &Case, out_dir: &Path) -> Result<Mesh> {
 
 /// Runs `case`, writing results to `out_dir`. `progress` shows a progress bar over the steps.
 pub fn run(case: &Case, out_dir: &Path, progress: bool) -> Result<RunSummary> {
-    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
     let spec = ModelSpec::new(case)?; // bad parameters fail before gmsh runs
-    let t = Instant::now();
-    let mesh = load_mesh(case, out_dir)?;
-    let mesh_seconds = t.elapsed().as_secs_f64();
+    let (mesh, mesh_seconds) = mesh_case(case, out_dir)?;
     run_model(case, spec, mesh, mesh_seconds, out_dir, progress, |_, _| {
         Ok(())
     })
 }
 
+/// Obtains the case's mesh into `out_dir` ([`load_mesh`]) and the seconds it took. If that
+/// fails, `out_dir/summary.json` says so (status `failed`, the error, no model).
+pub fn mesh_case(case: &Case, out_dir: &Path) -> Result<(Mesh, f64)> {
+    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+    let t = Instant::now();
+    match load_mesh(case, out_dir) {
+        Ok(mesh) => Ok((mesh, t.elapsed().as_secs_f64())),
+        Err(e) => {
+            let mut summary = Summary::new(&case.path);
+            summary.seconds.mesh = t.elapsed().as_secs_f64();
+            summary.seconds.total = summary.seconds.mesh;
+            summary.fail(&e);
+            write_summary_after_failure(&summary, out_dir);
+            Err(e)
+        }
+    }
+}
+
 /// Runs `case` on an already loaded `mesh` (from [`load_mesh`], which took `mesh_seconds`),
 /// writing results to `out_dir`, and calls `on_step` with the model and every converged step
 /// after its files are written (e.g. to evaluate quantities in memory; an error stops the run).
+/// `summary.json` is written whether the run converges or fails.
 pub fn run_mesh(
     case: &Case,
     mesh: Mesh,
@@ -150,6 +173,35 @@ pub fn run_model(
     mesh_seconds: f64,
     out_dir: &Path,
     progress: bool,
+    on_step: impl FnMut(&Model, &StepResult) -> Result<()>,
+) -> Result<RunSummary> {
+    let start = Instant::now();
+    let mut summary = Summary::new(&case.path);
+    summary.seconds.mesh = mesh_seconds;
+    let result = solve(case, spec, mesh, out_dir, progress, &mut summary, on_step);
+    summary.seconds.total = mesh_seconds + start.elapsed().as_secs_f64();
+    match &result {
+        Ok(run) => {
+            complete_summary(&mut summary, run);
+            summary.write(&out_dir.join("summary.json"))?;
+        }
+        Err(e) => {
+            summary.fail(e);
+            write_summary_after_failure(&summary, out_dir);
+        }
+    }
+    result
+}
+
+/// The model, the load steps and their files: the work of [`run_mesh`], which writes the
+/// summary.
+fn solve(
+    case: &Case,
+    spec: ModelSpec,
+    mesh: Mesh,
+    out_dir: &Path,
+    progress: bool,
+    summary: &mut Summary,
     mut on_step: impl FnMut(&Model, &StepResult) -> Result<()>,
 ) -> Result<RunSummary> {
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
@@ -163,8 +215,9 @@ pub fn run_model(
         "model built ({})",
         model.analysis.name()
     );
+    describe_model(summary, &model, model_seconds);
     let bar = progress_bar(progress, model.schedule.steps());
-    let mut writer = StepWriter::new(&model, out_dir, case.output.vtu);
+    let mut writer = StepWriter::new(&model, out_dir, case.output.vtu, summary);
     let mut last_reactions = Vec::new();
     let (_, stats) = run_steps(&model, &newton_settings(&case.solver), |step| {
         let t = Instant::now();
@@ -180,7 +233,7 @@ pub fn run_model(
         nodes: model.mesh.nodes.len(),
         cells: model.continuum.cells.len(),
         dofs: model.dofs.free_count(),
-        mesh_seconds,
+        mesh_seconds: summary.seconds.mesh,
         model_seconds,
         stats,
         reactions: model
@@ -210,6 +263,53 @@ impl From<SolverSpec> for NewtonSettings {
     }
 }
 
+// --- summary.json ---------------------------------------------------------------------------
+
+/// Records the analysis and size of the built `model` in `summary`.
+fn describe_model(summary: &mut Summary, model: &Model, model_seconds: f64) {
+    let (analysis, thickness) = match model.analysis {
+        Analysis::PlaneStress { thickness } => ("plane_stress", Some(thickness)),
+        Analysis::PlaneStrain { thickness } => ("plane_strain", Some(thickness)),
+        Analysis::Axisymmetric => ("axisymmetric", None),
+    };
+    summary.analysis = Some(analysis);
+    summary.model = Some(ModelSize {
+        nodes: model.mesh.nodes.len(),
+        elements: model.continuum.cells.len(),
+        interface_elements: model.interface.elements.len(),
+        unknowns: model.dofs.free_count(),
+        thickness,
+    });
+    summary.seconds.model = Some(model_seconds);
+}
+
+/// Completes `summary` with the counters and timings of the converged `run`.
+fn complete_summary(summary: &mut Summary, run: &RunSummary) {
+    let s = &run.stats;
+    summary.status = Status::Converged;
+    summary.totals.steps = s.steps;
+    summary.totals.increments = s.increments;
+    summary.totals.cutbacks = s.cutbacks;
+    summary.totals.iterations = s.iterations;
+    summary.totals.unsymmetric_solves = Some(s.unsymmetric_solves);
+    summary.totals.krylov_iterations = Some(s.krylov_iterations);
+    let seconds = &mut summary.seconds;
+    seconds.symbolic = Some(s.symbolic_seconds);
+    seconds.assembly = Some(s.assembly_seconds);
+    seconds.factorisation = Some(s.factorization_seconds);
+    seconds.solve = Some(s.solve_seconds);
+    seconds.output = Some(s.output_seconds);
+    summary.final_residual = Some(s.last_residual);
+}
+
+/// Writes the summary of a failed run; a failure to write it is logged, since the run's own
+/// error is the one to report.
+fn write_summary_after_failure(summary: &Summary, out_dir: &Path) {
+    if let Err(e) = summary.write(&out_dir.join("summary.json")) {
+        tracing::warn!("{e}");
+    }
+}
+
 fn progress_bar(enabled: bool, steps: usize) -> indicatif::ProgressBar {
     if !enabled {
         return indicatif::ProgressBar::hidden();
@@ -224,8 +324,9 @@ fn progress_bar(enabled: bool, steps: usize) -> indicatif::ProgressBar {
     bar
 }
 
-/// Writes the files of each converged step and keeps the series and history up to date.
-struct StepWriter<'m> {
+/// Writes the files of each converged step, keeps the series and history up to date, and
+/// records the step in the summary.
+struct StepWriter<'m, 's> {
     model: &'m Model,
     points: BodyPoints,
     interface: InterfaceOutput,
@@ -233,10 +334,11 @@ struct StepWriter<'m> {
     vtu: bool,
     series: Vec<PvdEntry>,
     history: CsvTable,
+    summary: &'s mut Summary,
 }
 
-impl<'m> StepWriter<'m> {
-    fn new(model: &'m Model, out_dir: &Path, vtu: bool) -> Self {
+impl<'m, 's> StepWriter<'m, 's> {
+    fn new(model: &'m Model, out_dir: &Path, vtu: bool, summary: &'s mut Summary) -> Self {
         let mut columns: Vec<String> = [
             "step",
             "load_factor",
@@ -272,6 +374,7 @@ impl<'m> StepWriter<'m> {
                 columns,
                 rows: Vec::new(),
             },
+            summary,
         }
     }
 
@@ -318,17 +421,52 @@ impl<'m> StepWriter<'m> {
                 table,
             )?;
         }
+        let residual = *step.newton.residuals.last().unwrap_or(&0.0);
+        let resultants = resultants(self.model, states);
         let mut row = vec![
             step.step as f64,
             step.load_factor,
             step.increments as f64,
             step.newton.iterations as f64,
-            *step.newton.residuals.last().unwrap_or(&0.0),
+            residual,
         ];
         row.extend(reactions.iter().flatten());
-        row.extend(resultants(self.model, states).iter().flatten());
+        row.extend(resultants.iter().flatten());
         self.history.rows.push(row);
         write_csv(&self.out_dir.join("history.csv"), &self.history)?;
+        self.summary.push_step(StepSummary {
+            step: step.step,
+            load_factor: step.load_factor,
+            increments: step.increments,
+            cutbacks: step.cutbacks,
+            iterations: step.newton.iterations,
+            residual,
+            reactions: Named(
+                self.model
+                    .supports
+                    .iter()
+                    .zip(&reactions)
+                    .map(|(s, r)| (s.name.clone(), Force { x: r[0], y: r[1] }))
+                    .collect(),
+            ),
+            contact: Named(
+                self.model
+                    .interface
+                    .pairs
+                    .iter()
+                    .zip(&resultants)
+                    .map(|(p, r)| {
+                        let resultant = ContactResultant {
+                            normal_force: r[0],
+                            tangential_force: r[1],
+                            force_on_b_x: r[2],
+                            force_on_b_y: r[3],
+                        };
+                        (p.name.clone(), resultant)
+                    })
+                    .collect(),
+            ),
+        });
         Ok(reactions)
     }
 }

@@ -293,7 +293,8 @@ fn repo(path: &str) -> PathBuf {
 }
 
 /// Runs `asperity converge` on a copy of a study file with the `.geo` path made absolute and
-/// `edit` applied; returns (exit code, stdout + stderr, output folder).
+/// `edit` applied; returns (exit code, stdout + stderr, output folder). `ASPERITY_PIPELINES`
+/// names a folder without the plot script, so the plot is skipped (and says how to make it).
 fn converge(
     study: &str,
     edit: impl Fn(String) -> String,
@@ -311,9 +312,9 @@ fn converge(
             case.to_str().unwrap(),
             "--out",
             out.to_str().unwrap(),
-            "--no-plot",
         ])
         .args(args)
+        .env("ASPERITY_PIPELINES", dir.path())
         .output()
         .expect("runs");
     let text = String::from_utf8_lossy(&output.stdout).to_string()
@@ -338,6 +339,13 @@ fn a_converged_study_exits_zero_and_writes_the_table() {
     println!("{text}");
     assert_eq!(code, 0, "{text}");
     assert!(text.contains("bore_displacement") && text.contains("bore_cli"));
+    let skipped = format!(
+        "plot: skipped convergence.png: ASPERITY_PIPELINES={} has no plot_convergence.py; to make it, run \
+         `.venv/bin/python pipelines/plot_convergence.py {}`",
+        dir.path().display(),
+        dir.path().join("out").display()
+    );
+    assert!(text.contains(&skipped), "{text}");
     let csv = std::fs::read_to_string(dir.path().join("out/convergence.csv")).unwrap();
     let rows: Vec<&str> = csv.lines().collect();
     assert!(rows[0].starts_with("quantity,kind,level,h,unknowns"));
@@ -347,11 +355,10 @@ fn a_converged_study_exits_zero_and_writes_the_table() {
     let order: f64 = rows[1].split(',').nth(13).unwrap().parse().unwrap();
     assert!(order > 3.5, "order {order}");
     for k in 0..3 {
-        assert!(
-            dir.path()
-                .join(format!("out/level_{k}/history.csv"))
-                .is_file()
-        );
+        let level = dir.path().join(format!("out/level_{k}"));
+        assert!(level.join("history.csv").is_file());
+        let summary = std::fs::read_to_string(level.join("summary.json")).unwrap();
+        assert!(summary.contains("\"status\": \"converged\""), "{summary}");
     }
 }
 

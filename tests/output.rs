@@ -1,9 +1,11 @@
 //! Output writers: VTU round trip through vtkio's reader, validation failures that must leave
-//! no file behind, the PVD collection and CSV tables.
+//! no file behind, the PVD collection, CSV tables, and the `summary.json` of converged and
+//! failed runs.
 
 use std::fs;
 use std::path::{Path, PathBuf};
 
+use asperity::config::Case;
 use asperity::output::csv::{CsvTable, write_csv};
 use asperity::output::pvd::{PvdEntry, write_pvd};
 use asperity::output::vtu::{read_vtu, write_vtu};
@@ -389,6 +391,127 @@ fn csv_rejects_ragged_rows_and_non_finite_values() {
     let err = write_csv(&path, &table).unwrap_err().to_string();
     assert!(err.contains("column `b`, row 1"), "{err}");
     assert!(dir_names(dir.path()).is_empty());
+}
+
+/// The shrink fit of `pipelines/shrink_fit.toml` (axisymmetric, one contact pair, one step).
+fn shrink_fit() -> Case {
+    Case::from_file(&Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/shrink_fit.toml"))
+        .unwrap()
+}
+
+fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// The last row of a CSV file by column name.
+fn last_row(path: &Path) -> std::collections::HashMap<String, f64> {
+    let text = fs::read_to_string(path).unwrap();
+    let header = text.lines().next().unwrap().split(',');
+    let values = text.lines().last().unwrap().split(',');
+    header
+        .zip(values)
+        .map(|(h, v)| (h.to_string(), v.parse().unwrap()))
+        .collect()
+}
+
+#[test]
+fn a_converged_run_writes_its_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = shrink_fit();
+    let run = asperity::pipeline::run(&case, dir.path(), false).unwrap();
+    let s = read_json(&dir.path().join("summary.json"));
+    println!("{s:#}");
+    assert_eq!(s["program"], "asperity");
+    assert_eq!(s["version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(s["case"], case.path.display().to_string());
+    assert_eq!(s["status"], "converged");
+    assert!(s["error"].is_null());
+    assert_eq!(s["analysis"], "axisymmetric");
+    assert_eq!(s["model"]["nodes"], run.nodes);
+    assert_eq!(s["model"]["elements"], run.cells);
+    assert_eq!(s["model"]["unknowns"], run.dofs);
+    assert!(s["model"]["interface_elements"].as_u64().unwrap() > 0);
+    assert!(s["model"]["thickness"].is_null());
+    let steps = s["steps"].as_array().unwrap();
+    assert_eq!(steps.len(), 1);
+    assert_eq!(steps[0]["load_factor"], 1.0);
+    assert_eq!(steps[0]["cutbacks"], 0);
+    // Reactions and resultants are those of history.csv.
+    let history = last_row(&dir.path().join("history.csv"));
+    for support in ["shaft_ends", "hub_ends", "axis"] {
+        for c in ["x", "y"] {
+            let column = &history[&format!("reaction_{support}_{c}")];
+            assert_eq!(steps[0]["reactions"][support][c], *column);
+            assert_eq!(s["reactions"][support][c], *column);
+        }
+    }
+    for quantity in [
+        "normal_force",
+        "tangential_force",
+        "force_on_b_x",
+        "force_on_b_y",
+    ] {
+        assert_eq!(
+            steps[0]["contact"]["fit"][quantity],
+            history[&format!("fit_{quantity}")]
+        );
+    }
+    assert_eq!(s["final_residual"], history["residual"]);
+    assert_eq!(steps[0]["iterations"], history["iterations"]);
+    let totals = &s["totals"];
+    assert_eq!(totals["steps"], 1);
+    assert_eq!(totals["increments"], run.stats.increments);
+    assert_eq!(totals["iterations"], run.stats.iterations);
+    assert_eq!(totals["unsymmetric_solves"], run.stats.unsymmetric_solves);
+    assert_eq!(totals["krylov_iterations"], run.stats.krylov_iterations);
+    for phase in [
+        "mesh",
+        "model",
+        "symbolic",
+        "assembly",
+        "factorisation",
+        "solve",
+        "output",
+        "total",
+    ] {
+        assert!(s["seconds"][phase].as_f64().unwrap() >= 0.0, "{phase}");
+    }
+}
+
+#[test]
+fn a_failed_run_writes_its_summary_with_the_converged_steps() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = shrink_fit();
+    let (mesh, mesh_seconds) = asperity::pipeline::mesh_case(&case, dir.path()).unwrap();
+    let err = asperity::pipeline::run_mesh(&case, mesh, mesh_seconds, dir.path(), false, |_, _| {
+        Err(asperity::Error::io(
+            "evaluation",
+            std::io::Error::other("stopped by the test"),
+        ))
+    })
+    .unwrap_err();
+    let s = read_json(&dir.path().join("summary.json"));
+    assert_eq!(s["status"], "failed");
+    assert_eq!(s["error"], err.to_string());
+    assert!(err.to_string().contains("stopped by the test"));
+    assert!(s["model"]["nodes"].as_u64().unwrap() > 0);
+    // The step converged and its files were written before the evaluation failed.
+    assert_eq!(s["steps"].as_array().unwrap().len(), 1);
+    assert_eq!(s["totals"]["steps"], 1);
+    assert!(s["totals"]["unsymmetric_solves"].is_null());
+    assert!(s["seconds"]["assembly"].is_null());
+    assert!(s["seconds"]["total"].as_f64().unwrap() >= 0.0);
+
+    // A mesh that cannot be read: no model, and the error.
+    let out = dir.path().join("no_mesh");
+    let mut case = case;
+    case.mesh.file = Some(dir.path().join("missing.msh"));
+    let err = asperity::pipeline::mesh_case(&case, &out).unwrap_err();
+    let s = read_json(&out.join("summary.json"));
+    assert_eq!(s["status"], "failed");
+    assert_eq!(s["error"], err.to_string());
+    assert!(s["model"].is_null() && s["analysis"].is_null());
+    assert_eq!(s["steps"].as_array().unwrap().len(), 0);
 }
 
 /// Times writing a 500k-point grid of quad8 cells with the fields of a real run. Run with

@@ -4,21 +4,26 @@
 //! ParaView or a post-processing script may read the output folder while the run is still
 //! going. Writing straight into `step_0007.vtu` would expose a truncated file in both
 //! cases; instead every writer of this module tree goes through [`write_atomically`], which
-//! writes a hidden temporary file next to the target and renames it into place. A rename
-//! within one directory (one filesystem) replaces the target in a single step on POSIX
-//! systems, so readers see either the old file or the new one, never a mixture.
+//! writes a hidden temporary file next to the target (`tempfile`'s [`NamedTempFile`]) and
+//! persists it onto the target. Persisting renames within one directory (one filesystem),
+//! which replaces the target in a single step on POSIX systems, so readers see either the
+//! old file or the new one, never a mixture; a temporary file that is never persisted is
+//! deleted when it is dropped, also when `write` fails or panics.
 
-use std::fs::{self, File};
 use std::io::{self, BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
+
+use tempfile::NamedTempFile;
 
 use crate::{Error, Result};
 
 /// Writes `path` by calling `write` on a buffered temporary file in the same directory and
-/// renaming that file onto `path` once `write` has succeeded and the data is flushed.
+/// persisting that file onto `path` once `write` has succeeded and the data is flushed.
 ///
 /// Creates the parent directory if it is missing. On any failure the temporary file is
-/// removed and the error names `path`; an existing file at `path` is left untouched.
+/// removed and the error names `path`; an existing file at `path` is left untouched. The
+/// file gets the permissions `File::create` would give it (0o666 less the umask), not the
+/// owner-only ones of a temporary file.
 ///
 /// Validation of the data should happen *before* calling this, so that a bad value does not
 /// even create the temporary file; `write` may still fail (disk full, ...), in which case
@@ -34,38 +39,43 @@ pub(crate) fn write_atomically(
         )
     })?;
     let dir = match path.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() => dir.to_path_buf(),
-        _ => PathBuf::from("."),
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
     };
-    fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-
-    // Hidden (leading dot) so that file browsers and `*.vtu` globs skip it, and in the same
-    // directory so that the final rename cannot cross filesystems.
-    let mut tmp_name = std::ffi::OsString::from(".");
-    tmp_name.push(file_name);
-    tmp_name.push(".tmp");
-    let tmp = dir.join(tmp_name);
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
 
     let result = (|| -> io::Result<()> {
-        let mut writer = BufWriter::with_capacity(1 << 20, File::create(&tmp)?);
+        // Hidden (leading dot) so that file browsers and `*.vtu` globs skip it, and in the
+        // same directory so that persisting it cannot cross filesystems.
+        let mut prefix = std::ffi::OsString::from(".");
+        prefix.push(file_name);
+        prefix.push(".");
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).suffix(".tmp");
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            builder.permissions(std::fs::Permissions::from_mode(0o666));
+        }
+        let tmp = builder.tempfile_in(dir)?;
+        let mut writer = BufWriter::with_capacity(1 << 20, tmp.as_file());
         write(&mut writer)?;
         // `into_inner` flushes and reports flush errors, which dropping a `BufWriter` would
         // silently swallow (a full disk would then yield a truncated file and `Ok`).
-        let file = writer
+        writer
             .into_inner()
             .map_err(io::IntoInnerError::into_error)?;
-        // Make the data durable before the rename makes it visible, so that a crash of
-        // the machine cannot leave a renamed but empty file.
-        file.sync_all()?;
-        drop(file);
-        fs::rename(&tmp, path)
+        // Make the data durable before the rename makes it visible, so that a crash of the
+        // machine cannot leave a renamed but empty file.
+        tmp.as_file().sync_all()?;
+        persist(tmp, path)
     })();
+    result.map_err(|e| Error::io(path, e))
+}
 
-    result.map_err(|e| {
-        // Best effort: the original error matters more than a failed cleanup.
-        let _ = fs::remove_file(&tmp);
-        Error::io(path, e)
-    })
+/// Renames `tmp` onto `path`; on failure `tmp` is dropped, which deletes it.
+fn persist(tmp: NamedTempFile, path: &Path) -> io::Result<()> {
+    tmp.persist(path).map(drop).map_err(|e| e.error)
 }
 
 /// Builds the [`Error::Io`] used for data that cannot be written (wrong lengths, NaN, ...):
@@ -81,6 +91,16 @@ pub(crate) fn invalid_data(path: &Path, message: impl Into<String>) -> Error {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::fs;
+
+    fn names(dir: &Path) -> Vec<std::ffi::OsString> {
+        let mut names: Vec<_> = fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        names.sort();
+        names
+    }
 
     #[test]
     fn failed_write_leaves_nothing_behind_and_keeps_old_file() {
@@ -94,19 +114,32 @@ mod tests {
         .unwrap_err();
         assert!(err.to_string().contains("boom"), "{err}");
         assert_eq!(fs::read_to_string(&path).unwrap(), "old");
-        let names: Vec<_> = fs::read_dir(dir.path())
-            .unwrap()
-            .map(|e| e.unwrap().file_name())
-            .collect();
-        assert_eq!(names, vec![std::ffi::OsString::from("a.txt")]);
+        assert_eq!(names(dir.path()), vec![std::ffi::OsString::from("a.txt")]);
     }
 
     #[test]
-    fn creates_missing_parent_directories() {
+    fn creates_missing_parent_directories_and_replaces_the_file() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("x/y/b.txt");
+        write_atomically(&path, |w| w.write_all(b"old")).unwrap();
         write_atomically(&path, |w| w.write_all(b"new")).unwrap();
         assert_eq!(fs::read_to_string(&path).unwrap(), "new");
-        assert!(!dir.path().join("x/y/.b.txt.tmp").exists());
+        assert_eq!(
+            names(&dir.path().join("x/y")),
+            vec![std::ffi::OsString::from("b.txt")]
+        );
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn the_file_gets_the_permissions_of_a_created_file() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let created = dir.path().join("created.txt");
+        fs::write(&created, "x").unwrap();
+        let path = dir.path().join("atomic.txt");
+        write_atomically(&path, |w| w.write_all(b"x")).unwrap();
+        let mode = |p: &Path| fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode(&path), mode(&created));
     }
 }

@@ -1,4 +1,5 @@
-//! CSV tables (load-displacement history, interface stresses along a contact line, ...).
+//! The one CSV writer: load-displacement history, interface stresses along a contact line,
+//! the table of a convergence study.
 //!
 //! The format is the plain one that `pandas.read_csv`, `numpy.loadtxt(delimiter=",",
 //! skiprows=1)` and spreadsheets read without options: one header line of column names,
@@ -11,16 +12,23 @@ use std::path::Path;
 use super::atomic::{invalid_data, write_atomically};
 use crate::Result;
 
-/// A table of floating-point columns with names.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct CsvTable {
+/// A table with named columns; the cells are numbers (`f64`, the default) or [`Cell`]s for
+/// tables that also hold text and empty cells (`convergence.csv`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CsvTable<C = f64> {
     /// Column names, written as the header line.
     pub columns: Vec<String>,
     /// Rows, each with exactly `columns.len()` values.
-    pub rows: Vec<Vec<f64>>,
+    pub rows: Vec<Vec<C>>,
 }
 
-impl CsvTable {
+impl<C> Default for CsvTable<C> {
+    fn default() -> Self {
+        Self::new(Vec::<String>::new())
+    }
+}
+
+impl<C> CsvTable<C> {
     /// An empty table with the given column names.
     pub fn new(columns: impl IntoIterator<Item = impl Into<String>>) -> Self {
         CsvTable {
@@ -30,12 +38,73 @@ impl CsvTable {
     }
 }
 
+/// A cell of a table that is not all numbers.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Cell {
+    Number(f64),
+    /// Quoted when it contains a comma, quote or line break.
+    Text(String),
+    /// Written as nothing between the commas (a missing value: pandas reads NaN).
+    Empty,
+}
+
+impl From<f64> for Cell {
+    fn from(v: f64) -> Self {
+        Cell::Number(v)
+    }
+}
+
+impl From<Option<f64>> for Cell {
+    fn from(v: Option<f64>) -> Self {
+        v.map_or(Cell::Empty, Cell::Number)
+    }
+}
+
+impl From<&str> for Cell {
+    fn from(s: &str) -> Self {
+        Cell::Text(s.to_string())
+    }
+}
+
+/// What [`write_csv`] can write as a cell.
+pub trait CsvCell {
+    /// The number to check for finiteness, if the cell is a number.
+    fn number(&self) -> Option<f64>;
+    /// Appends the cell's text.
+    fn push_to(&self, out: &mut String);
+}
+
+impl CsvCell for f64 {
+    fn number(&self) -> Option<f64> {
+        Some(*self)
+    }
+    fn push_to(&self, out: &mut String) {
+        push_f64(out, *self);
+    }
+}
+
+impl CsvCell for Cell {
+    fn number(&self) -> Option<f64> {
+        match self {
+            Cell::Number(v) => Some(*v),
+            _ => None,
+        }
+    }
+    fn push_to(&self, out: &mut String) {
+        match self {
+            Cell::Number(v) => push_f64(out, *v),
+            Cell::Text(s) => out.push_str(&quote_field(s)),
+            Cell::Empty => {}
+        }
+    }
+}
+
 /// Writes `table` to `path` (atomically, creating the parent directory).
 ///
-/// Fails without touching `path` if a row does not have one value per column or a value is
+/// Fails without touching `path` if a row does not have one value per column or a number is
 /// NaN or infinite: such a value in a result table means the computation went wrong, and
 /// writing it would only move the surprise into the plotting script.
-pub fn write_csv(path: &Path, table: &CsvTable) -> Result<()> {
+pub fn write_csv<C: CsvCell>(path: &Path, table: &CsvTable<C>) -> Result<()> {
     let ncols = table.columns.len();
     for (r, row) in table.rows.iter().enumerate() {
         if row.len() != ncols {
@@ -47,7 +116,11 @@ pub fn write_csv(path: &Path, table: &CsvTable) -> Result<()> {
                 ),
             ));
         }
-        if let Some((c, v)) = row.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        let bad = row
+            .iter()
+            .enumerate()
+            .find_map(|(c, v)| v.number().filter(|v| !v.is_finite()).map(|v| (c, v)));
+        if let Some((c, v)) = bad {
             return Err(invalid_data(
                 path,
                 format!(
@@ -65,19 +138,19 @@ pub fn write_csv(path: &Path, table: &CsvTable) -> Result<()> {
     text.push_str(&header.join(","));
     text.push('\n');
     for row in &table.rows {
-        for (c, &v) in row.iter().enumerate() {
+        for (c, v) in row.iter().enumerate() {
             if c > 0 {
                 text.push(',');
             }
-            push_f64(&mut text, v);
+            v.push_to(&mut text);
         }
         text.push('\n');
     }
     write_atomically(path, |w| w.write_all(text.as_bytes()))
 }
 
-/// Quotes a column name if it contains a comma, quote or line break (RFC 4180), so that
-/// names like `p_N, MPa` do not shift the columns.
+/// Quotes a column name or text cell if it contains a comma, quote or line break (RFC
+/// 4180), so that names like `p_N, MPa` do not shift the columns.
 fn quote_field(name: &str) -> String {
     if name.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", name.replace('"', "\"\""))
@@ -131,6 +204,25 @@ mod tests {
         }
         assert_eq!(format_f64(0.25), "0.25");
         assert_eq!(format_f64(1e-300), "1e-300");
+    }
+
+    #[test]
+    fn mixed_cells_are_written_and_checked() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.csv");
+        let mut table = CsvTable::new(["name", "value", "order"]);
+        table
+            .rows
+            .push(vec!["a, b".into(), 0.5.into(), Cell::from(None)]);
+        table
+            .rows
+            .push(vec!["c".into(), 1e-300.into(), Some(2.0).into()]);
+        write_csv(&path, &table).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(text, "name,value,order\n\"a, b\",0.5,\nc,1e-300,2\n");
+        table.rows[1][1] = f64::NAN.into();
+        let err = write_csv(&path, &table).unwrap_err().to_string();
+        assert!(err.contains("column `value`, row 1"), "{err}");
     }
 
     #[test]

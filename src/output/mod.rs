@@ -1,13 +1,15 @@
-//! Result output: VTU files ([`vtu`]), the `.pvd` series that lists them ([`pvd`]) and CSV
-//! tables ([`csv`]).
+//! Result output: VTU files ([`vtu`]), the `.pvd` series that lists them ([`pvd`]), CSV
+//! tables ([`csv`]) and the run's `summary.json` ([`summary`]).
 //!
 //! Writers never leave a half-written file behind: each writes to a temporary file in the
 //! target folder and renames it into place once it is complete. They also refuse to write
-//! non-finite numbers (a NaN in a result file is an error, not data).
+//! non-finite numbers (a NaN in a result file is an error, not data); only `summary.json`
+//! writes one, as `null`, since it also describes failed runs.
 
 pub(crate) mod atomic;
 pub mod csv;
 pub mod pvd;
+pub mod summary;
 pub mod vtu;
 
 use crate::mesh::CellKind;

@@ -1,16 +1,17 @@
-//! Quantities of interest evaluated in memory on a converged step: reactions, point
-//! displacements, contact pressure statistics, stick-zone length, relative displacement and
-//! stiffness of a contact pair.
+//! Quantities of interest evaluated in memory on a converged step, from typed model and
+//! interface data (no result tables read back): reactions, point displacements, contact
+//! pressure statistics, stick-zone length, relative displacement and stiffness of a pair.
 
 use crate::Error;
 use crate::Result;
 use crate::config::{Component, QuantityKind, QuantitySpec, Statistic};
 use crate::contact::ContactStatus;
+use crate::contact::InterfaceState;
 use crate::element::Analysis;
 use crate::element::interface6::interface_point;
 use crate::element::set::INTERFACE_POINTS;
 use crate::model::Model;
-use crate::post::interface::{InterfaceOutput, resultants};
+use crate::post::interface::{FIELDS, InterfaceOutput, resultants};
 use crate::post::reactions;
 use crate::solver::stepping::StepResult;
 
@@ -73,38 +74,34 @@ pub fn evaluate(quantities: &[QuantitySpec], model: &Model, step: &StepResult) -
                         });
                         force / area
                     }
-                    statistic => {
+                    Some(Statistic::Peak) => {
                         let out = interface.get_or_insert_with(|| InterfaceOutput::new(model));
-                        // Rows: arc_length, x, y, contact_normal_stress, contact_pressure, ...
-                        let table = &out.tables(model, states)[p];
-                        let pressure = |row: &Vec<f64>| row[4];
-                        if statistic == Some(Statistic::Peak) {
-                            table
-                                .rows
+                        out.nodal(model, states)[p]
+                            .iter()
+                            .map(|n| n.values[PRESSURE])
+                            .fold(f64::NEG_INFINITY, f64::max)
+                    }
+                    _ => {
+                        let (axis, at) = match (q.x, q.y) {
+                            (Some(x), _) => (0, x),
+                            (_, Some(y)) => (1, y),
+                            _ => unreachable!("checked by QuantitySpec::check"),
+                        };
+                        let out = interface.get_or_insert_with(|| InterfaceOutput::new(model));
+                        let curve = pressure_along(out, model, states, p, axis);
+                        interpolate(&curve, at).ok_or_else(|| {
+                            let (lo, hi) = curve
                                 .iter()
-                                .map(pressure)
-                                .fold(f64::NEG_INFINITY, f64::max)
-                        } else {
-                            let (col, at) = match (q.x, q.y) {
-                                (Some(x), _) => (1, x),
-                                (_, Some(y)) => (2, y),
-                                _ => unreachable!("checked by QuantitySpec::check"),
-                            };
-                            interpolate(&table.rows, col, at, 4).ok_or_else(|| {
-                                let (lo, hi) = table
-                                    .rows
-                                    .iter()
-                                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
-                                        (a.min(r[col]), b.max(r[col]))
-                                    });
-                                Error::Model(format!(
-                                    "quantity '{}': {} = {at} is outside pair '{}' ({lo} .. {hi})",
-                                    q.name,
-                                    ["", "x", "y"][col],
-                                    model.interface.pairs[p].name
-                                ))
-                            })?
-                        }
+                                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &(c, _)| {
+                                    (a.min(c), b.max(c))
+                                });
+                            Error::Model(format!(
+                                "quantity '{}': {} = {at} is outside pair '{}' ({lo} .. {hi})",
+                                q.name,
+                                ["x", "y"][axis],
+                                model.interface.pairs[p].name
+                            ))
+                        })?
                     }
                 }
             }
@@ -185,26 +182,69 @@ fn for_lengths(model: &Model, p: usize, mut f: impl FnMut(usize, usize, f64)) {
     }
 }
 
-/// Linear interpolation of column `value` at coordinate `at` of column `col` between
-/// successive rows (the first crossing along the curve).
-fn interpolate(rows: &[Vec<f64>], col: usize, at: f64, value: usize) -> Option<f64> {
-    let tol = 1e-9
-        * rows
-            .iter()
-            .fold(0.0_f64, |m, r| m.max(r[col].abs()))
-            .max(1.0);
-    if let [row] = rows {
-        return ((row[col] - at).abs() <= tol).then_some(row[value]);
+/// Index of `name` in [`FIELDS`], the order of [`NodalContact::values`]; a compile-time
+/// error if there is no such field.
+///
+/// [`NodalContact::values`]: crate::post::interface::NodalContact::values
+const fn field(name: &str) -> usize {
+    let mut i = 0;
+    while i < FIELDS.len() {
+        let (a, b) = (FIELDS[i].as_bytes(), name.as_bytes());
+        if a.len() == b.len() {
+            let mut j = 0;
+            while j < a.len() && a[j] == b[j] {
+                j += 1;
+            }
+            if j == a.len() {
+                return i;
+            }
+        }
+        i += 1;
     }
-    rows.windows(2).find_map(|w| {
-        let (a, b) = (w[0][col], w[1][col]);
+    panic!("no such interface field")
+}
+
+/// The contact pressure −p_N in [`NodalContact::values`].
+///
+/// [`NodalContact::values`]: crate::post::interface::NodalContact::values
+const PRESSURE: usize = field("contact_pressure");
+
+/// (coordinate `axis` of the node, contact pressure) at the side-B nodes of pair `p`, in
+/// order along the curve. The positions are the interface grid's points, which list every
+/// pair's nodes in the order of [`InterfaceOutput::nodal`].
+fn pressure_along(
+    out: &InterfaceOutput,
+    model: &Model,
+    states: &[InterfaceState],
+    p: usize,
+    axis: usize,
+) -> Vec<(f64, f64)> {
+    let nodal = out.nodal(model, states);
+    let first: usize = nodal[..p].iter().map(Vec::len).sum();
+    let points = out.grid(model, states).points;
+    nodal[p]
+        .iter()
+        .zip(&points[first..])
+        .map(|(n, x)| (x[axis], n.values[PRESSURE]))
+        .collect()
+}
+
+/// Linear interpolation of the values of `curve` (coordinate, value) at coordinate `at`
+/// between successive points (the first crossing along the curve).
+fn interpolate(curve: &[(f64, f64)], at: f64) -> Option<f64> {
+    let tol = 1e-9 * curve.iter().fold(0.0_f64, |m, c| m.max(c.0.abs())).max(1.0);
+    if let [(c, v)] = curve {
+        return ((c - at).abs() <= tol).then_some(*v);
+    }
+    curve.windows(2).find_map(|w| {
+        let ((a, va), (b, vb)) = (w[0], w[1]);
         if (a - at).abs() <= tol {
-            Some(w[0][value])
+            Some(va)
         } else if (b - at).abs() <= tol {
-            Some(w[1][value])
+            Some(vb)
         } else if (a - at) * (b - at) < 0.0 {
             let t = (at - a) / (b - a);
-            Some(w[0][value] + t * (w[1][value] - w[0][value]))
+            Some(va + t * (vb - va))
         } else {
             None
         }

@@ -73,6 +73,8 @@ pub struct StepResult<'a> {
     pub newton: NewtonLog,
     /// Number of increments the step took (1 unless it was cut back).
     pub increments: usize,
+    /// Failed increments of the step that were halved and retried.
+    pub cutbacks: usize,
     pub solution: &'a Solution,
     /// Internal forces over all dofs (reactions at prescribed dofs).
     pub internal_force: &'a [f64],
@@ -201,6 +203,7 @@ pub fn run_steps(
             load_factor: model.schedule.load_factor(step),
             newton: NewtonLog { iterations, ..log },
             increments,
+            cutbacks,
             solution: &solution,
             internal_force,
             external_force: &f_ext,

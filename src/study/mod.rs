@@ -31,12 +31,16 @@
 //! finite model, say) leaves an error that does not vanish with h.
 //!
 //! ## Running levels in parallel
-//! Up to `jobs` levels (default: the number of cores) run at once, finest first. After
-//! meshing, a level's memory is estimated as [`BYTES_PER_UNKNOWN`] × 2 × nodes and reserved
-//! from a budget of half of `MemAvailable` in `/proc/meminfo` (unlimited where that cannot be
-//! read): a level starts only when its estimate fits next to the levels running, and a
-//! level whose estimate exceeds the whole budget runs alone. Meshing first gives the exact
-//! size of a level, so no extrapolation from the coarser level is needed.
+//! Up to `jobs` levels (default: the number of cores) are solved at once, finest first, as
+//! tasks of one `rayon` scope on the global pool (the pool the assembly and the linear
+//! solver share). The calling thread meshes the levels one after another, finest first, and
+//! hands each to the pool once it fits: a level's memory is estimated as
+//! [`BYTES_PER_UNKNOWN`] × 2 × nodes (meshing first gives the exact size, so no extrapolation
+//! from a coarser level is needed) and reserved from a budget of half of `MemAvailable` in
+//! `/proc/meminfo` (unlimited where that cannot be read); a level whose estimate exceeds the
+//! whole budget runs alone. Only the calling thread waits for memory, never a pool thread,
+//! so a pool thread that picks up another level while it waits inside the solver cannot
+//! block the level it interrupted. After a level fails, no further level is started.
 
 use std::path::PathBuf;
 use std::sync::Mutex;
@@ -52,12 +56,13 @@ pub use report::{Level, Report};
 pub use schedule::{BYTES_PER_UNKNOWN, available_memory};
 
 use crate::config::{Case, QuantitySpec};
-use crate::output::atomic::write_atomically;
+use crate::mesh::Mesh;
+use crate::model::ModelSpec;
 use crate::pipeline;
 use crate::post::quantities::evaluate;
 use crate::{Error, Result};
 use report::{plot, write_table};
-use schedule::MemoryGate;
+use schedule::Gate;
 
 /// Relative size of differences below which they are round-off.
 pub const ROUND_OFF: f64 = 1e-10;
@@ -126,38 +131,40 @@ pub fn run(case: &Case, options: &Options) -> Result<Report> {
         .jobs
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
         .clamp(1, n);
-    let gate = MemoryGate::new(available_memory().map_or(u64::MAX, |m| m / 2));
-    let queue = Mutex::new((0..n).collect::<Vec<usize>>()); // popped finest first
+    let gate = Gate::new(available_memory().map_or(u64::MAX, |m| m / 2), jobs);
     let cancel = AtomicBool::new(false);
-    // Progress lines as the levels finish, on a terminal only (the report lists them anyway).
-    let terminal = std::io::IsTerminal::is_terminal(&std::io::stderr());
     let results: Mutex<Vec<Option<Result<Level>>>> = Mutex::new((0..n).map(|_| None).collect());
-    std::thread::scope(|s| {
-        for _ in 0..jobs {
-            s.spawn(|| {
-                loop {
-                    let Some(k) = queue.lock().expect("queue").pop() else {
-                        break;
-                    };
-                    if cancel.load(Ordering::Relaxed) {
-                        break;
-                    }
-                    let result = run_level(case, &quantities, options, k, &gate);
-                    match &result {
-                        Ok(l) => {
-                            let line = format!(
-                                "level {k}: size {:.6}, {} unknowns, {:.2} s",
-                                l.size, l.unknowns, l.seconds
-                            );
-                            tracing::info!("{line}");
-                            if terminal {
-                                eprintln!("{line}");
-                            }
-                        }
-                        Err(_) => cancel.store(true, Ordering::Relaxed),
-                    }
-                    results.lock().expect("results")[k] = Some(result);
+    let finish = |k: usize, result: Result<Level>| {
+        if result.is_err() {
+            cancel.store(true, Ordering::Relaxed);
+        }
+        results.lock().expect("results")[k] = Some(result);
+    };
+    rayon::in_place_scope(|scope| {
+        for k in (0..n).rev() {
+            if cancel.load(Ordering::Relaxed) {
+                break;
+            }
+            let meshed = match mesh_level(case, options, k) {
+                Ok(meshed) => meshed,
+                Err(e) => {
+                    finish(k, Err(e));
+                    break;
                 }
+            };
+            let estimate = BYTES_PER_UNKNOWN * 2 * meshed.mesh.nodes.len() as u64;
+            let permit = gate.acquire(k, estimate);
+            if cancel.load(Ordering::Relaxed) {
+                break;
+            }
+            let (quantities, finish) = (&quantities, &finish);
+            scope.spawn(move |_| {
+                let result = solve_level(meshed, quantities);
+                drop(permit);
+                if let Ok(l) = &result {
+                    report_level(l);
+                }
+                finish(k, result);
             });
         }
     });
@@ -212,37 +219,77 @@ fn level_size(case: &Case, ratio: f64, k: usize) -> f64 {
     case.mesh.size / ratio.powi(k as i32)
 }
 
-/// Meshes, solves and evaluates level `k`.
-fn run_level(
-    case: &Case,
-    quantities: &[QuantitySpec],
-    options: &Options,
-    k: usize,
-    gate: &MemoryGate,
-) -> Result<Level> {
-    let start = Instant::now();
+/// Prints that a level is done, on a terminal only (the report lists the levels anyway).
+fn report_level(l: &Level) {
+    let line = format!(
+        "level {}: size {:.6}, {} unknowns, {:.2} s",
+        l.level, l.size, l.unknowns, l.seconds
+    );
+    tracing::info!("{line}");
+    if std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        eprintln!("{line}");
+    }
+}
+
+/// A level with its mesh, ready to be solved.
+struct Meshed {
+    level: usize,
+    case: Case,
+    spec: ModelSpec,
+    dir: PathBuf,
+    mesh: Mesh,
+    mesh_seconds: f64,
+}
+
+/// Meshes level `k` into `level_k/`.
+fn mesh_level(case: &Case, options: &Options, k: usize) -> Result<Meshed> {
     let mut case = case.clone();
     case.mesh.size = level_size(&case, options.ratio, k);
     let dir = options.out.join(format!("level_{k}"));
-    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-    let mesh = pipeline::load_mesh(&case, &dir)?;
-    let mesh_seconds = start.elapsed().as_secs_f64();
-    let estimate = BYTES_PER_UNKNOWN * 2 * mesh.nodes.len() as u64;
-    let _permit = gate.acquire(k, estimate);
-    let mut values = None;
-    let summary = pipeline::run_mesh(&case, mesh, mesh_seconds, &dir, false, |model, step| {
-        if step.step == model.schedule.steps() {
-            values = Some(evaluate(quantities, model, step)?);
-        }
-        Ok(())
-    })?;
-    let summary_path = dir.join("summary.txt");
-    write_atomically(&summary_path, |w| writeln!(w, "{summary}"))?;
-    Ok(Level {
+    let spec = ModelSpec::new(&case)?; // bad parameters fail before gmsh runs
+    let (mesh, mesh_seconds) = pipeline::mesh_case(&case, &dir)?;
+    Ok(Meshed {
         level: k,
+        case,
+        spec,
+        dir,
+        mesh,
+        mesh_seconds,
+    })
+}
+
+/// Solves a meshed level (its files, with `summary.json`, go to `level_k/`) and evaluates
+/// the quantities at the last step.
+fn solve_level(meshed: Meshed, quantities: &[QuantitySpec]) -> Result<Level> {
+    let start = Instant::now();
+    let Meshed {
+        level,
+        case,
+        spec,
+        dir,
+        mesh,
+        mesh_seconds,
+    } = meshed;
+    let mut values = None;
+    let summary = pipeline::run_model(
+        &case,
+        spec,
+        mesh,
+        mesh_seconds,
+        &dir,
+        false,
+        |model, step| {
+            if step.step == model.schedule.steps() {
+                values = Some(evaluate(quantities, model, step)?);
+            }
+            Ok(())
+        },
+    )?;
+    Ok(Level {
+        level,
         size: case.mesh.size,
         unknowns: summary.dofs,
-        seconds: start.elapsed().as_secs_f64(),
+        seconds: mesh_seconds + start.elapsed().as_secs_f64(),
         values: values.expect("the last step was evaluated"),
     })
 }

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use super::analysis::Convergence;
 use crate::Result;
 use crate::config::{QuantityKind, QuantitySpec, Statistic};
-use crate::output::atomic::write_atomically;
+use crate::output::csv::{Cell, CsvTable, write_csv};
 
 /// What was run at one level.
 #[derive(Clone, Debug)]
@@ -187,13 +187,31 @@ fn describe(q: &QuantitySpec) -> String {
     }
 }
 
-/// Writes `convergence.csv`: one row per quantity and level.
+/// The columns of `convergence.csv`.
+const COLUMNS: [&str; 17] = [
+    "quantity",
+    "kind",
+    "level",
+    "h",
+    "unknowns",
+    "seconds",
+    "value",
+    "difference",
+    "error_reference",
+    "error_extrapolated",
+    "reference",
+    "extrapolated",
+    "error_estimate",
+    "order",
+    "order_reference",
+    "tolerance",
+    "status",
+];
+
+/// Writes `convergence.csv`: one row per quantity and level (empty cells where a value does
+/// not apply).
 pub(super) fn write_table(report: &Report) -> Result<()> {
-    let opt = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
-    let mut text = String::from(
-        "quantity,kind,level,h,unknowns,seconds,value,difference,error_reference,error_extrapolated,reference,\
-         extrapolated,error_estimate,order,order_reference,tolerance,status\n",
-    );
+    let mut table = CsvTable::<Cell>::new(COLUMNS);
     for (q, c) in report.quantities.iter().zip(&report.results) {
         let status = if c.passed() {
             "ok"
@@ -204,63 +222,104 @@ pub(super) fn write_table(report: &Report) -> Result<()> {
         };
         for (k, l) in report.levels.iter().enumerate() {
             let v = c.values[k];
-            let _ = writeln!(
-                text,
-                "{},{},{},{},{},{:.3},{},{},{},{},{},{},{},{},{},{},{}",
-                q.name,
-                q.kind.as_str(),
-                l.level,
-                l.size,
-                l.unknowns,
-                l.seconds,
-                v,
-                opt((k > 0).then(|| c.differences[k - 1])),
-                opt(q.reference.map(|r| v - r)),
-                opt(c.extrapolated.map(|x| v - x)),
-                opt(q.reference),
-                opt(c.extrapolated),
-                opt(c.error_estimate),
-                opt(c.order),
-                opt(c.reference_order),
-                q.tolerance,
-                status
-            );
+            table.rows.push(vec![
+                q.name.as_str().into(),
+                q.kind.as_str().into(),
+                (l.level as f64).into(),
+                l.size.into(),
+                (l.unknowns as f64).into(),
+                // Milliseconds are enough for a wall-clock time.
+                ((l.seconds * 1e3).round() / 1e3).into(),
+                v.into(),
+                (k > 0).then(|| c.differences[k - 1]).into(),
+                q.reference.map(|r| v - r).into(),
+                c.extrapolated.map(|x| v - x).into(),
+                q.reference.into(),
+                c.extrapolated.into(),
+                c.error_estimate.into(),
+                c.order.into(),
+                c.reference_order.into(),
+                q.tolerance.into(),
+                status.into(),
+            ]);
         }
     }
-    write_atomically(&report.csv, |w| w.write_all(text.as_bytes()))
+    write_csv(&report.csv, &table)
 }
 
-/// Makes `convergence.png` with `pipelines/plot_convergence.py`; returns what happened.
+/// The environment variable naming the folder of the plot script (`plot_convergence.py`).
+const PIPELINES_VAR: &str = "ASPERITY_PIPELINES";
+
+/// Where `plot_convergence.py` is: in `$ASPERITY_PIPELINES` if set, else in the `pipelines/`
+/// folder of the first ancestor of the running executable that has one (the repository of a
+/// `target/release/asperity`). Returns the script and the Python to run it with: the
+/// `.venv/bin/python` beside that `pipelines/` folder if there is one, else `python3`.
+fn plot_script() -> std::result::Result<(PathBuf, PathBuf), String> {
+    let script_in = |dir: &Path| dir.join("plot_convergence.py");
+    let pipelines = match std::env::var_os(PIPELINES_VAR) {
+        Some(dir) => {
+            let dir = PathBuf::from(dir);
+            if !script_in(&dir).is_file() {
+                return Err(format!(
+                    "{PIPELINES_VAR}={} has no plot_convergence.py",
+                    dir.display()
+                ));
+            }
+            dir
+        }
+        None => {
+            let exe = std::env::current_exe().map_err(|e| format!("no executable path: {e}"))?;
+            exe.ancestors()
+                .skip(1)
+                .map(|a| a.join("pipelines"))
+                .find(|p| script_in(p).is_file())
+                .ok_or_else(|| {
+                    format!(
+                        "pipelines/plot_convergence.py not found above {} (set {PIPELINES_VAR})",
+                        exe.display()
+                    )
+                })?
+        }
+    };
+    let venv = pipelines
+        .parent()
+        .map(|root| root.join(".venv/bin/python"))
+        .filter(|p| p.is_file());
+    Ok((
+        script_in(&pipelines),
+        venv.unwrap_or_else(|| PathBuf::from("python3")),
+    ))
+}
+
+/// Makes `convergence.png` with `plot_convergence.py` (found by [`plot_script`]); returns
+/// what happened, with the command to run by hand when it was skipped.
 pub(super) fn plot(out: &Path) -> String {
-    let roots = [
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")),
-        std::env::current_dir().unwrap_or_default(),
-    ];
-    let script = roots
-        .iter()
-        .map(|r| r.join("pipelines/plot_convergence.py"))
-        .find(|p| p.is_file());
-    let pythons = roots
-        .iter()
-        .map(|r| r.join(".venv/bin/python"))
-        .filter(|p| p.is_file())
-        .chain([PathBuf::from("python3")]);
-    let how = format!(
-        "make the venv with `make venv`, then run `.venv/bin/python pipelines/plot_convergence.py {}`",
-        out.display()
-    );
-    let Some(script) = script else {
-        return format!("skipped convergence.png: pipelines/plot_convergence.py not found; {how}");
+    let how = |python: &str, script: &str| {
+        format!(
+            "to make it, run `{python} {script} {}` in the repository (after `make venv`)",
+            out.display()
+        )
     };
-    let python = pythons.into_iter().find(|p| {
-        std::process::Command::new(p)
-            .args(["-c", "import matplotlib"])
-            .output()
-            .is_ok_and(|o| o.status.success())
-    });
-    let Some(python) = python else {
-        return format!("skipped convergence.png: no Python with matplotlib found; {how}");
+    let (script, python) = match plot_script() {
+        Ok(found) => found,
+        Err(why) => {
+            return format!(
+                "skipped convergence.png: {why}; {}",
+                how(".venv/bin/python", "pipelines/plot_convergence.py")
+            );
+        }
     };
+    let manual = how(&python.display().to_string(), &script.display().to_string());
+    let has_matplotlib = std::process::Command::new(&python)
+        .args(["-c", "import matplotlib"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !has_matplotlib {
+        return format!(
+            "skipped convergence.png: {} has no matplotlib; {manual}",
+            python.display()
+        );
+    }
     match std::process::Command::new(&python)
         .arg(&script)
         .arg(out)
@@ -268,7 +327,7 @@ pub(super) fn plot(out: &Path) -> String {
     {
         Ok(o) if o.status.success() => out.join("convergence.png").display().to_string(),
         Ok(o) => format!(
-            "skipped convergence.png: {} failed: {}",
+            "skipped convergence.png: {} failed: {}; {manual}",
             script.display(),
             String::from_utf8_lossy(&o.stderr)
                 .trim()
@@ -277,7 +336,7 @@ pub(super) fn plot(out: &Path) -> String {
                 .unwrap_or_default()
         ),
         Err(e) => format!(
-            "skipped convergence.png: cannot run {}: {e}",
+            "skipped convergence.png: cannot run {}: {e}; {manual}",
             python.display()
         ),
     }
