@@ -10,6 +10,7 @@
 #   make convergence             mesh-convergence verification studies -> out/convergence
 #   make mesh GEO=geo/X.geo SIZE=0.5   mesh a .geo script into build/mesh/
 #   make bench                   timings at ~10k, ~100k, ~1M unknowns, appended to BENCHMARKS.md
+#   make bench-calculix          asperity against CalculiX 2.20 on the same meshes, increments and answers -> BENCHMARKS.md
 
 SHELL   := /bin/bash
 CARGO   ?= cargo
@@ -20,7 +21,7 @@ BIN     := target/release/asperity
 SIZE    ?= 1
 
 .PHONY: all deps gmsh venv build test mesh bench examples tapered_joint plane_punch indentation thick_cylinder shrink_fit clean
-.PHONY: convergence
+.PHONY: convergence bench-calculix
 
 all: build
 
@@ -122,6 +123,12 @@ bench: gmsh venv build
 	$(CARGO) bench --bench elastic
 	$(CARGO) bench --bench contact
 	$(PYTHON) pipelines/compare_algorithms.py pipelines/tapered_joint/coulomb.toml pipelines/tapered_joint/compliant_1.toml pipelines/tapered_joint/compliant_2.toml
+
+# make bench-calculix QUICK=1: small meshes, agreement check in minutes, BENCHMARKS.md untouched
+bench-calculix: gmsh venv build
+	@command -v ccx >/dev/null || { echo "installing calculix-ccx (apt-get)"; \
+	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq calculix-ccx >/dev/null; }
+	$(PYTHON) benches/calculix/bench_calculix.py $(if $(QUICK),--quick,--write)
 
 clean:
 	rm -rf target build out $(VENV)
