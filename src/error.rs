@@ -111,9 +111,10 @@ pub enum Error {
     /// Supports and the nodes outside every body leave no unknown.
     #[error("model: every degree of freedom is prescribed: nothing to solve")]
     NothingToSolve,
-    /// A quantity of interest does not fit the model (used by the quantity evaluation).
-    #[error("model: {0}")]
-    Model(String),
+    /// A quantity of interest cannot be evaluated on the model: `name` is the quantity's,
+    /// `reason` says what is missing or wrong.
+    #[error("quantity '{name}': {reason}")]
+    Quantity { name: String, reason: String },
     /// An external program (gmsh) failed.
     #[error("{0}")]
     External(String),

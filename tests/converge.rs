@@ -274,17 +274,16 @@ fn quantities_are_evaluated_on_the_solved_model() {
         })
         .unwrap_err();
         match e {
-            Error::Model(message) => message,
-            other => panic!("expected a model error, got {other}"),
+            Error::Quantity { name, reason } => (name, reason),
+            other => panic!("expected a quantity error, got {other}"),
         }
     };
-    let e = evaluation_error(&bad);
-    assert!(
-        e.contains("'far'") && e.contains("outside pair 'fit'"),
-        "{e}"
-    );
+    let (name, e) = evaluation_error(&bad);
+    assert_eq!(name, "far");
+    assert!(e.contains("outside pair 'fit'"), "{e}");
     bad[0] = parse_quantity("nowhere:displacement:point=tip,component=x").unwrap();
-    let e = evaluation_error(&bad);
+    let (name, e) = evaluation_error(&bad);
+    assert_eq!(name, "nowhere");
     assert!(e.contains("'tip'") && e.contains("hub_corner"), "{e}");
 }
 

@@ -27,7 +27,7 @@ pub fn evaluate(quantities: &[QuantitySpec], model: &Model, step: &StepResult) -
             .pairs
             .iter()
             .position(|p| p.name == name)
-            .ok_or_else(|| Error::Model(format!("quantity '{}': no contact pair '{name}'", q.name)))
+            .ok_or_else(|| quantity_error(q, format!("no contact pair '{name}'")))
     };
     let comp = |q: &QuantitySpec| q.component.map_or(0, Component::index);
     let mut values = Vec::with_capacity(quantities.len());
@@ -39,26 +39,26 @@ pub fn evaluate(quantities: &[QuantitySpec], model: &Model, step: &StepResult) -
                     .supports
                     .iter()
                     .position(|s| s.name == name)
-                    .ok_or_else(|| {
-                        Error::Model(format!("quantity '{}': no support '{name}'", q.name))
-                    })?;
+                    .ok_or_else(|| quantity_error(q, format!("no support '{name}'")))?;
                 reactions(model, step.internal_force, step.external_force)[i][comp(q)]
             }
             QuantityKind::Displacement => {
                 let name = q.point.as_deref().unwrap_or_default();
                 let group = model.mesh.group(0, name).ok_or_else(|| {
-                    Error::Model(format!(
-                        "quantity '{}': no physical point '{name}' in the mesh (physical points: {})",
-                        q.name,
-                        model.mesh.group_names(0)
-                    ))
+                    quantity_error(
+                        q,
+                        format!(
+                            "no physical point '{name}' in the mesh (physical points: {})",
+                            model.mesh.group_names(0)
+                        ),
+                    )
                 })?;
                 let nodes: Vec<u32> = model.mesh.points_in(group).collect();
                 if nodes.is_empty() {
-                    return Err(Error::Model(format!(
-                        "quantity '{}': physical point '{name}' has no nodes",
-                        q.name
-                    )));
+                    return Err(quantity_error(
+                        q,
+                        format!("physical point '{name}' has no nodes"),
+                    ));
                 }
                 let c = comp(q);
                 nodes.iter().map(|&n| u[2 * n as usize + c]).sum::<f64>() / nodes.len() as f64
@@ -95,12 +95,14 @@ pub fn evaluate(quantities: &[QuantitySpec], model: &Model, step: &StepResult) -
                                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &(c, _)| {
                                     (a.min(c), b.max(c))
                                 });
-                            Error::Model(format!(
-                                "quantity '{}': {} = {at} is outside pair '{}' ({lo} .. {hi})",
-                                q.name,
-                                ["x", "y"][axis],
-                                model.interface.pairs[p].name
-                            ))
+                            quantity_error(
+                                q,
+                                format!(
+                                    "{} = {at} is outside pair '{}' ({lo} .. {hi})",
+                                    ["x", "y"][axis],
+                                    model.interface.pairs[p].name
+                                ),
+                            )
                         })?
                     }
                 }
@@ -141,10 +143,10 @@ pub fn evaluate(quantities: &[QuantitySpec], model: &Model, step: &StepResult) -
             }
         };
         if !value.is_finite() {
-            return Err(Error::Model(format!(
-                "quantity '{}' is not finite ({value}) at the last step",
-                q.name
-            )));
+            return Err(quantity_error(
+                q,
+                format!("not finite ({value}) at the last step"),
+            ));
         }
         values.push(value);
     }
@@ -249,4 +251,12 @@ fn interpolate(curve: &[(f64, f64)], at: f64) -> Option<f64> {
             None
         }
     })
+}
+
+/// The error of quantity `q` that cannot be evaluated for `reason`.
+fn quantity_error(q: &QuantitySpec, reason: String) -> Error {
+    Error::Quantity {
+        name: q.name.clone(),
+        reason,
+    }
 }
