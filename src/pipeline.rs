@@ -380,17 +380,23 @@ impl<'m, 's> StepWriter<'m, 's> {
 
     /// Writes the step's files; returns the reactions of the supports.
     fn write(&mut self, step: &StepResult) -> Result<Vec<[f64; 2]>> {
+        let start = Instant::now();
+        let (mut post, mut vtu) = (0.0, 0.0);
         let reactions = reactions(self.model, step.internal_force, step.external_force);
         let states = &step.solution.interface_committed;
         if self.vtu {
             let name = format!("bodies_{:04}.vtu", step.step);
+            let t = Instant::now();
             let grid = body_grid(
                 self.model,
                 &self.points,
                 &step.solution.u,
                 &step.solution.committed,
             );
+            post += t.elapsed().as_secs_f64();
+            let t = Instant::now();
             write_vtu(&self.out_dir.join(&name), &grid)?;
+            vtu += t.elapsed().as_secs_f64();
             self.series.push(PvdEntry {
                 time: step.step as f64,
                 part: 0,
@@ -399,10 +405,12 @@ impl<'m, 's> StepWriter<'m, 's> {
             });
             if !self.model.interface.elements.is_empty() {
                 let name = format!("interface_{:04}.vtu", step.step);
+                let t = Instant::now();
                 write_vtu(
                     &self.out_dir.join(&name),
                     &self.interface.grid(self.model, states),
                 )?;
+                vtu += t.elapsed().as_secs_f64();
                 self.series.push(PvdEntry {
                     time: step.step as f64,
                     part: 1,
@@ -467,6 +475,13 @@ impl<'m, 's> StepWriter<'m, 's> {
                     .collect(),
             ),
         });
+        tracing::debug!(
+            step = step.step,
+            post,
+            vtu,
+            rest = start.elapsed().as_secs_f64() - post - vtu,
+            "output seconds (body recovery, VTU files, interface/CSV/PVD)"
+        );
         Ok(reactions)
     }
 }
