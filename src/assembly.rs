@@ -10,6 +10,7 @@
 //! elements of one colour share a node, hence no two write the same matrix entry or vector
 //! component, and the colours are processed one after another.
 
+use faer::MatMut;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use rayon::prelude::*;
 
@@ -224,6 +225,50 @@ impl SparsityPattern {
     }
 }
 
+/// Marker for a dof outside the dense block in [`DenseScatter`].
+const OUTSIDE: u32 = u32::MAX;
+
+/// Precomputed map from the dofs of every element of a set to the rows/columns of a dense
+/// block over some equations (e.g. the interface unknowns of the condensed solver), built
+/// once per model so that assembling into the block needs no search and no allocation.
+#[derive(Clone, Debug, Default)]
+pub struct DenseScatter {
+    /// `map[e · STRIDE + a]`: the block index of dof `a` of element `e`, or `OUTSIDE`
+    /// (prescribed, or not in the block).
+    map: Vec<u32>,
+}
+
+impl DenseScatter {
+    /// Dofs per element slot (8 nodes · 2).
+    const STRIDE: usize = 16;
+
+    /// The map of the elements of `set`: `local(eq)` is the block index of free equation `eq`
+    /// (`None` if it is not in the block).
+    pub fn new<S: ElementSet>(
+        set: &S,
+        dofs: &DofMap,
+        local: impl Fn(usize) -> Option<usize>,
+    ) -> Self {
+        let mut map = vec![OUTSIDE; set.len() * Self::STRIDE];
+        for e in 0..set.len() {
+            for (n, &node) in set.nodes(e).iter().enumerate() {
+                for c in 0..2 {
+                    if let Some(k) = dofs.equation(2 * node as usize + c).and_then(&local) {
+                        map[e * Self::STRIDE + 2 * n + c] = k as u32;
+                    }
+                }
+            }
+        }
+        Self { map }
+    }
+
+    /// Block indices of the dofs of element `e`.
+    #[inline]
+    fn element(&self, e: usize) -> &[u32] {
+        &self.map[e * Self::STRIDE..(e + 1) * Self::STRIDE]
+    }
+}
+
 /// What one assembly pass shares between all its elements: the displacements, their
 /// numbering, and what to compute.
 #[derive(Clone, Copy, Debug)]
@@ -313,6 +358,44 @@ impl GlobalSystem {
         let targets = Targets {
             values: input.tangent.then_some(SharedMut(self.values.as_mut_ptr())),
             force: Some(SharedMut(self.internal_force.as_mut_ptr())),
+            dense: None,
+        };
+        scatter(
+            &self.pattern,
+            input,
+            set,
+            coloring,
+            committed,
+            trial,
+            targets,
+        );
+    }
+
+    /// Adds the internal forces of every element of `set` into this system and, if
+    /// `input.tangent`, their tangents into the dense `block` through `map` (entries outside
+    /// the block are dropped: `map` must cover every free dof of the elements).
+    #[allow(clippy::too_many_arguments)]
+    pub fn assemble_dense<S: ElementSet>(
+        &mut self,
+        input: &AssemblyInput,
+        set: &S,
+        coloring: &Coloring,
+        committed: &[S::State],
+        trial: &mut [S::State],
+        block: MatMut<'_, f64>,
+        map: &DenseScatter,
+    ) {
+        assert_eq!(map.map.len(), set.len() * DenseScatter::STRIDE);
+        let stride = block.col_stride();
+        assert!(block.row_stride() == 1 && stride >= block.nrows() as isize);
+        let targets = Targets {
+            values: None,
+            force: Some(SharedMut(self.internal_force.as_mut_ptr())),
+            dense: input.tangent.then_some(Dense {
+                values: SharedMut(block.as_ptr_mut()),
+                col_stride: stride as usize,
+                map,
+            }),
         };
         scatter(
             &self.pattern,
@@ -341,6 +424,7 @@ impl GlobalSystem {
         let targets = Targets {
             values: Some(SharedMut(self.preconditioner.as_mut_ptr())),
             force: None,
+            dense: None,
         };
         scatter(
             &self.pattern,
@@ -355,11 +439,20 @@ impl GlobalSystem {
 }
 
 /// Where one assembly pass adds the element contributions: matrix values over the pattern
-/// and internal forces over all dofs, each only where given.
+/// and internal forces over all dofs, or matrices into a dense block, each only where given.
 #[derive(Clone, Copy)]
-struct Targets {
+struct Targets<'m> {
     values: Option<SharedMut<f64>>,
     force: Option<SharedMut<f64>>,
+    dense: Option<Dense<'m>>,
+}
+
+/// A dense column-major block and the map of the elements' dofs into it.
+#[derive(Clone, Copy)]
+struct Dense<'m> {
+    values: SharedMut<f64>,
+    col_stride: usize,
+    map: &'m DenseScatter,
 }
 
 /// Evaluates every element of `set` (colour by colour, in parallel within a colour) and adds
@@ -374,7 +467,11 @@ fn scatter<S: ElementSet>(
     trial: &mut [S::State],
     targets: Targets,
 ) {
-    let Targets { values, force } = targets;
+    let Targets {
+        values,
+        force,
+        dense,
+    } = targets;
     let AssemblyInput {
         dofs, u, algorithm, ..
     } = *input;
@@ -400,7 +497,7 @@ fn scatter<S: ElementSet>(
         };
         let output = ElementOutput {
             trial: trial_e,
-            k: values.is_some().then_some(&mut ke),
+            k: (values.is_some() || dense.is_some()).then_some(&mut ke),
             f: &mut fe,
         };
         set.evaluate(e, &element_input, output);
@@ -409,6 +506,29 @@ fn scatter<S: ElementSet>(
             for a in 0..2 * nodes.len() {
                 // SAFETY: elements of one colour share no node, hence no dof.
                 unsafe { *force.get().add(global(a)) += fe[a] };
+            }
+        }
+        if let Some(Dense {
+            values,
+            col_stride,
+            map,
+        }) = dense
+        {
+            let local = map.element(e);
+            for b in 0..2 * nodes.len() {
+                let col = local[b];
+                if col == OUTSIDE {
+                    continue;
+                }
+                for a in 0..2 * nodes.len() {
+                    let row = local[a];
+                    if row != OUTSIDE {
+                        let at = row as usize + col as usize * col_stride;
+                        // SAFETY: as above; the block entries of one element's dofs are
+                        // written by no other element of its colour.
+                        unsafe { *values.get().add(at) += ke[(a, b)] };
+                    }
+                }
             }
         }
         let Some(values) = values else { return };

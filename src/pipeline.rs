@@ -20,7 +20,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use crate::config::{Case, SolverSpec};
+use crate::config::{Case, LinearSolverKind, SolverSpec};
 use crate::element::Analysis;
 use crate::mesh::{Mesh, gmsh, msh};
 use crate::model::{Model, ModelSpec};
@@ -32,7 +32,7 @@ use crate::output::summary::{
 use crate::output::vtu::write_vtu;
 use crate::post::interface::{InterfaceOutput, resultants};
 use crate::post::{BodyPoints, body_grid, reactions};
-use crate::solver::newton::NewtonSettings;
+use crate::solver::newton::{LinearSolver, NewtonSettings};
 use crate::solver::stepping::{RunStatistics, StepResult, run_steps};
 use crate::{Error, Result};
 
@@ -253,6 +253,10 @@ pub fn newton_settings(spec: &SolverSpec) -> NewtonSettings {
         displacement_tolerance: spec.displacement_tolerance,
         max_cutbacks: spec.max_cutbacks,
         contact_algorithm: spec.contact_algorithm.into(),
+        linear_solver: match spec.linear_solver {
+            LinearSolverKind::Condensed => LinearSolver::Condensed,
+            LinearSolverKind::Krylov => LinearSolver::Krylov,
+        },
     }
 }
 

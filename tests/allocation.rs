@@ -1,8 +1,9 @@
 //! Newton iterations allocate nothing: a counting global allocator watches every iteration
-//! of a small frictional contact model once its workspaces exist, on the symmetric path
-//! (sticking contact, Cholesky), on the unsymmetric one (slipping contact, Buczkowski &
-//! Kleiber (1994), Eq. 21: BiCGSTAB preconditioned with the elastic contact matrix) and in
-//! the line search.
+//! of a small frictional contact model once its workspaces exist, with either linear solver:
+//! the condensed one (exact solves on the interface; linear-elastic bulk from its stored
+//! stiffness) and the Krylov one, on the symmetric path (sticking contact, Cholesky), on the
+//! unsymmetric one (slipping contact, Buczkowski & Kleiber (1994), Eq. 21: BiCGSTAB
+//! preconditioned with the elastic contact matrix) and in the line search.
 //!
 //! Workspaces made once per run may be allocated in the first step (the warm-up): the Krylov
 //! workspace and the preconditioner values, which the first unsymmetric solve sizes. Every
@@ -21,12 +22,13 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use asperity::assembly::{AssemblyInput, GlobalSystem};
+use asperity::assembly::{AssemblyInput, DenseScatter, DofMap, GlobalSystem, SparsityPattern};
 use asperity::model::Model;
 use asperity::solver::mechanics::Mechanics;
-use asperity::solver::newton::{Newton, NewtonSettings, Problem, norm};
+use asperity::solver::newton::{LinearSolver, Newton, NewtonSettings, Problem, norm};
 use asperity::solver::stepping::Solution;
 use common::{add_curve_group, block_on_base, linear_coulomb, merge, settings, tensor, uniform};
+use faer::MatMut;
 
 /// The system allocator, counting the allocations and reallocations of the threads that
 /// opted in (frees need no count: a free without an allocation is impossible).
@@ -100,10 +102,9 @@ struct Marked<'a> {
     record: &'a mut Record,
 }
 
-impl Problem for Marked<'_> {
-    fn assemble(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) -> bool {
-        let allocations = allocations();
-        let symmetric = self.inner.assemble(system, input);
+impl Marked<'_> {
+    /// Records an assembly that started at `allocations`.
+    fn mark(&mut self, input: &AssemblyInput, allocations: usize, symmetric: bool) {
         let record = &mut *self.record;
         if input.tangent {
             assert!(
@@ -118,6 +119,53 @@ impl Problem for Marked<'_> {
         } else {
             record.line_search_assemblies += 1;
         }
+    }
+}
+
+impl Problem for Marked<'_> {
+    fn assemble(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) -> bool {
+        let allocations = allocations();
+        let symmetric = self.inner.assemble(system, input);
+        self.mark(input, allocations, symmetric);
+        symmetric
+    }
+
+    fn interface_equations(&self, dofs: &DofMap) -> Vec<usize> {
+        self.inner.interface_equations(dofs)
+    }
+
+    fn bulk_is_linear(&self) -> bool {
+        self.inner.bulk_is_linear()
+    }
+
+    fn bulk_pattern(&self, dofs: &DofMap) -> SparsityPattern {
+        self.inner.bulk_pattern(dofs)
+    }
+
+    fn interface_scatter(
+        &self,
+        dofs: &DofMap,
+        local: &dyn Fn(usize) -> Option<usize>,
+    ) -> DenseScatter {
+        self.inner.interface_scatter(dofs, local)
+    }
+
+    fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) {
+        self.inner.assemble_bulk(system, input);
+    }
+
+    /// On the condensed path every evaluation ends with the interface: its tangent
+    /// assemblies start the iterations (and the confirmation of a converged increment).
+    fn assemble_interface(
+        &mut self,
+        system: &mut GlobalSystem,
+        input: &AssemblyInput,
+        block: MatMut<'_, f64>,
+        map: &DenseScatter,
+    ) -> bool {
+        let allocations = allocations();
+        let symmetric = self.inner.assemble_interface(system, input, block, map);
+        self.mark(input, allocations, symmetric);
         symmetric
     }
 }
@@ -149,6 +197,8 @@ struct Run {
     ends: Vec<usize>,
     warm_up_unsymmetric_solves: usize,
     warm_up_line_search_assemblies: usize,
+    /// Interface unknowns of the condensed solver, if it was used.
+    condensed: Option<usize>,
 }
 
 /// Solves every step of `model` as the load stepping does (one increment per step), marking
@@ -186,7 +236,9 @@ fn solve(model: &Model, settings: NewtonSettings) -> Run {
         solution.commit();
         force_floor = force_floor.max(1e-3 * norm(&newton.system().internal_force));
     }
+    let condensed = newton.condensed().map(|c| c.interface_equations().len());
     Run {
+        condensed,
         record,
         ends,
         warm_up_unsymmetric_solves,
@@ -195,8 +247,21 @@ fn solve(model: &Model, settings: NewtonSettings) -> Run {
 }
 
 #[test]
-fn newton_iterations_allocate_nothing_after_the_first_step() {
+fn condensed_newton_iterations_allocate_nothing_after_the_first_step() {
+    iterations_allocate_nothing_after_the_first_step(LinearSolver::Condensed);
+}
+
+#[test]
+fn krylov_newton_iterations_allocate_nothing_after_the_first_step() {
+    iterations_allocate_nothing_after_the_first_step(LinearSolver::Krylov);
+}
+
+fn iterations_allocate_nothing_after_the_first_step(linear_solver: LinearSolver) {
     let (model, settings) = frictional_model();
+    let settings = NewtonSettings {
+        linear_solver,
+        ..settings
+    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .start_handler(|_| COUNTED.set(true))
@@ -207,6 +272,12 @@ fn newton_iterations_allocate_nothing_after_the_first_step() {
         run.warm_up_unsymmetric_solves > 0,
         "the warm-up step must slip, so that it makes the Krylov workspace"
     );
+    if linear_solver == LinearSolver::Condensed {
+        let condensed = run
+            .condensed
+            .expect("the contact model takes the condensed path");
+        assert!(condensed > 0, "interface unknowns");
+    }
 
     // One window per iteration: from the start of its tangent assembly to the start of the
     // next iteration's (linear solve and line search included), or to the end of the

@@ -370,6 +370,22 @@ pub struct SolverSpec {
     /// (elastic contact matrix).
     #[serde(default)]
     pub contact_algorithm: ContactAlgorithmKind,
+    /// Linear solver of models with contact pairs: `"condensed"` (exact solves by
+    /// condensation onto the interface unknowns, default) or `"krylov"` (Cholesky, and
+    /// BiCGSTAB preconditioned with the elastic contact matrix for unsymmetric tangents).
+    #[serde(default)]
+    pub linear_solver: LinearSolverKind,
+}
+
+/// The linear solver of models with contact pairs (`[solver] linear_solver`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LinearSolverKind {
+    /// Exact solves by condensation onto the interface unknowns.
+    #[default]
+    Condensed,
+    /// Cholesky for symmetric tangents, preconditioned BiCGSTAB for unsymmetric ones.
+    Krylov,
 }
 
 /// The global algorithm for contact (`[solver] contact_algorithm`).
@@ -405,6 +421,7 @@ impl Default for SolverSpec {
             displacement_tolerance: default_tolerance(),
             max_cutbacks: default_max_cutbacks(),
             contact_algorithm: ContactAlgorithmKind::default(),
+            linear_solver: LinearSolverKind::default(),
         }
     }
 }

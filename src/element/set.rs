@@ -88,6 +88,14 @@ impl ElementSet for ContinuumSet {
     }
 }
 
+impl ContinuumSet {
+    /// Whether every body's material is linear: the continuum stiffness is then constant
+    /// (small strains) and its internal force is K_c · u.
+    pub fn is_linear(&self) -> bool {
+        self.materials.iter().all(|m| m.is_linear())
+    }
+}
+
 /// A contact pair: its law, interference and the range of its elements in
 /// [`InterfaceSet::elements`].
 #[derive(Debug)]

@@ -73,6 +73,10 @@ impl LinearElastic {
 }
 
 impl Material for LinearElastic {
+    fn is_linear(&self) -> bool {
+        true
+    }
+
     fn update(
         &self,
         strain: &Voigt,

@@ -58,6 +58,12 @@ pub trait Material: Send + Sync + std::fmt::Debug {
 
     /// Short description for logs, e.g. "elastic E=210000 nu=0.3".
     fn describe(&self) -> String;
+
+    /// Whether the stress is a fixed linear function of the strain, independent of the
+    /// history (then the bodies' stiffness is constant and needs assembling only once).
+    fn is_linear(&self) -> bool {
+        false
+    }
 }
 
 /// Von Mises equivalent stress of a Voigt stress (xx, yy, xy, zz).

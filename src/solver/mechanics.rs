@@ -2,7 +2,9 @@
 //! tangent of bodies and interfaces at given displacements, and the preconditioner matrix of
 //! unsymmetric solves.
 
-use crate::assembly::{AssemblyInput, GlobalSystem};
+use faer::MatMut;
+
+use crate::assembly::{AssemblyInput, DenseScatter, DofMap, GlobalSystem, SparsityPattern};
 use crate::contact::{ContactAlgorithm, InterfaceState};
 use crate::element::interface6::evaluate_interface;
 use crate::element::set::{ElementSet, INTERFACE_POINTS, InterfaceSet};
@@ -97,5 +99,60 @@ impl Problem for Mechanics<'_> {
             system.assemble_preconditioner(input, &correction, &m.interface_coloring, ic, it);
         }
         symmetric
+    }
+
+    fn interface_equations(&self, dofs: &DofMap) -> Vec<usize> {
+        let mut eqs: Vec<usize> = (0..self.model.interface.len())
+            .flat_map(|e| self.model.interface.nodes(e))
+            .flat_map(|&n| (0..2).filter_map(move |c| dofs.equation(2 * n as usize + c)))
+            .collect();
+        eqs.sort_unstable();
+        eqs.dedup();
+        eqs
+    }
+
+    fn bulk_is_linear(&self) -> bool {
+        self.model.continuum.is_linear()
+    }
+
+    fn bulk_pattern(&self, dofs: &DofMap) -> SparsityPattern {
+        let continuum = &self.model.continuum;
+        let connectivity = (0..continuum.len()).map(|e| continuum.nodes(e));
+        SparsityPattern::new(self.model.mesh.nodes.len(), dofs, connectivity)
+    }
+
+    fn interface_scatter(
+        &self,
+        dofs: &DofMap,
+        local: &dyn Fn(usize) -> Option<usize>,
+    ) -> DenseScatter {
+        DenseScatter::new(&self.model.interface, dofs, local)
+    }
+
+    fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) {
+        let m = self.model;
+        let (cc, ct) = (self.committed, &mut *self.trial);
+        system.assemble(input, &m.continuum, &m.continuum_coloring, cc, ct);
+    }
+
+    fn assemble_interface(
+        &mut self,
+        system: &mut GlobalSystem,
+        input: &AssemblyInput,
+        block: MatMut<'_, f64>,
+        map: &DenseScatter,
+    ) -> bool {
+        let m = self.model;
+        let (ic, it) = (self.interface_committed, &mut *self.interface_trial);
+        system.assemble_dense(
+            input,
+            &m.interface,
+            &m.interface_coloring,
+            ic,
+            it,
+            block,
+            map,
+        );
+        !it.iter().any(InterfaceState::has_unsymmetric_tangent)
     }
 }

@@ -10,14 +10,42 @@
 //! rule, a residual a thousand times below the force tolerance is accepted without the
 //! correction check: a linear problem then needs one solve, not two.
 //!
+//! # Linear solves
+//! Models with contact pairs are solved exactly by condensation onto the interface unknowns
+//! ([`CondensedSolver`], [`LinearSolver::Condensed`], the default): the continuum is assembled
+//! into the global pattern and factored (with the interface ordered last) only when its
+//! tangent changed — once per model for linear-elastic bodies, every iteration otherwise —
+//! and the interface elements into a dense block over the interface unknowns, whose dense LU
+//! is formed at every iteration. The consistent (unsymmetric) tangent is used as is. With
+//! linear-elastic bodies the continuum is evaluated only at the start of an increment (its
+//! internal force and states); iterations take its force as f_c(u₀) + K_c (u − u₀) from the
+//! stored stiffness, re-evaluating the interface elements alone, and a converged increment
+//! is confirmed by one full evaluation (which also gives its states and reactions). Models
+//! without contact pairs, and [`LinearSolver::Krylov`], use [`CholeskySolver`] (with BiCGSTAB
+//! for unsymmetric tangents).
+//!
 //! [`Newton`] owns the global system, the linear solver and every vector the loop needs, all
 //! sized once for the model: an iteration allocates nothing, which keeps the many small
 //! iterations of contact problems free of allocator traffic.
 
+use faer::{Mat, MatMut};
+
 use crate::Result;
-use crate::assembly::{AssemblyInput, DofMap, GlobalSystem, SparsityPattern};
+use crate::assembly::{AssemblyInput, DenseScatter, DofMap, GlobalSystem, SparsityPattern};
 use crate::contact::ContactAlgorithm;
+use crate::solver::condensed::CondensedSolver;
 use crate::solver::linear::CholeskySolver;
+
+/// The linear solver of models with contact pairs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LinearSolver {
+    /// Exact solves by condensation onto the interface unknowns ([`CondensedSolver`]).
+    #[default]
+    Condensed,
+    /// Cholesky for symmetric tangents, BiCGSTAB preconditioned with the elastic contact
+    /// matrix for unsymmetric ones.
+    Krylov,
+}
 
 /// Settings of the Newton loop (public fields, as in dolfinx's `NewtonSolver`).
 #[derive(Clone, Copy, Debug)]
@@ -31,6 +59,8 @@ pub struct NewtonSettings {
     /// conclusions 2–3). A choice of the solution method, not of the model: every algorithm
     /// has the same residual, hence the same solution.
     pub contact_algorithm: ContactAlgorithm,
+    /// The linear solver of models with contact pairs (models without use Cholesky).
+    pub linear_solver: LinearSolver,
 }
 
 /// A problem the Newton loop can solve: it assembles internal forces and the tangent.
@@ -39,6 +69,81 @@ pub trait Problem {
     /// `input.tangent`) into the cleared `system` at the displacements `input.u`, updating
     /// trial states. Returns whether the tangent is symmetric.
     fn assemble(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) -> bool;
+
+    /// The free equations of the interface elements' nodes, sorted: empty (the default) if
+    /// the problem has no interface, which keeps it off the condensed path. The methods
+    /// below are called only when it is not empty.
+    fn interface_equations(&self, _dofs: &DofMap) -> Vec<usize> {
+        Vec::new()
+    }
+
+    /// Whether the bulk (continuum) is linear: constant tangent, internal force K_c · u.
+    fn bulk_is_linear(&self) -> bool {
+        false
+    }
+
+    /// The pattern of the bulk's elements over the equations of `dofs` (for a linear bulk,
+    /// whose stiffness over all dofs then gives its internal force, reactions included).
+    fn bulk_pattern(&self, _dofs: &DofMap) -> SparsityPattern {
+        unimplemented!("a problem with a linear bulk gives its pattern")
+    }
+
+    /// The scatter map of the interface elements into the dense interface block, `local`
+    /// giving the block index of a free equation.
+    fn interface_scatter(
+        &self,
+        _dofs: &DofMap,
+        _local: &dyn Fn(usize) -> Option<usize>,
+    ) -> DenseScatter {
+        unimplemented!("a problem with interface equations scatters its interface")
+    }
+
+    /// Adds the bulk's internal force (and, if `input.tangent`, its tangent) into `system`.
+    fn assemble_bulk(&mut self, _system: &mut GlobalSystem, _input: &AssemblyInput) {
+        unimplemented!("a problem with interface equations assembles its bulk")
+    }
+
+    /// Adds the interface's internal force into `system` and, if `input.tangent`, its
+    /// tangent into the dense interface `block` through `map`. Returns whether that tangent
+    /// is symmetric.
+    fn assemble_interface(
+        &mut self,
+        _system: &mut GlobalSystem,
+        _input: &AssemblyInput,
+        _block: MatMut<'_, f64>,
+        _map: &DenseScatter,
+    ) -> bool {
+        unimplemented!("a problem with interface equations assembles its interface")
+    }
+}
+
+/// The condensed path's solver and workspaces (made at the first increment of a problem with
+/// an interface).
+#[derive(Debug)]
+struct Condensed {
+    solver: CondensedSolver,
+    /// The interface elements' tangent over the interface unknowns.
+    block: Mat<f64>,
+    map: DenseScatter,
+    /// Whether the bulk is linear (constant K_c, stored in the system's values).
+    linear_bulk: bool,
+    /// Whether the system's values hold a continuum tangent not yet factored.
+    bulk_dirty: bool,
+    /// Linear bulk: whether K_c is assembled and factored.
+    bulk_ready: bool,
+    /// Linear bulk: the continuum stiffness over all dofs (prescribed ones numbered too),
+    /// whose product with a displacement change gives the change of the continuum's
+    /// internal force, reactions included.
+    stiffness: Option<(DofMap, GlobalSystem)>,
+    /// Linear bulk: the continuum internal force (all dofs) at the displacements `u_ref`
+    /// (all dofs), evaluated at the start of the increment.
+    bulk_force: Vec<f64>,
+    u_ref: Vec<f64>,
+    /// Workspace: Δu = u − u_ref over all dofs.
+    du: Vec<f64>,
+    /// Whether the internal force of the last evaluation came from K_c Δu rather than from
+    /// the continuum elements.
+    extrapolated: bool,
 }
 
 /// What happened in one increment.
@@ -83,6 +188,10 @@ pub struct Newton<'a> {
     /// Line search: the displacements it starts from, and a trial step's out-of-balance force.
     start: Vec<f64>,
     trial_residual: Vec<f64>,
+    /// The condensed solver, once a problem with an interface asked for it.
+    condensed: Option<Condensed>,
+    /// Whether the problem was found to have no interface (then Cholesky is used).
+    no_interface: bool,
 }
 
 impl<'a> Newton<'a> {
@@ -104,6 +213,8 @@ impl<'a> Newton<'a> {
             external: vec![0.0; free],
             start: vec![0.0; dofs.dof_count()],
             trial_residual: vec![0.0; free],
+            condensed: None,
+            no_interface: false,
         })
     }
 
@@ -120,6 +231,118 @@ impl<'a> Newton<'a> {
     /// The linear solver (for its statistics).
     pub fn linear(&self) -> &CholeskySolver {
         &self.linear
+    }
+
+    /// The condensed solver, if the problem solved so far has an interface and the settings
+    /// chose it.
+    pub fn condensed(&self) -> Option<&CondensedSolver> {
+        self.condensed.as_ref().map(|c| &c.solver)
+    }
+
+    /// Makes the condensed solver for `problem` if the settings ask for it and it has an
+    /// interface (once; later calls return at once). Returns the seconds it took.
+    fn prepare_condensed(&mut self, problem: &impl Problem) -> Result<f64> {
+        if self.settings.linear_solver != LinearSolver::Condensed
+            || self.condensed.is_some()
+            || self.no_interface
+        {
+            return Ok(0.0);
+        }
+        let t = std::time::Instant::now();
+        let interface = problem.interface_equations(self.dofs);
+        if interface.is_empty() {
+            self.no_interface = true;
+            return Ok(0.0);
+        }
+        let solver = CondensedSolver::new(&self.system.pattern, &interface)?;
+        let map = problem.interface_scatter(self.dofs, &|eq| solver.local_index(eq));
+        let n_i = solver.interface_equations().len();
+        let n = self.dofs.dof_count();
+        let linear_bulk = problem.bulk_is_linear();
+        let stiffness = linear_bulk.then(|| {
+            let all = DofMap::new(&vec![false; n]);
+            let pattern = problem.bulk_pattern(&all);
+            (all, GlobalSystem::new(pattern, n))
+        });
+        self.condensed = Some(Condensed {
+            solver,
+            block: Mat::zeros(n_i, n_i),
+            map,
+            linear_bulk,
+            bulk_dirty: false,
+            bulk_ready: false,
+            stiffness,
+            bulk_force: vec![0.0; n],
+            u_ref: vec![0.0; n],
+            du: vec![0.0; n],
+            extrapolated: false,
+        });
+        Ok(t.elapsed().as_secs_f64())
+    }
+
+    /// Assembles the internal force at `u` (and the tangent if `tangent`), on the condensed
+    /// path if it is active (`fresh`: evaluate the bulk's elements even if it is linear).
+    /// Returns whether the tangent is symmetric.
+    fn evaluate(
+        &mut self,
+        problem: &mut impl Problem,
+        u: &[f64],
+        tangent: bool,
+        fresh: bool,
+    ) -> bool {
+        let input = AssemblyInput {
+            dofs: self.dofs,
+            u,
+            tangent,
+            algorithm: self.settings.contact_algorithm,
+        };
+        let Some(c) = self.condensed.as_mut() else {
+            self.system.clear(tangent);
+            return problem.assemble(&mut self.system, &input);
+        };
+        let system = &mut self.system;
+        c.extrapolated = false;
+        if !c.linear_bulk {
+            system.clear(tangent);
+            problem.assemble_bulk(system, &input);
+            c.bulk_dirty |= tangent;
+        } else if !c.bulk_ready || fresh {
+            // The continuum's elements: its force (and states) at u, K_c the first time.
+            let first = !c.bulk_ready;
+            system.clear(first);
+            problem.assemble_bulk(
+                system,
+                &AssemblyInput {
+                    tangent: first,
+                    ..input
+                },
+            );
+            if first && let Some((all, stiffness)) = c.stiffness.as_mut() {
+                stiffness.clear(true);
+                let input = AssemblyInput { dofs: all, ..input };
+                problem.assemble_bulk(stiffness, &input);
+            }
+            c.bulk_dirty |= first;
+            c.bulk_ready = true;
+            c.bulk_force.copy_from_slice(&system.internal_force);
+            c.u_ref.copy_from_slice(u);
+        } else {
+            // f_c(u) = f_c(u_ref) + K_c (u − u_ref) over all dofs.
+            let (_, stiffness) = c.stiffness.as_ref().expect("linear bulk");
+            for ((d, a), b) in c.du.iter_mut().zip(u).zip(&c.u_ref) {
+                *d = a - b;
+            }
+            let f = &mut system.internal_force;
+            multiply(&stiffness.pattern, &stiffness.values, &c.du, f);
+            for (f, f0) in f.iter_mut().zip(&c.bulk_force) {
+                *f += f0;
+            }
+            c.extrapolated = true;
+        }
+        if tangent {
+            c.block.fill(0.0);
+        }
+        problem.assemble_interface(system, &input, c.block.as_mut(), &c.map)
     }
 
     /// Solves one increment from the displacements in `u` (whose prescribed components
@@ -145,11 +368,14 @@ impl<'a> Newton<'a> {
         let f_ext_norm = norm(f_ext);
         let mut last_correction = f64::INFINITY;
         let mut initial_residual = None;
+        log.factorization_seconds += self.prepare_condensed(problem)?;
+        // The next evaluation runs the bulk's elements (start of the increment, or the check
+        // of a converged state reached with extrapolated bulk forces).
+        let mut fresh = true;
         loop {
             let t = std::time::Instant::now();
-            self.system.clear(true);
-            let input = self.input(u, true);
-            let symmetric = problem.assemble(&mut self.system, &input);
+            let symmetric = self.evaluate(problem, u, true, fresh);
+            fresh = false;
             log.assembly_seconds += t.elapsed().as_secs_f64();
             let r = &mut self.residual;
             out_of_balance(dofs, &self.system.internal_force, &self.external, r);
@@ -174,6 +400,12 @@ impl<'a> Newton<'a> {
                     || linear_increment
                     || last_correction <= settings.displacement_tolerance)
             {
+                if self.condensed.as_ref().is_some_and(|c| c.extrapolated) {
+                    // Confirm with the continuum's elements (its states and reactions too).
+                    fresh = true;
+                    log.residuals.pop();
+                    continue;
+                }
                 log.converged = true;
                 return Ok(log);
             }
@@ -181,7 +413,18 @@ impl<'a> Newton<'a> {
                 return Ok(log);
             }
             let t = std::time::Instant::now();
-            if symmetric {
+            if let Some(c) = self.condensed.as_mut() {
+                if c.bulk_dirty {
+                    c.solver.factor_bulk(self.system.matrix())?;
+                    c.bulk_dirty = false;
+                }
+                c.solver.factor_interface(c.block.as_ref())?;
+                log.factorization_seconds += t.elapsed().as_secs_f64();
+                let t = std::time::Instant::now();
+                c.solver.solve_in_place(r);
+                log.unsymmetric_solves += usize::from(!symmetric);
+                log.solve_seconds += t.elapsed().as_secs_f64();
+            } else if symmetric {
                 self.linear.factorize(self.system.matrix())?;
                 log.factorization_seconds += t.elapsed().as_secs_f64();
                 let t = std::time::Instant::now();
@@ -218,19 +461,6 @@ impl<'a> Newton<'a> {
         }
     }
 
-    /// The assembly of this solver's dofs at `u`, with the tangent if `tangent`.
-    fn input<'u>(&self, u: &'u [f64], tangent: bool) -> AssemblyInput<'u>
-    where
-        'a: 'u,
-    {
-        AssemblyInput {
-            dofs: self.dofs,
-            u,
-            tangent,
-            algorithm: self.settings.contact_algorithm,
-        }
-    }
-
     /// Backtracking line search along the Newton correction δu held in the residual: takes
     /// u + α δu with the first α ∈ {1, ½, ¼, ⅛, 1/16} that lowers the out-of-balance force
     /// ‖r‖ below `current`, or the α with the smallest ‖r‖. Contact and friction make the
@@ -244,9 +474,7 @@ impl<'a> Newton<'a> {
         for _ in 0..5 {
             u.copy_from_slice(&self.start);
             self.dofs.add_free(alpha, &self.residual, u);
-            self.system.clear(false);
-            let input = self.input(u, false);
-            problem.assemble(&mut self.system, &input);
+            self.evaluate(problem, u, false, false);
             let trial = &mut self.trial_residual;
             out_of_balance(
                 self.dofs,
@@ -275,5 +503,21 @@ fn out_of_balance(dofs: &DofMap, internal: &[f64], external: &[f64], out: &mut [
     dofs.gather_free(internal, out);
     for (ri, ei) in out.iter_mut().zip(external) {
         *ri = ei - *ri;
+    }
+}
+
+/// y = A x for the matrix with values `values` over `pattern` (both triangles stored).
+fn multiply(pattern: &SparsityPattern, values: &[f64], x: &[f64], y: &mut [f64]) {
+    y.fill(0.0);
+    let symbolic = pattern.symbolic();
+    let (cp, ri) = (symbolic.col_ptr(), symbolic.row_idx());
+    for (j, &xj) in x.iter().enumerate() {
+        if xj == 0.0 {
+            continue;
+        }
+        let range = cp[j] as usize..cp[j + 1] as usize;
+        for (&i, &v) in ri[range.clone()].iter().zip(&values[range]) {
+            y[i as usize] += v * xj;
+        }
     }
 }

@@ -1,0 +1,1066 @@
+//! Exact solves of the unsymmetric contact tangent by static condensation onto the interface.
+//!
+//! The tangent of a contact model is K = K_c + K_if: the bodies' (continuum) stiffness K_c is
+//! symmetric, and for elastic bodies constant; the interface elements' contribution K_if is
+//! unsymmetric with friction, changes every iteration, and — since a 6-node interface element
+//! connects only interface nodes — lives only in the rows and columns of the interface
+//! unknowns I. Splitting the other ("bulk") unknowns B off,
+//!
+//! ```text
+//! [ K_BB  K_BI        ] [x_B]   [r_B]
+//! [ K_IB  K_II + K_if ] [x_I] = [r_I],
+//! ```
+//!
+//! the bulk is eliminated with a sparse Cholesky factorisation, leaving the small dense system
+//! (S_c + K_if) x_I = r_I − K_IB K_BB⁻¹ r_B with the continuum Schur complement
+//! S_c = K_II − K_IB K_BB⁻¹ K_BI, which is factored by dense LU with partial pivoting at every
+//! solve. No Krylov iteration: the solution is exact to rounding.
+//!
+//! # How S_c is obtained
+//! One supernodal Cholesky factorisation (faer) of the whole continuum matrix with the bulk
+//! ordered first (AMD on K_BB) and the interface last: its trailing block satisfies
+//! L_II L_IIᵀ = S_c, so S_c falls out of the sparse factorisation, whose supernodal updates
+//! exploit the sparsity of K_BI (forming W = L_BB⁻¹ K_BI column block by column block would
+//! not). S_c is only positive *semi*-definite when a body is held only through the interface
+//! (e.g. a shaft pushed into a sleeve), so the factorisation is of K_c + D with a positive
+//! diagonal D on the interface unknowns (the continuum's own diagonal there); the bulk part
+//! of the factor does not change, the trailing block becomes S_c + D, and S_c = L_II L_IIᵀ − D.
+//!
+//! A solve then costs one sparse forward and backward substitution over the bulk part of the
+//! factor, a copy of S_c, the dense LU of S_c + K_if (⅔ n_I³ flops) and its substitutions.
+//! All storage is allocated by [`CondensedSolver::new`]; [`CondensedSolver::factor_bulk`] and
+//! [`CondensedSolver::solve`] allocate none of their own. (faer's multi-threaded kernels
+//! allocate rayon's task bookkeeping: in `factor_bulk`, and in solves from n_I = 1024 on,
+//! where the dense LU runs on all threads; measured: no allocation at all in solves with
+//! n_I = 835.)
+//!
+//! # Use
+//! ```text
+//! let mut s = CondensedSolver::new(&pattern, &interface_equations)?;  // once per model
+//! s.factor_bulk(continuum_matrix)?;     // once for elastic bodies; again when K_c changed
+//! loop {                                // every Newton iteration
+//!     k_if.fill(0.0); /* assemble interface elements into k_if via s.local_index(eq) */
+//!     s.solve(k_if.as_ref(), &mut rhs)?;
+//! }
+//! ```
+
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
+use faer::linalg::matmul::matmul;
+use faer::linalg::matmul::triangular::{BlockStructure, matmul as triangular_matmul};
+use faer::linalg::triangular_solve::{
+    solve_lower_triangular_in_place, solve_upper_triangular_in_place,
+};
+use faer::perm::PermRef;
+use faer::reborrow::{Reborrow, ReborrowMut};
+use faer::sparse::linalg::amd;
+use faer::sparse::linalg::cholesky::supernodal::{
+    SupernodalLltRef, SymbolicSupernodalCholesky, factorize_supernodal_numeric_llt,
+    factorize_supernodal_numeric_llt_scratch,
+};
+use faer::sparse::linalg::cholesky::{
+    CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+    factorize_symbolic_cholesky,
+};
+use faer::sparse::linalg::{SupernodalThreshold, SymbolicSupernodalParams};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
+use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
+
+use crate::assembly::SparsityPattern;
+use crate::{Error, Result};
+
+/// Marker for a bulk equation in the equation → interface-index map.
+const BULK: u32 = u32::MAX;
+
+/// Interface size from which the dense LU of every solve runs in parallel. Below it the
+/// threads' overhead outweighs the gain (n_I = 835: 5–13 ms sequential, 27–33 ms on two
+/// threads), and the sequential LU allocates nothing, whereas faer's parallel kernels
+/// allocate rayon bookkeeping (~1500 allocations per LU at n_I = 835).
+const DENSE_PARALLEL_FROM: usize = 1024;
+
+/// Exact solver for continuum-plus-interface tangents by condensation onto the interface
+/// unknowns (see the module documentation).
+pub struct CondensedSolver {
+    /// Unknowns: all, bulk, interface.
+    n: usize,
+    n_bulk: usize,
+    /// Interface equations in the order of the dense interface block.
+    interface: Vec<usize>,
+    /// Equation → index into `interface`, or `BULK`.
+    local: Vec<u32>,
+    /// Elimination order: `order[new] = old` equation; `position[old] = new`. The bulk comes
+    /// first (AMD), then the interface in the order of `interface`.
+    order: Vec<u32>,
+    position: Vec<u32>,
+    /// Symbolic supernodal Cholesky factorisation of the reordered matrix.
+    symbolic: SymbolicCholesky<u32>,
+    /// Lower triangle of the reordered continuum matrix (plus the interface shift), rebuilt
+    /// by [`Self::factor_bulk`] in a fixed traversal order; `fill` is its insertion cursor.
+    lower: SymbolicSparseColMat<u32>,
+    lower_values: Vec<f64>,
+    fill: Vec<u32>,
+    /// Position in `lower_values` of the diagonal entry of each interface unknown.
+    interface_diagonal: Vec<usize>,
+    /// Size of the original pattern (a consistency check of the matrices passed in).
+    pattern_nnz: usize,
+    /// Numeric Cholesky factor (supernodal values).
+    factor: Vec<f64>,
+    /// The diagonal shift D on the interface unknowns of the last factorisation.
+    shift: Vec<f64>,
+    /// Continuum Schur complement S_c on the interface unknowns.
+    schur: Mat<f64>,
+    /// Dense LU of S_c + K_if (also holds L_II while S_c is formed).
+    lu: Mat<f64>,
+    lu_perm: Vec<usize>,
+    lu_perm_inv: Vec<usize>,
+    /// Right-hand side / solution in elimination order, and a gather buffer.
+    x: Vec<f64>,
+    gather: Vec<f64>,
+    workspace: MemBuffer,
+    /// Parallelism of the sparse factorisation and S_c, and of the dense LU per solve.
+    par: Par,
+    dense_par: Par,
+    /// Whether the bulk, and the interface system, are factored.
+    factored: bool,
+    interface_factored: bool,
+}
+
+impl std::fmt::Debug for CondensedSolver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CondensedSolver")
+            .field("n", &self.n)
+            .field("n_interface", &self.interface.len())
+            .field("factor_nnz", &self.factor.len())
+            .finish()
+    }
+}
+
+impl CondensedSolver {
+    /// Symbolic analysis, once per model: orders the bulk (AMD on K_BB) with the interface
+    /// equations `interface` (free equation numbers of the interface nodes, any order,
+    /// duplicates allowed) last, factors symbolically, and allocates every buffer.
+    pub fn new(pattern: &SparsityPattern, interface: &[usize]) -> Result<Self> {
+        Self::with_relaxation(pattern, interface, None)
+    }
+
+    /// [`Self::new`] with faer's supernode relaxation thresholds `relax` (`None`: faer's
+    /// defaults), for tests of supernodes straddling the bulk–interface border.
+    fn with_relaxation(
+        pattern: &SparsityPattern,
+        interface: &[usize],
+        relax: Option<&[(usize, f64)]>,
+    ) -> Result<Self> {
+        let global = pattern.symbolic();
+        let n = global.nrows();
+        let mut interface = interface.to_vec();
+        interface.sort_unstable();
+        interface.dedup();
+        if let Some(&last) = interface.last()
+            && last >= n
+        {
+            return Err(Error::Linear(format!(
+                "interface equation {last} out of range (there are {n} unknowns)"
+            )));
+        }
+        let n_i = interface.len();
+        let n_bulk = n - n_i;
+        let mut local = vec![BULK; n];
+        for (k, &eq) in interface.iter().enumerate() {
+            local[eq] = k as u32;
+        }
+
+        // AMD on the bulk block (upper triangle of its pattern, bulk-compacted indices).
+        let mut compact = vec![BULK; n];
+        let bulk: Vec<u32> = (0..n as u32)
+            .filter(|&eq| local[eq as usize] == BULK)
+            .collect();
+        for (k, &eq) in bulk.iter().enumerate() {
+            compact[eq as usize] = k as u32;
+        }
+        let (cp, ri) = (global.col_ptr(), global.row_idx());
+        let mut b_col_ptr = Vec::with_capacity(n_bulk + 1);
+        b_col_ptr.push(0u32);
+        let mut b_row_idx = Vec::new();
+        for &eq in &bulk {
+            let j = eq as usize;
+            b_row_idx.extend(
+                ri[cp[j] as usize..cp[j + 1] as usize]
+                    .iter()
+                    .map(|&i| compact[i as usize])
+                    .filter(|&i| i != BULK && i <= compact[j]),
+            );
+            b_col_ptr.push(b_row_idx.len() as u32);
+        }
+        let mut amd_fwd = vec![0u32; n_bulk];
+        let mut amd_inv = vec![0u32; n_bulk];
+        {
+            let b_pattern = SymbolicSparseColMatRef::new_unsorted_checked(
+                n_bulk, n_bulk, &b_col_ptr, None, &b_row_idx,
+            );
+            let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<u32>(
+                n_bulk,
+                b_row_idx.len(),
+            ))
+            .map_err(|_| Error::Linear("out of memory for the AMD ordering".into()))?;
+            amd::order_maybe_unsorted(
+                &mut amd_fwd,
+                &mut amd_inv,
+                b_pattern,
+                Default::default(),
+                MemStack::new(&mut mem),
+            )
+            .map_err(|e| Error::Linear(format!("AMD ordering failed: {e:?}")))?;
+        }
+        drop((b_col_ptr, b_row_idx, compact));
+        let order: Vec<u32> = amd_fwd
+            .iter()
+            .map(|&k| bulk[k as usize])
+            .chain(interface.iter().map(|&eq| eq as u32))
+            .collect();
+        drop((bulk, amd_fwd, amd_inv));
+        let mut position = vec![0u32; n];
+        for (new, &old) in order.iter().enumerate() {
+            position[old as usize] = new as u32;
+        }
+
+        let symbolic = factorize_symbolic_cholesky(
+            global.as_ref(),
+            Side::Lower,
+            SymmetricOrdering::Custom(PermRef::new_checked(&order, &position, n)),
+            CholeskySymbolicParams {
+                supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+                supernodal_params: match relax {
+                    Some(relax) => SymbolicSupernodalParams { relax: Some(relax) },
+                    None => Default::default(),
+                },
+                ..Default::default()
+            },
+        )
+        .map_err(|e| Error::Linear(format!("symbolic Cholesky factorisation failed: {e:?}")))?;
+        let SymbolicCholeskyRaw::Supernodal(supernodal) = symbolic.raw() else {
+            return Err(Error::Linear(
+                "expected a supernodal symbolic factorisation".into(),
+            ));
+        };
+
+        // Lower triangle of the reordered matrix: count per column, then the row indices in
+        // the traversal order that `factor_bulk` repeats.
+        let mut lower_col_ptr = vec![0u32; n + 1];
+        for_each_lower(global.as_ref(), &position, |col, _, _| {
+            lower_col_ptr[col + 1] += 1
+        });
+        for c in 0..n {
+            lower_col_ptr[c + 1] += lower_col_ptr[c];
+        }
+        let nnz_lower = lower_col_ptr[n] as usize;
+        let mut lower_row_idx = vec![0u32; nnz_lower];
+        let mut fill: Vec<u32> = lower_col_ptr[..n].to_vec();
+        let mut interface_diagonal = vec![usize::MAX; n_i];
+        for_each_lower(global.as_ref(), &position, |col, row, _| {
+            let slot = fill[col] as usize;
+            lower_row_idx[slot] = row as u32;
+            fill[col] += 1;
+            if row == col && col >= n_bulk {
+                interface_diagonal[col - n_bulk] = slot;
+            }
+        });
+        if interface_diagonal.contains(&usize::MAX) {
+            return Err(Error::Linear(
+                "the sparsity pattern lacks a diagonal entry of an interface unknown".into(),
+            ));
+        }
+        let lower =
+            SymbolicSparseColMat::new_unsorted_checked(n, n, lower_col_ptr, None, lower_row_idx);
+
+        let par = Par::rayon(0);
+        let gather_len = (0..supernodal.n_supernodes())
+            .map(|s| supernodal.supernode(s).pattern().len())
+            .max()
+            .unwrap_or(0);
+        let req = StackReq::any_of(&[
+            factorize_supernodal_numeric_llt_scratch::<u32, f64>(
+                supernodal,
+                par,
+                Default::default(),
+            ),
+            lu_factor::lu_in_place_scratch::<usize, f64>(n_i, n_i, par, Default::default()),
+            lu_solve::solve_in_place_scratch::<usize, f64>(n_i, 1, par),
+        ]);
+        let workspace = MemBuffer::try_new(req)
+            .map_err(|_| Error::Linear("out of memory for the factorisation workspace".into()))?;
+        let factor = vec![0.0; supernodal.len_val()];
+        Ok(Self {
+            n,
+            n_bulk,
+            interface,
+            local,
+            order,
+            position,
+            lower_values: vec![0.0; nnz_lower],
+            lower,
+            fill,
+            interface_diagonal,
+            pattern_nnz: global.row_idx().len(),
+            factor,
+            shift: vec![0.0; n_i],
+            schur: Mat::zeros(n_i, n_i),
+            lu: Mat::zeros(n_i, n_i),
+            lu_perm: vec![0; n_i],
+            lu_perm_inv: vec![0; n_i],
+            x: vec![0.0; n],
+            gather: vec![0.0; gather_len],
+            workspace,
+            par,
+            dense_par: if n_i >= DENSE_PARALLEL_FROM {
+                par
+            } else {
+                Par::Seq
+            },
+            symbolic,
+            factored: false,
+            interface_factored: false,
+        })
+    }
+
+    /// Sets the parallelism of [`Self::factor_bulk`] (`factor`) and of the dense LU and
+    /// substitutions of every solve (`dense`). Defaults: all threads for the former; for the
+    /// latter all threads from n_I = 1024 interface unknowns, sequential below. (The sparse
+    /// substitutions over the bulk are sequential: one right-hand side.)
+    pub fn set_parallelism(&mut self, factor: Par, dense: Par) {
+        self.par = factor;
+        self.dense_par = dense;
+    }
+
+    /// Number of unknowns.
+    pub fn size(&self) -> usize {
+        self.n
+    }
+
+    /// The interface equations, sorted: row/column k of the dense interface block passed to
+    /// [`Self::solve`] is equation `interface_equations()[k]`.
+    pub fn interface_equations(&self) -> &[usize] {
+        &self.interface
+    }
+
+    /// Index of equation `eq` in the dense interface block, or `None` for a bulk unknown.
+    #[inline]
+    pub fn local_index(&self, eq: usize) -> Option<usize> {
+        let k = self.local[eq];
+        (k != BULK).then_some(k as usize)
+    }
+
+    /// Stored entries of the sparse Cholesky factor (its dense interface block included).
+    pub fn factor_nnz(&self) -> usize {
+        self.factor.len()
+    }
+
+    /// Bytes held by this solver (factor, matrices, dense blocks, workspaces).
+    pub fn memory_bytes(&self) -> usize {
+        let n_i = self.interface.len();
+        8 * (self.factor.len() + self.lower_values.len() + 2 * n_i * n_i + 2 * self.n)
+            + 4 * (self.lower.row_idx().len() + 4 * self.n)
+            + self.workspace.len()
+    }
+
+    /// The continuum Schur complement S_c on the interface (valid after
+    /// [`Self::factor_bulk`]).
+    pub fn schur_complement(&self) -> MatRef<'_, f64> {
+        self.schur.as_ref()
+    }
+
+    /// Numeric factorisation of the symmetric continuum-only matrix `continuum` (the pattern
+    /// given to [`Self::new`]; its lower triangle is read) and formation of the dense
+    /// continuum Schur complement S_c on the interface. Once per model for elastic bodies,
+    /// again whenever the bulk tangent changed. Fails if K_BB is not positive definite (a
+    /// body neither supported nor touching an interface).
+    pub fn factor_bulk(&mut self, continuum: SparseColMatRef<'_, u32, f64>) -> Result<()> {
+        self.factored = false;
+        self.interface_factored = false;
+        let n = self.n;
+        if continuum.nrows() != n
+            || continuum.ncols() != n
+            || continuum.row_idx().len() != self.pattern_nnz
+        {
+            return Err(Error::Linear(
+                "the continuum matrix does not have the pattern of the condensed solver".into(),
+            ));
+        }
+        // Reordered lower triangle, same traversal as in `new`.
+        let col_ptr = self.lower.col_ptr();
+        for (f, &c) in self.fill.iter_mut().zip(col_ptr) {
+            *f = c;
+        }
+        let (fill, values) = (&mut self.fill, &mut self.lower_values);
+        for_each_lower(continuum.symbolic(), &self.position, |col, _, p| {
+            values[fill[col] as usize] = continuum.val()[p];
+            fill[col] += 1;
+        });
+        // Shift D on the interface diagonal: makes the trailing block S_c + D definite even
+        // when S_c is singular (a body held only through the interface).
+        let n_i = self.interface.len();
+        let fallback = self
+            .interface_diagonal
+            .iter()
+            .map(|&p| values[p].abs())
+            .fold(0.0, f64::max);
+        for (d, &p) in self.shift.iter_mut().zip(&self.interface_diagonal) {
+            let own = values[p].abs();
+            *d = if own > 0.0 {
+                own
+            } else if fallback > 0.0 {
+                fallback
+            } else {
+                1.0
+            };
+            values[p] += *d;
+        }
+        let SymbolicCholeskyRaw::Supernodal(symbolic) = self.symbolic.raw() else {
+            unreachable!("forced supernodal in `new`");
+        };
+        factorize_supernodal_numeric_llt(
+            &mut self.factor,
+            SparseColMatRef::new(self.lower.as_ref(), &self.lower_values),
+            Default::default(),
+            symbolic,
+            self.par,
+            MemStack::new(&mut self.workspace),
+            Default::default(),
+        )
+        .map_err(|_| {
+            Error::Linear(
+                "the bodies' stiffness with the interface unknowns held is not positive definite: a body is \
+                 neither supported nor in contact, or the bulk tangent lost definiteness"
+                    .into(),
+            )
+        })?;
+        // S_c = L_II L_IIᵀ − D, with L_II gathered into the LU buffer.
+        let llt = SupernodalLltRef::new(symbolic, &self.factor);
+        let n_bulk = self.n_bulk;
+        let mut l_ii = self.lu.as_mut();
+        l_ii.fill(0.0);
+        for s in first_interface_supernode(symbolic, n_bulk)..symbolic.n_supernodes() {
+            let node = llt.supernode(s);
+            let (start, ls, pattern) = (node.start(), node.val(), node.pattern());
+            let width = ls.ncols();
+            for jj in n_bulk.saturating_sub(start)..width {
+                let col = start + jj - n_bulk;
+                for ii in jj..width {
+                    l_ii[(start + ii - n_bulk, col)] = ls[(ii, jj)];
+                }
+                for (idx, &row) in pattern.iter().enumerate() {
+                    l_ii[(row as usize - n_bulk, col)] = ls[(width + idx, jj)];
+                }
+            }
+        }
+        triangular_matmul(
+            self.schur.as_mut(),
+            BlockStructure::Rectangular,
+            Accum::Replace,
+            self.lu.as_ref(),
+            BlockStructure::TriangularLower,
+            self.lu.as_ref().transpose(),
+            BlockStructure::TriangularUpper,
+            1.0,
+            self.par,
+        );
+        for k in 0..n_i {
+            self.schur[(k, k)] -= self.shift[k];
+        }
+        self.factored = true;
+        Ok(())
+    }
+
+    /// Exact solve of (K_c + K_if) x = `rhs` in place, with K_c the matrix of the last
+    /// [`Self::factor_bulk`] and K_if the (possibly unsymmetric) interface contribution given
+    /// as the dense n_I × n_I block `interface_block` over [`Self::interface_equations`]
+    /// (K_if is zero outside it): [`Self::factor_interface`] then [`Self::solve_in_place`].
+    pub fn solve(&mut self, interface_block: MatRef<'_, f64>, rhs: &mut [f64]) -> Result<()> {
+        self.factor_interface(interface_block)?;
+        self.solve_in_place(rhs);
+        Ok(())
+    }
+
+    /// Factors S_c + K_if by dense LU with partial pivoting, K_if = `interface_block` as in
+    /// [`Self::solve`]. Fails if it is singular to working precision (a pivot below
+    /// n_I·ε times the largest) or not finite.
+    pub fn factor_interface(&mut self, interface_block: MatRef<'_, f64>) -> Result<()> {
+        assert!(self.factored, "factor_interface before factor_bulk");
+        self.interface_factored = false;
+        let n_i = self.interface.len();
+        assert_eq!(
+            (interface_block.nrows(), interface_block.ncols()),
+            (n_i, n_i)
+        );
+        let mut a = self.lu.as_mut();
+        a.copy_from(self.schur.as_ref());
+        a += interface_block;
+        lu_factor::lu_in_place(
+            self.lu.as_mut(),
+            &mut self.lu_perm,
+            &mut self.lu_perm_inv,
+            self.dense_par,
+            MemStack::new(&mut self.workspace),
+            Default::default(),
+        );
+        // Singular to working precision: a pivot at rounding level of the largest one.
+        let largest = (0..n_i).fold(0.0f64, |m, k| m.max(self.lu[(k, k)].abs()));
+        let tiny = n_i as f64 * f64::EPSILON * largest;
+        if !largest.is_finite() || (0..n_i).any(|k| self.lu[(k, k)].abs() <= tiny) {
+            return Err(Error::Linear(
+                "the condensed interface system is singular: a body is held by nothing but its contact \
+                 interface, and the interface does not hold it (open, or sliding freely)"
+                    .into(),
+            ));
+        }
+        self.interface_factored = true;
+        Ok(())
+    }
+
+    /// Solves (K_c + K_if) x = `rhs` in place with the factors of the last
+    /// [`Self::factor_bulk`] and [`Self::factor_interface`] (e.g. several right-hand sides
+    /// for one tangent).
+    pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
+        assert!(
+            self.interface_factored,
+            "solve_in_place before factor_interface"
+        );
+        let (n_bulk, n_i) = (self.n_bulk, self.interface.len());
+        assert_eq!(rhs.len(), self.n);
+        let SymbolicCholeskyRaw::Supernodal(symbolic) = self.symbolic.raw() else {
+            unreachable!("forced supernodal in `new`");
+        };
+        let llt = SupernodalLltRef::new(symbolic, &self.factor);
+        for (x, &old) in self.x.iter_mut().zip(&self.order) {
+            *x = rhs[old as usize];
+        }
+        forward_bulk(llt, n_bulk, &mut self.x, &mut self.gather);
+        // Now x_I = r_I − K_IB K_BB⁻¹ r_B, the condensed right-hand side.
+        let perm = PermRef::new_checked(&self.lu_perm, &self.lu_perm_inv, n_i);
+        lu_solve::solve_in_place(
+            self.lu.as_ref(),
+            self.lu.as_ref(),
+            perm,
+            MatMut::from_column_major_slice_mut(&mut self.x[n_bulk..], n_i, 1),
+            self.dense_par,
+            MemStack::new(&mut self.workspace),
+        );
+        backward_bulk(llt, n_bulk, &mut self.x, &mut self.gather);
+        for (r, &new) in rhs.iter_mut().zip(&self.position) {
+            *r = self.x[new as usize];
+        }
+    }
+
+    /// Gathers the interface block of `matrix` (over the pattern given to [`Self::new`], e.g.
+    /// the interface elements assembled alone into a global value array) into `out`, in the
+    /// order of [`Self::interface_equations`]. Fails if an interface column has a nonzero
+    /// entry in a bulk row (interface elements must touch interface unknowns only).
+    pub fn gather_interface_block(
+        &self,
+        matrix: SparseColMatRef<'_, u32, f64>,
+        mut out: MatMut<'_, f64>,
+    ) -> Result<()> {
+        out.fill(0.0);
+        for (kj, &j) in self.interface.iter().enumerate() {
+            for (&i, &v) in matrix
+                .row_idx_of_col_raw(j)
+                .iter()
+                .zip(matrix.val_of_col(j))
+            {
+                match self.local_index(i as usize) {
+                    Some(ki) => out[(ki, kj)] = v,
+                    None if v != 0.0 => {
+                        return Err(Error::Linear(format!(
+                            "interface contribution at ({i}, {j}) couples a bulk unknown"
+                        )));
+                    }
+                    None => {}
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Calls `f(col, row, p)` for every entry p of the lower triangle (row ≥ col) of `pattern`
+/// mapped by `position` into the lower triangle of the reordered matrix, in a fixed order.
+fn for_each_lower(
+    pattern: SymbolicSparseColMatRef<'_, u32>,
+    position: &[u32],
+    mut f: impl FnMut(usize, usize, usize),
+) {
+    let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
+    for j in 0..pattern.ncols() {
+        let pj = position[j] as usize;
+        let range = cp[j] as usize..cp[j + 1] as usize;
+        for (p, &i) in range.clone().zip(&ri[range]) {
+            let i = i as usize;
+            if i < j {
+                continue;
+            }
+            let pi = position[i] as usize;
+            let (col, row) = if pi >= pj { (pj, pi) } else { (pi, pj) };
+            f(col, row, p);
+        }
+    }
+}
+
+/// Number of supernodes with a column in the bulk (the last one may straddle the border).
+fn bulk_supernodes(symbolic: &SymbolicSupernodalCholesky<u32>, n_bulk: usize) -> usize {
+    symbolic
+        .supernode_begin()
+        .iter()
+        .position(|&start| start as usize >= n_bulk)
+        .unwrap_or(symbolic.n_supernodes())
+}
+
+/// Index of the first supernode with a column in the interface block.
+fn first_interface_supernode(symbolic: &SymbolicSupernodalCholesky<u32>, n_bulk: usize) -> usize {
+    symbolic
+        .supernode_end()
+        .iter()
+        .position(|&end| end as usize > n_bulk)
+        .unwrap_or(symbolic.n_supernodes())
+}
+
+/// Forward substitution with the bulk columns of the factor: x_B ← L_BB⁻¹ x_B and
+/// x_I ← x_I − L_IB x_B.
+fn forward_bulk(
+    llt: SupernodalLltRef<'_, u32, f64>,
+    n_bulk: usize,
+    x: &mut [f64],
+    gather: &mut [f64],
+) {
+    let symbolic = llt.symbolic();
+    for s in 0..bulk_supernodes(symbolic, n_bulk) {
+        let node = llt.supernode(s);
+        let (start, ls, pattern) = (node.start(), node.val(), node.pattern());
+        let width = ls.ncols();
+        // Columns of this supernode in the bulk (all of them unless it straddles the border).
+        let k = width.min(n_bulk - start);
+        let (head, tail) = x.split_at_mut(start + k);
+        let mut x_top = MatMut::from_column_major_slice_mut(&mut head[start..], k, 1);
+        solve_lower_triangular_in_place(ls.submatrix(0, 0, k, k), x_top.rb_mut(), Par::Seq);
+        let x_top = x_top.rb();
+        if k < width {
+            let rest = MatMut::from_column_major_slice_mut(&mut tail[..width - k], width - k, 1);
+            matmul(
+                rest,
+                Accum::Add,
+                ls.submatrix(k, 0, width - k, k),
+                x_top,
+                -1.0,
+                Par::Seq,
+            );
+        }
+        let m = pattern.len();
+        let g = MatMut::from_column_major_slice_mut(&mut gather[..m], m, 1);
+        matmul(
+            g,
+            Accum::Replace,
+            ls.submatrix(width, 0, m, k),
+            x_top,
+            1.0,
+            Par::Seq,
+        );
+        for (&row, &v) in pattern.iter().zip(&gather[..m]) {
+            x[row as usize] -= v;
+        }
+    }
+}
+
+/// Backward substitution with the bulk columns of the factor, x_I holding the interface
+/// solution: x_B ← L_BB⁻ᵀ (x_B − L_IBᵀ x_I).
+fn backward_bulk(
+    llt: SupernodalLltRef<'_, u32, f64>,
+    n_bulk: usize,
+    x: &mut [f64],
+    gather: &mut [f64],
+) {
+    let symbolic = llt.symbolic();
+    for s in (0..bulk_supernodes(symbolic, n_bulk)).rev() {
+        let node = llt.supernode(s);
+        let (start, ls, pattern) = (node.start(), node.val(), node.pattern());
+        let width = ls.ncols();
+        let k = width.min(n_bulk - start);
+        let m = pattern.len();
+        for (g, &row) in gather[..m].iter_mut().zip(pattern) {
+            *g = x[row as usize];
+        }
+        let (head, tail) = x.split_at_mut(start + k);
+        let mut x_top = MatMut::from_column_major_slice_mut(&mut head[start..], k, 1);
+        matmul(
+            x_top.rb_mut(),
+            Accum::Add,
+            ls.submatrix(width, 0, m, k).transpose(),
+            MatRef::from_column_major_slice(&gather[..m], m, 1),
+            -1.0,
+            Par::Seq,
+        );
+        if k < width {
+            matmul(
+                x_top.rb_mut(),
+                Accum::Add,
+                ls.submatrix(k, 0, width - k, k).transpose(),
+                MatRef::from_column_major_slice(&tail[..width - k], width - k, 1),
+                -1.0,
+                Par::Seq,
+            );
+        }
+        solve_upper_triangular_in_place(ls.submatrix(0, 0, k, k).transpose(), x_top, Par::Seq);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::assembly::DofMap;
+    use faer::linalg::solvers::Solve;
+
+    /// Small deterministic pseudo-random numbers in [−1, 1).
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        }
+    }
+
+    /// A contact-like test system: two bodies, each an `nx` × `ny` grid of 4-node cells with
+    /// random symmetric positive semi-definite cell matrices (translations cost no energy), body A on top of body B along a line of coincident node pairs
+    /// joined by 2-node interface "elements" with a random unsymmetric matrix (penalty
+    /// plus `slip` times an unsymmetric part). Body B is held at its bottom; body A only
+    /// through the interface. `fixed_interface_nodes` additionally prescribes both dofs of
+    /// some interface nodes.
+    struct TestSystem {
+        pattern: SparsityPattern,
+        dofs: DofMap,
+        continuum: Vec<f64>,
+        interface: Vec<f64>,
+        interface_eqs: Vec<usize>,
+    }
+
+    fn test_system(nx: usize, ny: usize, slip: f64, fixed_interface_nodes: &[usize]) -> TestSystem {
+        test_system_with(nx, ny, slip, fixed_interface_nodes, false)
+    }
+
+    /// With `single_body`, body A is left out and the interface "elements" join neighbouring
+    /// nodes on the top of body B instead.
+    fn test_system_with(
+        nx: usize,
+        ny: usize,
+        slip: f64,
+        fixed_interface_nodes: &[usize],
+        single_body: bool,
+    ) -> TestSystem {
+        let mut rng = Rng(12345);
+        let per_body = (nx + 1) * (ny + 1);
+        let node = |body: usize, i: usize, j: usize| (body * per_body + j * (nx + 1) + i) as u32;
+        let mut cells: Vec<Vec<u32>> = Vec::new();
+        let first_body = usize::from(single_body);
+        for body in first_body..2 {
+            for j in 0..ny {
+                for i in 0..nx {
+                    cells.push(vec![
+                        node(body, i, j),
+                        node(body, i + 1, j),
+                        node(body, i + 1, j + 1),
+                        node(body, i, j + 1),
+                    ]);
+                }
+            }
+        }
+        // Interface: bottom row of body A (body 0) against top row of body B (body 1).
+        let pairs: Vec<Vec<u32>> = if single_body {
+            (0..nx)
+                .map(|i| vec![node(1, i, ny), node(1, i + 1, ny)])
+                .collect()
+        } else {
+            (0..=nx)
+                .map(|i| vec![node(0, i, 0), node(1, i, ny)])
+                .collect()
+        };
+        let node_count = 2 * per_body;
+        let mut fixed = vec![false; 2 * node_count];
+        for i in 0..=nx {
+            let n = node(1, i, 0) as usize;
+            fixed[2 * n] = true;
+            fixed[2 * n + 1] = true;
+        }
+        for &i in fixed_interface_nodes {
+            let n = node(0, i, 0) as usize;
+            fixed[2 * n] = true;
+            fixed[2 * n + 1] = true;
+        }
+        if single_body {
+            fixed[..2 * per_body].fill(true);
+        }
+        let dofs = DofMap::new(&fixed);
+        let pattern = SparsityPattern::new(
+            node_count,
+            &dofs,
+            cells.iter().chain(&pairs).map(|v| v.as_slice()),
+        );
+        let n = dofs.free_count();
+        let mut kc = Mat::<f64>::zeros(n, n);
+        let mut ki = Mat::<f64>::zeros(n, n);
+        let eq = |nodes: &[u32], a: usize| dofs.equation(2 * nodes[a / 2] as usize + a % 2);
+        for c in &cells {
+            // PSD cell matrix of rank 5 whose null space contains the two translations (as
+            // a plane cell's), so that a body held only through the interface floats.
+            let b = Mat::<f64>::from_fn(5, 8, |_, _| rng.next());
+            let translations = Mat::<f64>::from_fn(8, 8, |a, c| {
+                f64::from(u8::from(a == c)) - f64::from(u8::from(a % 2 == c % 2)) / 4.0
+            });
+            let b = &b * &translations;
+            let k = b.transpose() * &b;
+            for a in 0..8 {
+                for bb in 0..8 {
+                    if let (Some(r), Some(s)) = (eq(c, a), eq(c, bb)) {
+                        kc[(r, s)] += k[(a, bb)];
+                    }
+                }
+            }
+        }
+        for p in &pairs {
+            let penalty = 3.0;
+            let mut k = Mat::<f64>::zeros(4, 4);
+            for d in 0..2 {
+                k[(d, d)] += penalty;
+                k[(2 + d, 2 + d)] += penalty;
+                k[(d, 2 + d)] -= penalty;
+                k[(2 + d, d)] -= penalty;
+            }
+            // Unsymmetric friction-like coupling: tangential force from normal motion.
+            let u = slip * penalty * (1.0 + 0.5 * rng.next());
+            for (row, sign) in [(0, 1.0), (2, -1.0)] {
+                k[(row, 1)] += sign * u;
+                k[(row, 3)] -= sign * u;
+            }
+            for a in 0..4 {
+                for bb in 0..4 {
+                    if let (Some(r), Some(s)) = (eq(p, a), eq(p, bb)) {
+                        ki[(r, s)] += k[(a, bb)];
+                    }
+                }
+            }
+        }
+        let sym = pattern.symbolic();
+        let (mut continuum, mut interface) = (Vec::new(), Vec::new());
+        for j in 0..n {
+            for &i in &sym.row_idx()[sym.col_ptr()[j] as usize..sym.col_ptr()[j + 1] as usize] {
+                continuum.push(kc[(i as usize, j)]);
+                interface.push(ki[(i as usize, j)]);
+            }
+        }
+        let mut interface_eqs: Vec<usize> = pairs
+            .iter()
+            .flat_map(|p| (0..4).filter_map(|a| eq(p, a)))
+            .collect();
+        interface_eqs.reverse(); // any order is accepted
+        TestSystem {
+            pattern,
+            dofs,
+            continuum,
+            interface,
+            interface_eqs,
+        }
+    }
+
+    /// ‖b − A x‖ / ‖b‖ for A = Σ `values` over `sym`.
+    fn relative_residual(
+        sym: SymbolicSparseColMatRef<'_, u32>,
+        values: &[&[f64]],
+        x: &[f64],
+        b: &[f64],
+    ) -> f64 {
+        let mut r = b.to_vec();
+        for (j, &xj) in x.iter().enumerate() {
+            for p in sym.col_range(j) {
+                let a: f64 = values.iter().map(|v| v[p]).sum();
+                r[sym.row_idx()[p] as usize] -= a * xj;
+            }
+        }
+        crate::solver::newton::norm(&r) / crate::solver::newton::norm(b)
+    }
+
+    /// Solves with the condensed solver and with dense LU of the assembled matrix; returns
+    /// the relative difference and the relative residual of the condensed solution.
+    fn compare(t: &TestSystem, relax: Option<&[(usize, f64)]>) -> (f64, f64) {
+        let n = t.dofs.free_count();
+        let sym = t.pattern.symbolic().as_ref();
+        let kc = SparseColMatRef::new(sym, &t.continuum);
+        let ki = SparseColMatRef::new(sym, &t.interface);
+        let mut solver =
+            CondensedSolver::with_relaxation(&t.pattern, &t.interface_eqs, relax).unwrap();
+        solver.factor_bulk(kc).unwrap();
+        let n_i = solver.interface_equations().len();
+        let mut block = Mat::<f64>::zeros(n_i, n_i);
+        solver.gather_interface_block(ki, block.as_mut()).unwrap();
+        let mut rng = Rng(777);
+        let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+        let mut x = b.clone();
+        solver.solve(block.as_ref(), &mut x).unwrap();
+        // Reference: dense LU of K_c + K_if.
+        let mut dense = Mat::<f64>::zeros(n, n);
+        for j in 0..n {
+            for (p, &i) in sym.row_idx_of_col_raw(j).iter().enumerate() {
+                let p = sym.col_range(j).start + p;
+                dense[(i as usize, j)] = t.continuum[p] + t.interface[p];
+            }
+        }
+        let rhs = Mat::<f64>::from_fn(n, 1, |i, _| b[i]);
+        let reference = dense.partial_piv_lu().solve(&rhs);
+        let xm = Mat::<f64>::from_fn(n, 1, |i, _| x[i]);
+        let difference = (&xm - &reference).norm_l2() / reference.norm_l2();
+        let residual = (&rhs - &dense * &xm).norm_l2() / rhs.norm_l2();
+        (difference, residual)
+    }
+
+    #[test]
+    fn condensed_matches_dense_lu_sticking() {
+        let t = test_system(6, 4, 0.0, &[]);
+        let (d, r) = compare(&t, None);
+        assert!(d < 1e-10 && r < 1e-12, "difference {d:e}, residual {r:e}");
+    }
+
+    #[test]
+    fn condensed_matches_dense_lu_strongly_unsymmetric() {
+        // Interface block far from symmetric (|K − Kᵀ| comparable with |K|).
+        let t = test_system(7, 5, 2.0, &[]);
+        let n_i = t.interface_eqs.len();
+        assert!(n_i > 0);
+        let (d, r) = compare(&t, None);
+        assert!(d < 1e-10 && r < 1e-12, "difference {d:e}, residual {r:e}");
+    }
+
+    #[test]
+    fn condensed_matches_dense_lu_with_prescribed_interface_dofs() {
+        let t = test_system(8, 3, 1.0, &[0, 3, 8]);
+        assert_eq!(t.interface_eqs.len(), 2 * 9 + 2 * (9 - 3));
+        let (d, r) = compare(&t, None);
+        assert!(d < 1e-10 && r < 1e-12, "difference {d:e}, residual {r:e}");
+    }
+
+    #[test]
+    fn condensed_handles_supernodes_straddling_the_interface_border() {
+        // Merging every pair of adjacent supernodes puts bulk and interface columns into one.
+        let relax: &[(usize, f64)] = &[(usize::MAX, 1.0)];
+        let t = test_system_with(6, 4, 1.5, &[], true);
+        let solver =
+            CondensedSolver::with_relaxation(&t.pattern, &t.interface_eqs, Some(relax)).unwrap();
+        let SymbolicCholeskyRaw::Supernodal(sn) = solver.symbolic.raw() else {
+            unreachable!()
+        };
+        let straddling = (0..sn.n_supernodes())
+            .filter(|&s| {
+                (sn.supernode_begin()[s] as usize) < solver.n_bulk
+                    && sn.supernode_end()[s] as usize > solver.n_bulk
+            })
+            .count();
+        assert_eq!(straddling, 1);
+        let (d, r) = compare(&t, Some(relax));
+        assert!(d < 1e-10 && r < 1e-12, "difference {d:e}, residual {r:e}");
+    }
+
+    #[test]
+    fn condensed_reuses_the_bulk_factor_over_changing_interface_blocks() {
+        let t = test_system(5, 5, 0.0, &[]);
+        let sym = t.pattern.symbolic().as_ref();
+        let mut solver = CondensedSolver::new(&t.pattern, &t.interface_eqs).unwrap();
+        solver
+            .factor_bulk(SparseColMatRef::new(sym, &t.continuum))
+            .unwrap();
+        for slip in [0.0, 0.5, 3.0] {
+            let other = test_system(5, 5, slip, &[]);
+            let n_i = solver.interface_equations().len();
+            let mut block = Mat::<f64>::zeros(n_i, n_i);
+            solver
+                .gather_interface_block(SparseColMatRef::new(sym, &other.interface), block.as_mut())
+                .unwrap();
+            let n = t.dofs.free_count();
+            let mut x: Vec<f64> = (0..n).map(|i| (i as f64).sin()).collect();
+            let b = x.clone();
+            solver.solve(block.as_ref(), &mut x).unwrap();
+            let rel = relative_residual(sym, &[&t.continuum, &other.interface], &x, &b);
+            assert!(rel < 1e-12, "slip {slip}: residual {rel:e}");
+        }
+    }
+
+    #[test]
+    fn condensed_schur_complement_is_symmetric_and_singular_for_a_floating_body() {
+        let t = test_system(4, 3, 0.0, &[]);
+        let sym = t.pattern.symbolic().as_ref();
+        let mut solver = CondensedSolver::new(&t.pattern, &t.interface_eqs).unwrap();
+        solver
+            .factor_bulk(SparseColMatRef::new(sym, &t.continuum))
+            .unwrap();
+        let s = solver.schur_complement();
+        let asym = (s - s.transpose()).norm_l2() / s.norm_l2();
+        assert!(asym < 1e-13, "asymmetry {asym:e}");
+        // Body A is held only through the interface: it can translate freely, so S_c (no
+        // interface stiffness) has two zero eigenvalues; the rest are positive.
+        let mut eig = s.to_owned().self_adjoint_eigenvalues(Side::Lower).unwrap();
+        eig.sort_by(f64::total_cmp);
+        let scale = eig[eig.len() - 1];
+        assert!(
+            eig[0].abs() < 1e-12 * scale && eig[1].abs() < 1e-12 * scale,
+            "{eig:?}"
+        );
+        assert!(eig[2] > 1e-6 * scale, "{eig:?}");
+    }
+
+    #[test]
+    fn condensed_solves_several_right_hand_sides_and_rejects_a_singular_interface() {
+        let t = test_system(5, 3, 1.0, &[]);
+        let sym = t.pattern.symbolic().as_ref();
+        let mut solver = CondensedSolver::new(&t.pattern, &t.interface_eqs).unwrap();
+        solver
+            .factor_bulk(SparseColMatRef::new(sym, &t.continuum))
+            .unwrap();
+        let n_i = solver.interface_equations().len();
+        let mut block = Mat::<f64>::zeros(n_i, n_i);
+        solver
+            .gather_interface_block(SparseColMatRef::new(sym, &t.interface), block.as_mut())
+            .unwrap();
+        solver.factor_interface(block.as_ref()).unwrap();
+        let n = t.dofs.free_count();
+        for k in 0..3 {
+            let b: Vec<f64> = (0..n).map(|i| ((i * (k + 2)) as f64).cos()).collect();
+            let mut x = b.clone();
+            solver.solve_in_place(&mut x);
+            let rel = relative_residual(sym, &[&t.continuum, &t.interface], &x, &b);
+            assert!(rel < 1e-12, "right-hand side {k}: residual {rel:e}");
+        }
+        // Without interface stiffness body A floats: singular, reported as an error.
+        let zero = Mat::<f64>::zeros(n_i, n_i);
+        let err = solver.factor_interface(zero.as_ref()).unwrap_err();
+        assert!(err.to_string().contains("singular"), "{err}");
+    }
+
+    #[test]
+    fn condensed_without_interface_is_a_cholesky_solve() {
+        let t = test_system(3, 3, 0.0, &[]);
+        let sym = t.pattern.symbolic().as_ref();
+        // Holding body A's interface dofs through the interface block is impossible without
+        // an interface; use the sum as the "continuum" (symmetric part only: slip = 0).
+        let sum: Vec<f64> = t
+            .continuum
+            .iter()
+            .zip(&t.interface)
+            .map(|(a, b)| a + b)
+            .collect();
+        let mut solver = CondensedSolver::new(&t.pattern, &[]).unwrap();
+        solver.factor_bulk(SparseColMatRef::new(sym, &sum)).unwrap();
+        let n = t.dofs.free_count();
+        let b: Vec<f64> = (0..n).map(|i| 1.0 + i as f64).collect();
+        let mut x = b.clone();
+        solver
+            .solve(Mat::<f64>::zeros(0, 0).as_ref(), &mut x)
+            .unwrap();
+        let rel = relative_residual(sym, &[&sum], &x, &b);
+        assert!(rel < 1e-12, "residual {rel:e}");
+    }
+}
