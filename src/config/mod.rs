@@ -102,6 +102,20 @@ pub struct BodySpec {
     /// Name of the physical surface.
     pub group: String,
     pub material: MaterialSpec,
+    /// Element formulation: `"full"` or `"bbar"` (locking-free). Default: B-bar for plastic
+    /// bodies and for ν ≥ 0.45 in plane strain and axisymmetry, full otherwise (see
+    /// [`Formulation::for_body`](crate::element::continuum::Formulation::for_body)).
+    pub formulation: Option<FormulationKind>,
+}
+
+/// The element formulation of a body (`[[body]] formulation`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FormulationKind {
+    /// Standard displacement element, full integration.
+    Full,
+    /// B-bar: projected volumetric strain (locking-free in plane strain and axisymmetry).
+    Bbar,
 }
 
 /// Material parameters of a body.

@@ -261,12 +261,14 @@ fn build_continuum(
     let mut owner: Vec<Option<u32>> = vec![None; mesh.cells.len()];
     let mut names: Vec<String> = Vec::new();
     let mut materials = Vec::new();
+    let mut formulations = Vec::new();
     let mut cells = Vec::new();
     for (
         b,
         Body {
             group: name,
             material,
+            formulation,
         },
     ) in bodies.into_iter().enumerate()
     {
@@ -308,9 +310,14 @@ fn build_continuum(
             let problem = GroupProblem::Empty;
             return Err(mesh.group_error("body", &name, GroupKind::Surface, problem));
         }
-        tracing::info!("body '{name}': {}", material.describe());
+        tracing::info!(
+            "body '{name}': {}, {} formulation",
+            material.describe(),
+            formulation.name()
+        );
         names.push(name);
         materials.push(material);
+        formulations.push(formulation);
     }
     for g in mesh
         .groups
@@ -328,6 +335,7 @@ fn build_continuum(
             analysis,
             cells,
             materials,
+            formulations,
         },
     ))
 }

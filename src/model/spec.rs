@@ -4,13 +4,14 @@
 //! checked before any mesh exists; [`Model::build`](super::Model::build) consumes the spec.
 
 use crate::config::{
-    AnalysisSpec, Case, ContactAlgorithmKind, Faces, IntegrationKind, LawSpec, MaterialSpec,
-    PairingKind, Steps,
+    AnalysisSpec, Case, ContactAlgorithmKind, Faces, FormulationKind, IntegrationKind, LawSpec,
+    MaterialSpec, PairingKind, Steps,
 };
 use crate::contact::linear::LinearCoulomb;
 use crate::contact::rough::RoughJoint;
 use crate::contact::{ContactAlgorithm, InterfaceLaw};
 use crate::element::Analysis;
+use crate::element::continuum::Formulation;
 use crate::element::interface6::InterfaceRule;
 use crate::error::ParameterError;
 use crate::material::Material;
@@ -32,11 +33,12 @@ pub struct ModelSpec {
     pub factors: Vec<f64>,
 }
 
-/// A body: a physical surface and its material.
+/// A body: a physical surface, its material and its element formulation.
 #[derive(Debug)]
 pub struct Body {
     pub group: String,
     pub material: Box<dyn Material>,
+    pub formulation: Formulation,
 }
 
 /// Prescribed displacement components on the nodes of a physical curve or point, at load
@@ -100,24 +102,41 @@ impl ModelSpec {
                 format!("{} ({owner})", e.reason),
             )
         };
-        let bodies = case
-            .bodies
-            .iter()
-            .enumerate()
-            .map(|(i, b)| {
-                let material = build_material(&b.material).map_err(|e| {
-                    invalid(
-                        &format!("body[{i}].material"),
-                        &format!("body '{}'", b.group),
-                        e,
-                    )
-                })?;
-                Ok(Body {
-                    group: b.group.clone(),
-                    material,
+        let bodies =
+            case.bodies
+                .iter()
+                .enumerate()
+                .map(|(i, b)| {
+                    let material = build_material(&b.material).map_err(|e| {
+                        invalid(
+                            &format!("body[{i}].material"),
+                            &format!("body '{}'", b.group),
+                            e,
+                        )
+                    })?;
+                    let analysis: Analysis = case.analysis.into();
+                    let requested = b.formulation.map(|f| match f {
+                        FormulationKind::Full => Formulation::Full,
+                        FormulationKind::Bbar => Formulation::Bbar,
+                    });
+                    let plastic = b.material.yield_stress.is_some();
+                    let formulation =
+                        Formulation::for_body(requested, &analysis, plastic, b.material.nu)
+                            .map_err(|reason| {
+                                let value = requested.map_or("default", Formulation::name);
+                                case.invalid(
+                                    format!("body[{i}].formulation"),
+                                    format!("\"{value}\""),
+                                    format!("{reason} (body '{}')", b.group),
+                                )
+                            })?;
+                    Ok(Body {
+                        group: b.group.clone(),
+                        material,
+                        formulation,
+                    })
                 })
-            })
-            .collect::<Result<_>>()?;
+                .collect::<Result<_>>()?;
         let contacts = case
             .contacts
             .iter()
