@@ -414,3 +414,70 @@ fn prandtl_punch_collapses_at_two_plus_pi_k() {
     let quarter = curve[curve.len() * 3 / 4].1;
     assert!((p_max - quarter) / quarter < 0.005, "{quarter} → {p_max}");
 }
+
+/// Runs the perfectly plastic cylinder under p = `overload` · p_L through `factors` and
+/// returns how the run ended.
+fn overloaded_cylinder(
+    cylinder: Cylinder,
+    n: usize,
+    formulation: &str,
+    overload: f64,
+    factors: &[f64],
+) -> asperity::Result<usize> {
+    let text = cylinder.case(
+        &format!("E = {E}, nu = 0.3, yield_stress = {SY}"),
+        formulation,
+        overload * p_limit(),
+        factors,
+    );
+    let case = case(&text);
+    let model = model(cylinder.mesh(n, false), &case).unwrap();
+    let mut steps = 0;
+    run_steps(&model, &settings(&case), |_| {
+        steps += 1;
+        Ok(0.0)
+    })
+    .map(|_| steps)
+}
+
+#[test]
+fn overloaded_cylinder_is_reported_as_plastic_collapse() {
+    // p = 1.05 p_L: no equilibrium exists above λ = 1/1.05. B-bar: the run stops with
+    // Error::Collapse at a load factor within 2 % of p_L/p.
+    let overload = 1.05;
+    let factors = [0.5, 0.8, 0.9, 0.95, 1.0];
+    for cylinder in [Cylinder::Axisymmetric, Cylinder::PlaneStrain] {
+        for n in [4, 8] {
+            let outcome = overloaded_cylinder(cylinder, n, "bbar", overload, &factors);
+            match &outcome {
+                Err(asperity::Error::Collapse {
+                    converged_load_factor,
+                    failed_load_factor,
+                    ..
+                }) => {
+                    let carried = converged_load_factor * overload;
+                    println!(
+                        "{cylinder:?} n = {n}: collapse at λ_c = {converged_load_factor:.6} \
+                         ({carried:.6} p_L), λ_f = {failed_load_factor:.6}: {}",
+                        outcome.as_ref().unwrap_err()
+                    );
+                    assert!((carried - 1.0).abs() < 0.02, "collapse at {carried} p_L");
+                }
+                other => panic!("{cylinder:?} n = {n}: expected a collapse, got {other:?}"),
+            }
+        }
+    }
+}
+
+#[test]
+fn overloaded_locking_cylinder_is_a_failure_not_a_success() {
+    // The fully integrated (locking) element "converged" to metres of displacement here
+    // before issue 17; the plausibility bounds of [solver] now reject those increments.
+    for cylinder in [Cylinder::Axisymmetric, Cylinder::PlaneStrain] {
+        let outcome = overloaded_cylinder(cylinder, 4, "full", 1.05, &[0.5, 0.8, 0.9, 0.95, 1.0]);
+        match outcome {
+            Err(e) => println!("{cylinder:?} full: {e}"),
+            Ok(steps) => panic!("{cylinder:?} full integration: {steps} steps 'converged'"),
+        }
+    }
+}

@@ -384,6 +384,30 @@ pub struct SolverSpec {
     /// (elastic contact matrix).
     #[serde(default)]
     pub contact_algorithm: ContactAlgorithmKind,
+    // --- plausibility of a converged increment and collapse detection (issue 17) ----------
+    /// Largest nodal displacement increment of a converged increment, as a fraction of the
+    /// model size (bounding-box diagonal); a larger one is a failed increment (cut back).
+    #[serde(default = "default_max_displacement_increment")]
+    pub max_displacement_increment: f64,
+    /// Largest equivalent strain increment √(⅔ Δε:Δε) at any integration point of a
+    /// converged increment; a larger one is a failed increment (cut back).
+    #[serde(default = "default_max_strain_increment")]
+    pub max_strain_increment: f64,
+    /// A step that cannot be completed is reported as plastic collapse when the secant
+    /// stiffness Δλ/‖Δu‖ of its last converged increment is below this fraction of that of
+    /// the first increment of the run.
+    #[serde(default = "default_collapse_stiffness_ratio")]
+    pub collapse_stiffness_ratio: f64,
+}
+
+fn default_max_displacement_increment() -> f64 {
+    0.1
+}
+fn default_max_strain_increment() -> f64 {
+    0.05
+}
+fn default_collapse_stiffness_ratio() -> f64 {
+    1e-2
 }
 
 /// The global algorithm for contact (`[solver] contact_algorithm`).
@@ -419,6 +443,9 @@ impl Default for SolverSpec {
             displacement_tolerance: default_tolerance(),
             max_cutbacks: default_max_cutbacks(),
             contact_algorithm: ContactAlgorithmKind::default(),
+            max_displacement_increment: default_max_displacement_increment(),
+            max_strain_increment: default_max_strain_increment(),
+            collapse_stiffness_ratio: default_collapse_stiffness_ratio(),
         }
     }
 }

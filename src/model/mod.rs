@@ -11,7 +11,9 @@ mod spec;
 
 pub use constraints::{AXIS_SUPPORT, Support};
 pub use loads::Schedule;
-pub use spec::{Body, Contact, LineLoad, Load, LoadKind, ModelSpec, Prescribed, load_factors};
+pub use spec::{
+    Body, Contact, Control, LineLoad, Load, LoadKind, ModelSpec, Prescribed, load_factors,
+};
 
 use crate::assembly::{Coloring, DofMap, SparsityPattern};
 use crate::element::Analysis;
@@ -47,6 +49,10 @@ pub struct Model {
     pub nodal_loads: Vec<(usize, f64, usize)>,
     /// Load histories.
     pub schedule: Schedule,
+    /// How the steps are driven and checked.
+    pub control: Control,
+    /// Size of the model (bounding-box diagonal) in mm.
+    pub size: f64,
     pub dofs: DofMap,
     pub pattern: SparsityPattern,
 }
@@ -62,6 +68,7 @@ impl Model {
             loads,
             contacts,
             factors,
+            control,
         } = spec;
         // Interfaces first: splitting a conforming curve re-points body B's cells.
         let topologies = insert_interfaces(&mut mesh, &bodies, &contacts)?;
@@ -94,6 +101,8 @@ impl Model {
             prescribed,
             nodal_loads,
             schedule,
+            control,
+            size: scale,
             dofs,
             pattern,
         })

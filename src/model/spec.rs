@@ -31,6 +31,34 @@ pub struct ModelSpec {
     pub contacts: Vec<Contact>,
     /// The global load factor at the end of each step.
     pub factors: Vec<f64>,
+    /// How the steps are controlled and when a converged increment is implausible.
+    pub control: Control,
+}
+
+/// How the load steps are driven and checked (`[steps]` and the bounds of `[solver]`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Control {
+    /// Largest nodal displacement increment as a fraction of the model size.
+    pub max_displacement_increment: f64,
+    /// Largest equivalent strain increment at an integration point.
+    pub max_strain_increment: f64,
+    /// Collapse when the last converged secant stiffness Δλ/‖Δu‖ is below this fraction of
+    /// the first increment's.
+    pub collapse_stiffness_ratio: f64,
+    /// Whether some body is elasto-plastic.
+    pub plastic: bool,
+}
+
+impl Default for Control {
+    fn default() -> Self {
+        let solver = crate::config::SolverSpec::default();
+        Self {
+            max_displacement_increment: solver.max_displacement_increment,
+            max_strain_increment: solver.max_strain_increment,
+            collapse_stiffness_ratio: solver.collapse_stiffness_ratio,
+            plastic: false,
+        }
+    }
 }
 
 /// A body: a physical surface, its material and its element formulation.
@@ -194,6 +222,32 @@ impl ModelSpec {
                 })
             })
             .collect::<Result<_>>()?;
+        let solver = &case.solver;
+        for (key, value) in [
+            (
+                "max_displacement_increment",
+                solver.max_displacement_increment,
+            ),
+            ("max_strain_increment", solver.max_strain_increment),
+            ("collapse_stiffness_ratio", solver.collapse_stiffness_ratio),
+        ] {
+            if !(value > 0.0 && value.is_finite()) {
+                return Err(case.invalid(
+                    format!("solver.{key}"),
+                    value,
+                    "must be positive and finite",
+                ));
+            }
+        }
+        let control = Control {
+            max_displacement_increment: solver.max_displacement_increment,
+            max_strain_increment: solver.max_strain_increment,
+            collapse_stiffness_ratio: solver.collapse_stiffness_ratio,
+            plastic: case
+                .bodies
+                .iter()
+                .any(|b| b.material.yield_stress.is_some()),
+        };
         Ok(Self {
             analysis: case.analysis.into(),
             bodies,
@@ -201,6 +255,7 @@ impl ModelSpec {
             loads,
             contacts,
             factors: load_factors(&case.steps),
+            control,
         })
     }
 }
