@@ -30,6 +30,7 @@ hardening values, for CI; --size overrides the mesh size factor of every study.
 """
 from __future__ import annotations
 
+import re
 import argparse
 import os
 import subprocess

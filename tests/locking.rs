@@ -481,3 +481,42 @@ fn overloaded_locking_cylinder_is_a_failure_not_a_success() {
         }
     }
 }
+
+#[test]
+fn arc_length_control_follows_the_cylinder_to_its_limit_pressure() {
+    // [steps] control = "arc_length" with the reference pressure p_L: the largest load factor
+    // reached is the limit pressure in units of p_L, and the run ends normally (at the
+    // plateau the arc cannot be continued and shrinks below min_arc_length).
+    for cylinder in [Cylinder::Axisymmetric, Cylinder::PlaneStrain] {
+        let text = cylinder
+            .case(
+                &format!("E = {E}, nu = 0.3, yield_stress = {SY}"),
+                "bbar",
+                p_limit(),
+                &[1.0],
+            )
+            .replace(
+                "factors = [1]",
+                "control = \"arc_length\"\ninitial_increment = 0.2\nmax_load_factor = 1.5\n\
+                 max_increments = 200",
+            );
+        let case = case(&text);
+        let model = model(cylinder.mesh(4, false), &case).unwrap();
+        let mut path = Vec::new();
+        run_steps(&model, &settings(&case), |step| {
+            path.push((
+                step.load_factor,
+                cylinder.bore_displacement(&model, &step.solution.u),
+            ));
+            Ok(0.0)
+        })
+        .expect("arc-length control ends normally");
+        let lambda_max = path.iter().map(|p| p.0).fold(0.0, f64::max);
+        println!(
+            "{cylinder:?}: {} increments, λ_max = {lambda_max:.6} p_L, last (λ, u_a) = {:?}",
+            path.len(),
+            path.last().unwrap()
+        );
+        assert!((lambda_max - 1.0).abs() < 0.02, "λ_max = {lambda_max} p_L");
+    }
+}

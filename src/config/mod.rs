@@ -336,6 +336,32 @@ pub struct Steps {
     pub count: Option<usize>,
     /// Explicit load factors, e.g. `[0.5, 1.0, 0.5, 0.0]` for loading and unloading.
     pub factors: Option<Vec<f64>>,
+    /// `"load"` (default: the factors above) or `"arc_length"` (Riks–Crisfield; the keys
+    /// below, `count`/`factors` ignored).
+    #[serde(default)]
+    pub control: ControlKind,
+    /// Arc length: the load-factor increment of the first increment (default 0.1).
+    pub initial_increment: Option<f64>,
+    /// Arc length: most increments (default 100).
+    pub max_increments: Option<usize>,
+    /// Arc length: stop once the load factor reaches this (default 1).
+    pub max_load_factor: Option<f64>,
+    /// Arc length: smallest arc, relative to the first (default 1e-4); below it the path
+    /// cannot be followed further and the run ends.
+    pub min_arc_length: Option<f64>,
+    /// Arc length: largest arc, relative to the first (default 10).
+    pub max_arc_length: Option<f64>,
+}
+
+/// How the load factor is driven (`[steps] control`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ControlKind {
+    /// The load factors of `count` or `factors`.
+    #[default]
+    Load,
+    /// Arc-length (Riks–Crisfield, cylindrical) control.
+    ArcLength,
 }
 
 impl Default for Steps {
@@ -343,6 +369,12 @@ impl Default for Steps {
         Self {
             count: Some(1),
             factors: None,
+            control: ControlKind::Load,
+            initial_increment: None,
+            max_increments: None,
+            max_load_factor: None,
+            min_arc_length: None,
+            max_arc_length: None,
         }
     }
 }
@@ -772,11 +804,13 @@ pub(crate) mod tests {
         let s = Steps {
             count: Some(4),
             factors: None,
+            ..Steps::default()
         };
         assert_eq!(s.len(), 4);
         let s = Steps {
             count: None,
             factors: Some(vec![0.5, 1.0, 0.0]),
+            ..Steps::default()
         };
         assert_eq!(s.len(), 3);
     }

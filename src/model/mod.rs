@@ -12,7 +12,8 @@ mod spec;
 pub use constraints::{AXIS_SUPPORT, Support};
 pub use loads::Schedule;
 pub use spec::{
-    Body, Contact, Control, LineLoad, Load, LoadKind, ModelSpec, Prescribed, load_factors,
+    ArcLength, Body, Contact, Control, LineLoad, Load, LoadKind, ModelSpec, Prescribed,
+    load_factors,
 };
 
 use crate::assembly::{Coloring, DofMap, SparsityPattern};

@@ -4,8 +4,8 @@
 //! checked before any mesh exists; [`Model::build`](super::Model::build) consumes the spec.
 
 use crate::config::{
-    AnalysisSpec, Case, ContactAlgorithmKind, Faces, FormulationKind, IntegrationKind, LawSpec,
-    MaterialSpec, PairingKind, Steps,
+    AnalysisSpec, Case, ContactAlgorithmKind, ControlKind, Faces, FormulationKind, IntegrationKind,
+    LawSpec, MaterialSpec, PairingKind, Steps,
 };
 use crate::contact::linear::LinearCoulomb;
 use crate::contact::rough::RoughJoint;
@@ -47,6 +47,21 @@ pub struct Control {
     pub collapse_stiffness_ratio: f64,
     /// Whether some body is elasto-plastic.
     pub plastic: bool,
+    /// Arc-length control instead of the load factors of the steps.
+    pub arc_length: Option<ArcLength>,
+}
+
+/// Settings of arc-length control (`[steps] control = "arc_length"`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ArcLength {
+    /// Load-factor increment of the first increment (sets the arc length).
+    pub initial_increment: f64,
+    pub max_increments: usize,
+    /// Stop once the load factor reaches this.
+    pub max_load_factor: f64,
+    /// Smallest and largest arc, relative to the first.
+    pub min_arc_length: f64,
+    pub max_arc_length: f64,
 }
 
 impl Default for Control {
@@ -57,6 +72,7 @@ impl Default for Control {
             max_strain_increment: solver.max_strain_increment,
             collapse_stiffness_ratio: solver.collapse_stiffness_ratio,
             plastic: false,
+            arc_length: None,
         }
     }
 }
@@ -191,7 +207,7 @@ impl ModelSpec {
                 })
             })
             .collect::<Result<_>>()?;
-        let supports = case
+        let supports: Vec<Prescribed> = case
             .supports
             .iter()
             .map(|s| Prescribed {
@@ -200,7 +216,7 @@ impl ModelSpec {
                 factors: s.factors.clone(),
             })
             .collect();
-        let loads = case
+        let loads: Vec<Load> = case
             .loads
             .iter()
             .map(|l| {
@@ -247,6 +263,7 @@ impl ModelSpec {
                 .bodies
                 .iter()
                 .any(|b| b.material.yield_stress.is_some()),
+            arc_length: arc_length(case, &supports, &loads)?,
         };
         Ok(Self {
             analysis: case.analysis.into(),
@@ -258,6 +275,71 @@ impl ModelSpec {
             control,
         })
     }
+}
+
+/// The arc-length settings of `[steps]`, checked, when `control = "arc_length"`: the loads
+/// must all follow the global load factor and no support may prescribe a non-zero value.
+fn arc_length(case: &Case, supports: &[Prescribed], loads: &[Load]) -> Result<Option<ArcLength>> {
+    let steps = &case.steps;
+    if steps.control != ControlKind::ArcLength {
+        return Ok(None);
+    }
+    let control = "steps.control";
+    if let Some(s) = supports
+        .iter()
+        .find(|s| s.values.iter().flatten().any(|&v| v != 0.0))
+    {
+        return Err(case.invalid(
+            control,
+            "\"arc_length\"",
+            format!(
+                "arc-length control drives forces and pressures only; support '{}' prescribes \
+                 a non-zero displacement (use load control, or a force instead)",
+                s.group
+            ),
+        ));
+    }
+    if let Some(l) = loads.iter().find(|l| l.factors.is_some()) {
+        return Err(case.invalid(
+            control,
+            "\"arc_length\"",
+            format!(
+                "under arc-length control every load follows the one load factor λ; load on '{}' \
+                 has its own factors",
+                l.group
+            ),
+        ));
+    }
+    let arc = ArcLength {
+        initial_increment: steps.initial_increment.unwrap_or(0.1),
+        max_increments: steps.max_increments.unwrap_or(100),
+        max_load_factor: steps.max_load_factor.unwrap_or(1.0),
+        min_arc_length: steps.min_arc_length.unwrap_or(1e-4),
+        max_arc_length: steps.max_arc_length.unwrap_or(10.0),
+    };
+    for (key, value) in [
+        ("initial_increment", arc.initial_increment),
+        ("max_load_factor", arc.max_load_factor),
+        ("min_arc_length", arc.min_arc_length),
+        ("max_arc_length", arc.max_arc_length),
+        ("max_increments", arc.max_increments as f64),
+    ] {
+        if !(value > 0.0 && value.is_finite()) {
+            return Err(case.invalid(format!("steps.{key}"), value, "must be positive"));
+        }
+    }
+    if arc.min_arc_length > 1.0 || arc.max_arc_length < 1.0 {
+        return Err(case.invalid(
+            "steps.min_arc_length",
+            arc.min_arc_length,
+            format!(
+                "need min_arc_length ≤ 1 ≤ max_arc_length (relative to the first arc; \
+                 max_arc_length = {})",
+                arc.max_arc_length
+            ),
+        ));
+    }
+    Ok(Some(arc))
 }
 
 /// The constitutive model of a body: linear elastic, or J2 plasticity when a yield stress
@@ -396,6 +478,7 @@ mod tests {
         let s = Steps {
             count: Some(4),
             factors: None,
+            ..Steps::default()
         };
         assert_eq!(load_factors(&s), vec![0.25, 0.5, 0.75, 1.0]);
         assert_eq!(spec(CASE).unwrap().factors, vec![1.0]);

@@ -125,6 +125,9 @@ pub fn run_steps(
     settings: &NewtonSettings,
     mut on_step: impl FnMut(&StepResult) -> Result<f64>,
 ) -> Result<(Solution, RunStatistics)> {
+    if let Some(arc) = &model.control.arc_length {
+        return crate::solver::arclength::run_arc_length(model, settings, arc, on_step);
+    }
     let mut stats = RunStatistics::default();
     let mut newton = Newton::new(*settings, &model.dofs, &model.pattern)?;
     stats.symbolic_seconds = newton.linear().symbolic_seconds();
