@@ -444,9 +444,15 @@ def verdict(ok: bool) -> str:
 def solver_row(name: str, summary: dict) -> list:
     """Counters of a run's summary.json and its solver time (the sum of the phases)."""
     t = summary["totals"]
-    total = sum(phase_seconds(summary).values())
+    if summary.get("status") == "failed":
+        # A run stopped at its collapse load (issue 17): no final residual, phases partly timed.
+        total = sum(v or 0.0 for v in summary["seconds"].values())
+        residual = "(stopped)"
+    else:
+        total = sum(phase_seconds(summary).values())
+        residual = rust_exp(summary["final_residual"])
     return [name, summary["model"]["unknowns"], t["increments"], t["cutbacks"], t["iterations"],
-            t["unsymmetric_solves"], t["krylov_iterations"], rust_exp(summary["final_residual"]), f"{total:.1f}"]
+            t["unsymmetric_solves"], t["krylov_iterations"], residual, f"{total:.1f}"]
 
 
 # --- the steps of the pipeline ---------------------------------------------------------------
