@@ -5,6 +5,7 @@
 #   make indentation             axisymmetric punch into an elasto-plastic foundation (§4.3)
 #   make examples                all of the above and the validation examples
 #   make thick_cylinder          Lamé thick cylinder (gmsh -> solver -> plots)
+#   make prandtl                 Prandtl's punch on a perfectly plastic half-space (B-bar element)
 #   make shrink_fit              shrink-fit contact example
 #   make test                    all tests (Rust unit/integration tests + output checks)
 #   make convergence             mesh-convergence verification studies -> out/convergence
@@ -20,7 +21,7 @@ SUDO    := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 BIN     := target/release/asperity
 SIZE    ?= 1
 
-.PHONY: all deps gmsh venv build test mesh bench examples tapered_joint plane_punch indentation thick_cylinder shrink_fit clean
+.PHONY: all deps gmsh venv build test mesh bench examples tapered_joint plane_punch indentation thick_cylinder shrink_fit prandtl clean
 .PHONY: convergence bench-calculix
 
 all: build
@@ -53,7 +54,7 @@ mesh: gmsh
 	@echo "mesh: build/mesh/$(basename $(notdir $(GEO)))-$(SIZE).msh"
 
 ## --- examples -----------------------------------------------------------------
-examples: tapered_joint plane_punch indentation thick_cylinder shrink_fit
+examples: tapered_joint plane_punch indentation thick_cylinder shrink_fit prandtl
 
 tapered_joint plane_punch indentation: deps build
 	$(PYTHON) pipelines/$@.py --out out/$@
@@ -63,6 +64,11 @@ thick_cylinder: deps build
 	$(BIN) run pipelines/thick_cylinder.toml --out out/thick_cylinder
 	$(PYTHON) pipelines/plot_fields.py out/thick_cylinder --case pipelines/thick_cylinder.toml
 	@echo "results: out/thick_cylinder (results.pvd for ParaView, *.png, history.csv)"
+
+prandtl: deps build
+	$(BIN) run pipelines/prandtl.toml --out out/prandtl
+	$(PYTHON) pipelines/plot_fields.py out/prandtl --case pipelines/prandtl.toml
+	@echo "results: out/prandtl (results.pvd for ParaView, *.png, history.csv: mean pressure = -reaction_top_y / 10 mm)"
 
 shrink_fit: deps build
 	$(BIN) run pipelines/shrink_fit.toml --out out/shrink_fit

@@ -11,6 +11,8 @@ into OUT:
   normalised_contact_stress.png                        p_N/p_m, p_T/p_m against r/a for the ideal
                                                        Coulomb model, mu = 0.1 and 0.2 (Fig. 10)
   deflection_vs_hardening.png                          foundation top deflection against h (Fig. 11)
+  (the foundation uses the default, locking-free B-bar element; one extra run repeats h = 0 with
+  the fully integrated element, formulation = "full", for the report's comparison)
   stick_slip_zones.png                                 contact status along r/a for every run
   fields_<run>.png                                     von Mises stress and equivalent plastic
                                                        strain on the deformed shape (last step)
@@ -19,18 +21,22 @@ into OUT:
 and exits non-zero with a message if a check fails: expected arrays and columns present;
 vertical equilibrium (interface normal resultant and foundation reaction against the applied
 load) within 1e-6 relative at every step; for mu_m = 0.2 at r = 2 an inner stick zone and an
-outer slip annulus (the paper's hardening model, mu_m = beta = 0.2).
+outer slip annulus (the paper's hardening model, mu_m = beta = 0.2). A run of the hardening
+sweep may stop before Q = 4.6 pi a^2 p0 (without hardening that load is at the collapse load):
+it is reported with the last load it carried; any other failed run stops the pipeline.
 
 --quick uses a coarse mesh (size 2.5: 8 elements along the contact instead of 20) and three
 hardening values, for CI; --size overrides the mesh size factor of every study.
 """
 from __future__ import annotations
 
+import re
 import argparse
 import os
 import subprocess
 import sys
 import time
+import tomllib
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -101,8 +107,13 @@ def plan(out: Path, size: float, quick: bool) -> dict[str, dict]:
     for h in (HARDENING_QUICK if quick else HARDENING):
         runs[f"hardening_{h:g}"] = dict(study="hardening_sweep", label=f"h = {h:g} MPa", h=h,
                                         changes={f"body[{FOUNDATION}].material.hardening": h})
+    # Issue 17: the same perfectly plastic case with the fully integrated (locking) element.
+    runs["hardening_0_full"] = dict(study="hardening_sweep", label="h = 0 MPa, fully integrated element", h=0.0,
+                                    full=True, changes={f"body[{FOUNDATION}].material.hardening": 0.0},
+                                    new={f"body[{FOUNDATION}].formulation": "full"})
     for name, run in runs.items():
-        run["case"] = variant(STUDIES / f"{run['study']}.toml", cases / f"{name}.toml", run["changes"], size=size)
+        run["case"] = variant(STUDIES / f"{run['study']}.toml", cases / f"{name}.toml", run["changes"], size=size,
+                              new=run.get("new"))
         run["out"] = out / name
     return runs
 
@@ -135,6 +146,23 @@ def bodies(out: Path, step: int) -> pv.UnstructuredGrid:
         if name not in grid.cell_data:
             fail(f"{out}/bodies_{step:04d}.vtu: cell array '{name}' missing")
     return grid
+
+
+def reached(run: dict) -> float:
+    """The load factor of the last converged (sub-)increment of a run that stopped: its error
+    message gives the pseudo-time t of that state (step k ends at t = k, load factors linear in
+    between, README `[steps]`)."""
+    m = re.search(r"last converged load factor λ_c = ([0-9.eE+-]+)", run["stopped"] or "")
+    if m:
+        return float(m.group(1).rstrip("."))
+    m = re.search(r"last converged state is at time ([0-9]+(?:\.[0-9]+)?)", run["stopped"] or "")
+    factors = tomllib.loads(run["case"].read_text())["steps"]["factors"]
+    if not m:
+        return float(run["history"]["load_factor"][-1])
+    t = float(m.group(1))
+    k = min(int(t), len(factors) - 1)
+    below = factors[k - 1] if k > 0 else 0.0
+    return below + (t - k) * (factors[k] - below)
 
 
 def check_history(name: str, history: dict[str, np.ndarray]) -> dict[str, float]:
@@ -296,10 +324,10 @@ def normalised_plot(path: Path, runs: dict, columns: list[tuple[str, float]]) ->
     plt.close(fig)
 
 
-def deflection_plot(path: Path, sweep: list[dict]) -> None:
+def deflection_plot(path: Path, sweep: list[dict], locking: list[dict]) -> None:
     fig, (left, middle, right) = plt.subplots(1, 3, figsize=(17, 4.8))
     for s in sweep:
-        left.plot(s["r"], -s["uz"] * 1e3, "-", lw=1.2, label=f"h = {s['h']:g} MPa")
+        left.plot(s["r"], -s["uz"] * 1e3, "-", lw=1.2, label=s["label"])
     left.axvline(A_PUNCH, color="gray", lw=0.8, ls=":")
     left.set_xlabel("r [mm]")
     left.set_ylabel("deflection −u_z of the foundation top [µm]")
@@ -320,6 +348,9 @@ def deflection_plot(path: Path, sweep: list[dict]) -> None:
     for s in sweep:
         right.plot(s["path"][:, 1] * 1e3, s["path"][:, 0] * 1.6 * P0 / SIGMA_Y, ".-", ms=3, lw=1,
                    label=f"h = {s['h']:g} MPa")
+    for s in locking[1:]:
+        right.plot(s["path"][:, 1] * 1e3, s["path"][:, 0] * 1.6 * P0 / SIGMA_Y, "x--", ms=3, lw=1, color="gray",
+                   label="h = 0, fully integrated (locks)")
     right.set_xlabel("centre deflection [µm]")
     right.set_ylabel("mean punch pressure p_m / σ_Y")
     right.axhline(5.69 / np.sqrt(3), color="gray", ls="--", lw=0.8)
@@ -413,9 +444,15 @@ def verdict(ok: bool) -> str:
 def solver_row(name: str, summary: dict) -> list:
     """Counters of a run's summary.json and its solver time (the sum of the phases)."""
     t = summary["totals"]
-    total = sum(phase_seconds(summary).values())
+    if summary.get("status") == "failed":
+        # A run stopped at its collapse load (issue 17): no final residual, phases partly timed.
+        total = sum(v or 0.0 for v in summary["seconds"].values())
+        residual = "(stopped)"
+    else:
+        total = sum(phase_seconds(summary).values())
+        residual = rust_exp(summary["final_residual"])
     return [name, summary["model"]["unknowns"], t["increments"], t["cutbacks"], t["iterations"],
-            t["unsymmetric_solves"], t["krylov_iterations"], rust_exp(summary["final_residual"]), f"{total:.1f}"]
+            t["unsymmetric_solves"], t["krylov_iterations"], residual, f"{total:.1f}"]
 
 
 # --- the steps of the pipeline ---------------------------------------------------------------
@@ -435,11 +472,17 @@ def parse_args() -> argparse.Namespace:
 def solve(runs: dict, jobs: int | None, size: float) -> float:
     """Runs every case in parallel, keeps each run's summary.json; returns the wall time."""
     started = time.perf_counter()
-    summaries = run_cases([(r["case"], r["out"]) for r in runs.values()], jobs=jobs)
+    summaries = run_cases([(r["case"], r["out"]) for r in runs.values()], jobs=jobs, fail_fast=False)
     solve_seconds = time.perf_counter() - started
     print(f"{len(runs)} runs in {solve_seconds:.1f} s (size factor {size})", flush=True)
     for run, summary in zip(runs.values(), summaries):
         run["summary"] = summary
+        run["stopped"] = None
+        if summary.get("status") == "failed":
+            # Only the hardening sweep may stop early (at the collapse load without hardening).
+            if run["study"] != "hardening_sweep" or not (run["out"] / "history.csv").is_file():
+                sys.exit(f"run failed: {run['case']}: {summary.get('error')}")
+            run["stopped"] = str(summary.get("error") or "stopped").strip().splitlines()[0]
     return solve_seconds
 
 
@@ -453,6 +496,9 @@ def read_and_check(runs: dict) -> None:
         run["steps"] = {}
         run["contact"] = {}
         factors = [SWEEP_FACTOR] if run["study"] == "hardening_sweep" else [1.0, 2.0]
+        if run["stopped"]:
+            factors = [float(history["load_factor"][-1])]
+        run["final"] = factors[-1]
         for f in factors:
             run["steps"][f] = step = step_at(history, f, name)
             run["contact"][f] = contact_at(run["out"], step)
@@ -474,35 +520,44 @@ def first_yields(runs: dict) -> tuple[float, float]:
     return yield_factor, yield_a
 
 
-def hardening_sweep(runs: dict) -> list[dict]:
+
+def hardening_sweep(runs: dict) -> tuple[list[dict], list[dict]]:
     """Fig. 11: per hardening value the foundation's top deflection at the sweep load (centre,
-    edge, mean under the punch), the load path of the centre, and the plastic zone."""
-    sweep = []
+    edge, mean under the punch), the load path of the centre, and the plastic zone; and the
+    perfectly plastic case with B-bar and with full integration (issue 17)."""
+    sweep, locking = [], []
     for name, run in runs.items():
         if run["study"] != "hardening_sweep":
             continue
-        r, uz = top_deflection(run["out"], run["steps"][SWEEP_FACTOR])
+        step = run["steps"][run["final"]]
+        r, uz = top_deflection(run["out"], step)
         under = r <= A_PUNCH + 1e-9
         edge = float(np.interp(A_PUNCH, r, uz))
         mean = float(np.trapezoid(uz[under] * r[under], r[under]) / np.trapezoid(r[under], r[under]))
-        grid = bodies(run["out"], run["steps"][SWEEP_FACTOR])
+        grid = bodies(run["out"], step)
         path = [(0.0, 0.0)] + [(float(f), float(centre_deflection(run["out"], int(k))))
                                for k, f in zip(run["history"]["step"], run["history"]["load_factor"])]
-        sweep.append(dict(h=run["h"], r=r, uz=uz, edge=edge, mean=mean, name=name, path=np.array(path),
-                          eps=float(np.max(grid.point_data["equivalent_plastic_strain"])),
-                          plastic=int(np.asarray(grid.cell_data["plastic"]).sum())))
+        label = f"h = {run['h']:g} MPa" + (f" (stopped at Q = {run['final'] * 1.6:.3f} π a² p0)" if run["stopped"] else "")
+        entry = dict(h=run["h"], r=r, uz=uz, edge=edge, mean=mean, name=name, path=np.array(path), label=label,
+                     final=run["final"], stopped=run["stopped"], reached=reached(run),
+                     eps=float(np.max(grid.point_data["equivalent_plastic_strain"])),
+                     plastic=int(np.asarray(grid.cell_data["plastic"]).sum()))
+        (locking if run.get("full") else sweep).append(entry)
+        if run["h"] == 0.0 and not run.get("full"):
+            locking.insert(0, entry)
     sweep.sort(key=lambda s: s["h"])
-    return sweep
+    return sweep, locking
 
 
-def pictures(out: Path, runs: dict, sweep: list[dict], yield_factor: float, jobs: int | None) -> None:
+def pictures(out: Path, runs: dict, sweep: list[dict], locking: list[dict], yield_factor: float,
+             jobs: int | None) -> None:
     """The figures of the paper and the field pictures of every run."""
     tangential_plot(out / "tangential_stress_r1.png", runs, 1.0)
     tangential_plot(out / "tangential_stress_r2.png", runs, 2.0)
     normalised_plot(out / "normalised_contact_stress.png", runs,
                     [(f"first yield in this mesh, r = {yield_factor:g}", yield_factor),
                      ("r = 1 (the paper's initiation of plastic deformation)", 1.0)])
-    deflection_plot(out / "deflection_vs_hardening.png", sweep)
+    deflection_plot(out / "deflection_vs_hardening.png", sweep, locking)
     zones_plot(out / "stick_slip_zones.png", runs, ZONE_ROWS)
     fields = [(str(run["out"]), str(out / f"fields_{name}.png"), int(run["history"]["step"][-1]),
                f"{name}: {run['label']}, load factor {run['history']['load_factor'][-1]:g}")
@@ -616,10 +671,20 @@ load mesh-dependent). `normalised_contact_stress.png` shows both loads.
 
 
 def deflection_section(sweep: list[dict]) -> str:
-    sweep_table = table(["h [MPa]", "centre deflection [µm]", "edge deflection [µm]", "mean under punch [µm]",
-                         "max ε̄ᵖ", "plastic cells"],
-                        [[f"{s['h']:g}", -s["uz"][0] * 1e3, -s["edge"] * 1e3, -s["mean"] * 1e3, s["eps"], s["plastic"]]
-                         for s in sweep])
+    sweep_table = table(["h [MPa]", "Q / (π a² p0)", "centre deflection [µm]", "edge deflection [µm]",
+                         "mean under punch [µm]", "max ε̄ᵖ", "plastic cells"],
+                        [[f"{s['h']:g}", s["final"] * 1.6, -s["uz"][0] * 1e3, -s["edge"] * 1e3, -s["mean"] * 1e3,
+                          s["eps"], s["plastic"]] for s in sweep])
+    stopped = [s for s in sweep if s["stopped"]]
+    k_units = TOP_PRESSURE / (SIGMA_Y / np.sqrt(3))
+    stopped_text = "".join(
+        f"\n\nh = {s['h']:g} MPa did not reach the final load: its last completed step is Q = {s['final'] * 1.6:.3f} π a² p0 "
+        f"(its row and curves are at that load), and the cut-backs of the next step converged up to "
+        f"Q = {s['reached'] * 1.6:.3f} π a² p0 = {s['reached'] * TOP_PRESSURE:.1f} MPa = {s['reached'] * k_units:.2f} k, "
+        f"no further (solver: \"{s['stopped'].removeprefix('error: ').removesuffix(' Attempts:')}\"). "
+        "The load–deflection curve flattens steeply towards that load: the foundation is at or very near its "
+        "collapse load (README, issue 17)."
+        for s in stopped)
     return f"""
 Deflection −u_z of the foundation's upper face (foundation nodes at z = H) at Q = 4.6 π a² p0
 (top pressure {SWEEP_FACTOR * TOP_PRESSURE:.1f} MPa = {SWEEP_FACTOR * TOP_PRESSURE / SIGMA_Y:.2f} σ_Y), ideal
@@ -628,10 +693,41 @@ h ∈ {{{', '.join(f'{s["h"]:g}' for s in sweep)}}} MPa. The load is
 {SWEEP_FACTOR * TOP_PRESSURE / (SIGMA_Y / np.sqrt(3)):.2f} k (k = σ_Y/√3), just below the collapse load of a
 perfectly plastic half-space under a flat punch (Shield: 5.69 k), so without hardening the deflection grows steeply over the last steps
 (right panel of `deflection_vs_hardening.png`). The model is geometrically linear (small
-strains), which the largest plastic strains below exceed.
+strains), which the largest plastic strains below exceed.{stopped_text}
 
 {sweep_table}
 """
+
+
+def locking_section(locking: list[dict]) -> str:
+    if len(locking) < 2:
+        return "(no comparison run)"
+    k_units = TOP_PRESSURE / (SIGMA_Y / np.sqrt(3))
+    common = min(s["final"] for s in locking)
+    b, f = locking[0], locking[1]
+    loads = [x for x in (2.0, 2.5) if x < common - 1e-9] + [common]
+
+    def centre_at(x: dict, factor: float) -> float:
+        return float(x["path"][np.flatnonzero(np.abs(x["path"][:, 0] - factor) < 1e-9)[0], 1])
+    return f"""
+Issue 17: fully integrated 8-node elements lock under isochoric plastic flow (plane strain,
+axisymmetry) and overestimate collapse loads; the foundation of every run above uses the
+default locking-free B-bar element (README, `[[body]] formulation`). The perfectly plastic case
+h = 0 repeated with `formulation = "full"`, centre deflection of the foundation top [µm]:
+
+""" + table(["element", "largest Q converged / (π a² p0)", "last completed step"]
+            + [f"at Q = {x * 1.6:.3f} π a² p0" for x in loads] + ["at the last step", "max ε̄ᵖ there"],
+            [["B-bar (default)" if i == 0 else "full integration", f"{x['reached'] * 1.6:.3f}", x["final"] * 1.6]
+             + [centre_at(x, q) * 1e3 for q in loads] + [-x["uz"][0] * 1e3, x["eps"]]
+             for i, x in enumerate((b, f))]) + f"""
+
+The locking element is stiffer: at Q = {loads[0] * 1.6:.3f}, {loads[-1] * 1.6:.3f} π a² p0 the B-bar deflection is
+{100 * (centre_at(b, loads[0]) / centre_at(f, loads[0]) - 1):+.1f} %, {100 * (centre_at(b, loads[-1]) / centre_at(f, loads[-1]) - 1):+.1f} % larger.
+""" + ("Both reach the final load." if not (b["stopped"] or f["stopped"]) else
+       f"With B-bar, load control fails at Q ≈ {b['reached'] * 1.6:.3f} π a² p0 ({b['reached'] * k_units:.2f} k), just "
+       f"below the final load, at or very near the collapse load; the fully integrated element carries {f['reached'] * 1.6:.3f} π a² p0 with a centre deflection of "
+       f"{-f['uz'][0] * 1e3:.0f} µm." if b["stopped"] else
+       "Only the B-bar run reaches the final load.")
 
 
 def statistics_section(runs: dict) -> str:
@@ -649,7 +745,7 @@ case files actually run in `cases/`.
 """
 
 
-def report(out: Path, runs: dict, sweep: list[dict], size: float, solve_seconds: float,
+def report(out: Path, runs: dict, sweep: list[dict], locking: list[dict], size: float, solve_seconds: float,
            yields: tuple[float, float]) -> None:
     write_report(out / "REPORT.md", "Indentation of an elastic punch into an elasto-plastic foundation (paper §4.3)",
                  [("Set-up", setup_section(runs, size, solve_seconds)), ("Vertical equilibrium", equilibrium_section(runs)),
@@ -657,6 +753,7 @@ def report(out: Path, runs: dict, sweep: list[dict], size: float, solve_seconds:
                   ("Tangential contact stress (Figs. 8–9)", tangential_section(runs)),
                   ("First yield", first_yield_section(*yields)),
                   ("Deflection against hardening (Fig. 11)", deflection_section(sweep)),
+                  ("Locking-free element against full integration (h = 0)", locking_section(locking)),
                   ("Solver statistics (from each run's summary.json)", statistics_section(runs)), ("Files", FILES)])
 
 
@@ -669,9 +766,9 @@ def main() -> None:
     solve_seconds = solve(runs, args.jobs, size)
     read_and_check(runs)
     yields = first_yields(runs)
-    sweep = hardening_sweep(runs)
-    pictures(out, runs, sweep, yields[0], args.jobs)
-    report(out, runs, sweep, size, solve_seconds, yields)
+    sweep, locking = hardening_sweep(runs)
+    pictures(out, runs, sweep, locking, yields[0], args.jobs)
+    report(out, runs, sweep, locking, size, solve_seconds, yields)
     print(f"results: {out} (REPORT.md, *.png; <run>/results.pvd for ParaView)")
 
 

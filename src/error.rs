@@ -124,6 +124,27 @@ pub enum Error {
     /// A load step did not converge, even after cutting it back.
     #[error("{0}")]
     NoConvergence(Box<NoConvergence>),
+    /// A step could not be completed because the structure collapsed (issue 17): the load
+    /// exceeds what it can carry. The converged steps before it have been written.
+    #[error(
+        "plastic collapse in step {step}: the load factor cannot exceed ≈ {converged_load_factor:.6} \
+         (between the last converged λ_c = {converged_load_factor:.6} and the smallest failed \
+         λ_f = {failed_load_factor:.6}; {indicator}); last converged load factor λ_c = \
+         {converged_load_factor:.6}"
+    )]
+    Collapse {
+        /// 1-based step that could not be completed.
+        step: usize,
+        /// Global load factor of the last converged state.
+        converged_load_factor: f64,
+        /// Smallest global load factor of a failed attempt of the step.
+        failed_load_factor: f64,
+        /// What showed the collapse (the stiffness ratio, a tangent that lost positive
+        /// definiteness, implausible increments).
+        indicator: String,
+        /// The step's attempts, as for [`Error::NoConvergence`].
+        details: Box<NoConvergence>,
+    },
     /// One level of a convergence study failed.
     #[error("{}: level {level} (size {size}) failed: {source}", case.display())]
     StudyLevel {
@@ -133,6 +154,9 @@ pub enum Error {
         #[source]
         source: Box<Error>,
     },
+    /// Arc-length control cannot start (no load to scale) or its first increment failed.
+    #[error("arc-length control: {0}")]
+    ArcLength(String),
     /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]
     Io {

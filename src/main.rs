@@ -67,6 +67,10 @@ enum Command {
     },
 }
 
+/// Exit status of `asperity run` when the structure collapses (README "Exit codes"): 0 is
+/// success, 1 any other failure, 2 a convergence study that cannot run.
+const COLLAPSE_EXIT_CODE: u8 = 3;
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let level = match cli.verbose {
@@ -90,6 +94,12 @@ fn main() -> ExitCode {
     }
     match execute(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
+        // Plastic collapse (the load exceeds what the structure carries): its own code, so
+        // scripts can tell it from other failures; the converged steps are on disk.
+        Err(e @ asperity::Error::Collapse { .. }) => {
+            eprintln!("error: {e}");
+            ExitCode::from(COLLAPSE_EXIT_CODE)
+        }
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::FAILURE

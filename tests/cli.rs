@@ -4,13 +4,19 @@ use std::path::Path;
 use std::process::Command;
 
 fn asperity(args: &[&str]) -> (bool, String) {
+    let (code, text) = asperity_code(args);
+    (code == Some(0), text)
+}
+
+/// The exit code (`None` if killed) and the output of a run.
+fn asperity_code(args: &[&str]) -> (Option<i32>, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_asperity"))
         .args(args)
         .output()
         .expect("runs");
     let text =
         String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
-    (out.status.success(), text)
+    (out.status.code(), text)
 }
 
 fn fixture(name: &str) -> String {
@@ -277,4 +283,54 @@ max_cutbacks = 0
         .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
         .collect();
     assert!(leftovers.is_empty(), "temporary files left behind");
+}
+
+/// A perfectly plastic block in plane strain, clamped at its base and pulled at its top by
+/// twice its plane-strain limit traction (2/√3) σ_Y: no equilibrium exists above a load factor
+/// of about one half. The run must stop with "plastic collapse", exit code 3 (README "Exit
+/// codes"), the converged steps on disk and summary.json saying "failed".
+#[test]
+fn plastic_collapse_exits_with_code_3_and_keeps_the_converged_steps() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = dir.path().join("case.toml");
+    let traction = 2.0 * 2.0 / 3f64.sqrt() * 100.0;
+    std::fs::write(
+        &case,
+        format!(
+            r#"[mesh]
+file = "{}"
+[analysis]
+type = "plane_strain"
+[[body]]
+group = "lower"
+material = {{ E = 70000.0, nu = 0.3, yield_stress = 100.0 }}
+[[support]]
+group = "base"
+ux = 0.0
+uy = 0.0
+[[load]]
+group = "lower_top"
+traction = [0.0, {traction}]
+[steps]
+count = 4
+"#,
+            fixture("contact_pair.msh")
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let (code, text) = asperity_code(&[
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(3), "{text}");
+    assert!(
+        text.contains("plastic collapse") && text.contains("last converged load factor"),
+        "{text}"
+    );
+    assert!(out.join("bodies_0001.vtu").is_file(), "step 1 is on disk");
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert!(summary.contains("\"failed\""), "{summary}");
 }

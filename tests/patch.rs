@@ -1,5 +1,6 @@
 //! Patch tests: on distorted meshes of quad8 and tri6 a constant-strain field must be
-//! reproduced exactly (to round-off), in plane stress, plane strain and axisymmetry.
+//! reproduced exactly (to round-off), in plane stress, plane strain and axisymmetry, with the
+//! full and (plane strain, axisymmetry) the B-bar formulation.
 mod common;
 
 use asperity::config::AnalysisSpec;
@@ -8,6 +9,24 @@ use asperity::material::{OutOfPlane, Voigt};
 use asperity::mesh::Mesh;
 use asperity::solver::stepping::run_steps;
 use common::*;
+
+/// Extension of the test case builder: a body with an explicit `formulation`.
+trait BodyWith {
+    fn body_with(self, group: &str, material: toml::Table, formulation: &str) -> Self;
+}
+
+impl BodyWith for CaseBuilder {
+    fn body_with(self, group: &str, material: toml::Table, formulation: &str) -> Self {
+        self.push(
+            "body",
+            table(&[
+                ("group", group.into()),
+                ("material", material.into()),
+                ("formulation", formulation.into()),
+            ]),
+        )
+    }
+}
 
 const E: f64 = 70_000.0;
 const NU: f64 = 0.33;
@@ -18,10 +37,10 @@ const TOL: f64 = 1e-10;
 /// Constant in-plane stress applied as boundary tractions on the rectangle [0, 2] × [0, 1];
 /// u_y = 0 along y = 0 and u_x = 0 at the origin remove rigid-body motion, so the exact field
 /// is u_x = ε_xx x + γ_xy y, u_y = ε_yy y.
-fn traction_patch(analysis: CaseBuilder, triangles: bool) {
+fn traction_patch(analysis: CaseBuilder, triangles: bool, formulation: &str) {
     let (sxx, syy, sxy) = (100.0, -40.0, 25.0);
     let case = analysis
-        .body("body", elastic(E, NU))
+        .body_with("body", elastic(E, NU), formulation)
         .support("origin", &[("ux", 0.0)])
         .support("t0", &[("uy", 0.0)])
         .traction("s0", [-sxx, -sxy])
@@ -69,31 +88,48 @@ fn traction_patch(analysis: CaseBuilder, triangles: bool) {
 
 #[test]
 fn plane_stress_patch_quad8() {
-    traction_patch(CaseBuilder::plane_stress(2.5), false);
+    traction_patch(CaseBuilder::plane_stress(2.5), false, "full");
 }
 
 #[test]
 fn plane_stress_patch_tri6() {
-    traction_patch(CaseBuilder::plane_stress(2.5), true);
+    traction_patch(CaseBuilder::plane_stress(2.5), true, "full");
 }
 
 #[test]
 fn plane_strain_patch_quad8() {
-    traction_patch(CaseBuilder::plane_strain(), false);
+    for formulation in ["full", "bbar"] {
+        traction_patch(CaseBuilder::plane_strain(), false, formulation);
+    }
 }
 
 #[test]
 fn plane_strain_patch_tri6() {
-    traction_patch(CaseBuilder::plane_strain(), true);
+    for formulation in ["full", "bbar"] {
+        traction_patch(CaseBuilder::plane_strain(), true, formulation);
+    }
+}
+
+#[test]
+fn bbar_is_rejected_in_plane_stress() {
+    let case = CaseBuilder::plane_stress(1.0)
+        .body_with("body", elastic(E, NU), "bbar")
+        .case();
+    let e = model(rectangle(2.0, 1.0, 2, 2, 0.0, false), &case).unwrap_err();
+    assert!(
+        matches!(&e, asperity::Error::InvalidParameter { key, .. } if key == "body[0].formulation"),
+        "{e}"
+    );
+    assert!(e.to_string().contains("plane stress"), "{e}");
 }
 
 /// Axisymmetric patch test u_r = c r, u_z = d z, prescribed on the whole boundary of a
 /// distorted mesh; the interior must follow exactly, with ε_rr = ε_θθ = c, ε_zz = d.
-fn axisymmetric_patch(mesh: Mesh) {
+fn axisymmetric_patch(mesh: Mesh, formulation: &str) {
     let (c, d) = (1.2e-3, -0.7e-3);
     let fixed = [("ur", 0.0), ("uz", 0.0)];
     let case = CaseBuilder::axisymmetric()
-        .body("body", elastic(E, NU))
+        .body_with("body", elastic(E, NU), formulation)
         .support("s0", &fixed)
         .support("s1", &fixed)
         .support("t0", &fixed)
@@ -139,17 +175,24 @@ fn axisymmetric_patch(mesh: Mesh) {
 
 #[test]
 fn axisymmetric_patch_quad8_off_axis() {
-    axisymmetric_patch(common::structured(4, 4, 0.35, false, |s, t| {
-        [1.0 + 2.0 * s, 2.0 * t]
-    }));
+    for formulation in ["full", "bbar"] {
+        axisymmetric_patch(
+            common::structured(4, 4, 0.35, false, |s, t| [1.0 + 2.0 * s, 2.0 * t]),
+            formulation,
+        );
+    }
 }
 
 #[test]
 fn axisymmetric_patch_quad8_on_axis() {
-    axisymmetric_patch(rectangle(2.0, 2.0, 4, 4, 0.35, false));
+    for formulation in ["full", "bbar"] {
+        axisymmetric_patch(rectangle(2.0, 2.0, 4, 4, 0.35, false), formulation);
+    }
 }
 
 #[test]
 fn axisymmetric_patch_tri6_on_axis() {
-    axisymmetric_patch(rectangle(2.0, 2.0, 4, 4, 0.35, true));
+    for formulation in ["full", "bbar"] {
+        axisymmetric_patch(rectangle(2.0, 2.0, 4, 4, 0.35, true), formulation);
+    }
 }

@@ -102,6 +102,20 @@ pub struct BodySpec {
     /// Name of the physical surface.
     pub group: String,
     pub material: MaterialSpec,
+    /// Element formulation: `"full"` or `"bbar"` (locking-free). Default: B-bar for plastic
+    /// bodies and for ν ≥ 0.45 in plane strain and axisymmetry, full otherwise (see
+    /// [`Formulation::for_body`](crate::element::continuum::Formulation::for_body)).
+    pub formulation: Option<FormulationKind>,
+}
+
+/// The element formulation of a body (`[[body]] formulation`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FormulationKind {
+    /// Standard displacement element, full integration.
+    Full,
+    /// B-bar: projected volumetric strain (locking-free in plane strain and axisymmetry).
+    Bbar,
 }
 
 /// Material parameters of a body.
@@ -322,6 +336,32 @@ pub struct Steps {
     pub count: Option<usize>,
     /// Explicit load factors, e.g. `[0.5, 1.0, 0.5, 0.0]` for loading and unloading.
     pub factors: Option<Vec<f64>>,
+    /// `"load"` (default: the factors above) or `"arc_length"` (Riks–Crisfield; the keys
+    /// below, `count`/`factors` ignored).
+    #[serde(default)]
+    pub control: ControlKind,
+    /// Arc length: the load-factor increment of the first increment (default 0.1).
+    pub initial_increment: Option<f64>,
+    /// Arc length: most increments (default 100).
+    pub max_increments: Option<usize>,
+    /// Arc length: stop once the load factor reaches this (default 1).
+    pub max_load_factor: Option<f64>,
+    /// Arc length: smallest arc, relative to the first (default 1e-4); below it the path
+    /// cannot be followed further and the run ends.
+    pub min_arc_length: Option<f64>,
+    /// Arc length: largest arc, relative to the first (default 10).
+    pub max_arc_length: Option<f64>,
+}
+
+/// How the load factor is driven (`[steps] control`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ControlKind {
+    /// The load factors of `count` or `factors`.
+    #[default]
+    Load,
+    /// Arc-length (Riks–Crisfield, cylindrical) control.
+    ArcLength,
 }
 
 impl Default for Steps {
@@ -329,6 +369,12 @@ impl Default for Steps {
         Self {
             count: Some(1),
             factors: None,
+            control: ControlKind::Load,
+            initial_increment: None,
+            max_increments: None,
+            max_load_factor: None,
+            min_arc_length: None,
+            max_arc_length: None,
         }
     }
 }
@@ -375,6 +421,30 @@ pub struct SolverSpec {
     /// BiCGSTAB preconditioned with the elastic contact matrix for unsymmetric tangents).
     #[serde(default)]
     pub linear_solver: LinearSolverKind,
+    // --- plausibility of a converged increment and collapse detection (issue 17) ----------
+    /// Largest nodal displacement increment of a converged increment, as a fraction of the
+    /// model size (bounding-box diagonal); a larger one is a failed increment (cut back).
+    #[serde(default = "default_max_displacement_increment")]
+    pub max_displacement_increment: f64,
+    /// Largest equivalent strain increment √(⅔ Δε:Δε) at any integration point of a
+    /// converged increment; a larger one is a failed increment (cut back).
+    #[serde(default = "default_max_strain_increment")]
+    pub max_strain_increment: f64,
+    /// A step that cannot be completed is reported as plastic collapse when the secant
+    /// stiffness Δλ/‖Δu‖ of its last converged increment is below this fraction of that of
+    /// the first increment of the run.
+    #[serde(default = "default_collapse_stiffness_ratio")]
+    pub collapse_stiffness_ratio: f64,
+}
+
+fn default_max_displacement_increment() -> f64 {
+    0.1
+}
+fn default_max_strain_increment() -> f64 {
+    0.05
+}
+fn default_collapse_stiffness_ratio() -> f64 {
+    1e-2
 }
 
 /// The linear solver of models with contact pairs (`[solver] linear_solver`).
@@ -422,6 +492,9 @@ impl Default for SolverSpec {
             max_cutbacks: default_max_cutbacks(),
             contact_algorithm: ContactAlgorithmKind::default(),
             linear_solver: LinearSolverKind::default(),
+            max_displacement_increment: default_max_displacement_increment(),
+            max_strain_increment: default_max_strain_increment(),
+            collapse_stiffness_ratio: default_collapse_stiffness_ratio(),
         }
     }
 }
@@ -748,11 +821,13 @@ pub(crate) mod tests {
         let s = Steps {
             count: Some(4),
             factors: None,
+            ..Steps::default()
         };
         assert_eq!(s.len(), 4);
         let s = Steps {
             count: None,
             factors: Some(vec![0.5, 1.0, 0.0]),
+            ..Steps::default()
         };
         assert_eq!(s.len(), 3);
     }

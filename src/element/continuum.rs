@@ -1,14 +1,110 @@
 //! The 2D continuum element (quad8 with 3×3 Gauss points, tri6 with a 6-point rule) in plane
 //! stress, plane strain and axisymmetry: paper Eqs. (33)–(34),
 //! K = ∫ Bᵀ C B dV and F = ∫ Bᵀ σ dV, with dV = t dA or 2πr dA.
+//!
+//! # Formulations ([`Formulation`])
+//! - **Full** (`"full"`): the standard displacement element above, every strain component
+//!   sampled at every point of the full rule.
+//! - **B-bar** (`"bbar"`, Hughes 1980, IJNME 15, 1413–1418; de Souza Neto, Perić & Owen,
+//!   *Computational Methods for Plasticity* (2008) §15.2; Simo & Hughes (1998) §4.4): the
+//!   volumetric strain θ = ε_xx + ε_yy + ε_zz (in axisymmetry ε_rr + ε_zz + ε_θθ with the hoop
+//!   strain u_r / r) is replaced by its L2 projection θ̄ over the cell onto the linear fields
+//!   (1, x, y), and the strain the material sees is ε̄ = ε + ⅓ (θ̄ − θ) m, m = (1, 1, 0, 1):
+//!   the deviatoric part is untouched and fully integrated.
+//!
+//! Why: fully integrated quadratic elements *lock* when the material is (nearly)
+//! incompressible — isochoric plastic flow, ν → ½ — because the 9 (6) volumetric constraints
+//! per cell leave the mesh too few isochoric displacement fields. Measured (issue 17): a
+//! perfectly plastic thick cylinder (b/a = 2, ε_z = 0) under 1.05 p_L "converges" with full
+//! integration to bore displacements of 7.7 mm, 117 mm and 1.8 m on 4, 8 and 16 quad8 through
+//! the wall (tri6: 22 mm to 10 m), where no equilibrium exists; with B-bar Newton fails above
+//! 1.00002 p_L. Nearly incompressible Lamé (ν = 0.4999, 4 cells): full integration −9 %
+//! (quad8), B-bar −0.003 %.
+//!
+//! Choices, measured on those problems and on Prandtl's punch:
+//! - Linear (3-term) projection for both kinds: the constant one (mean dilatation, Q8/P0 and
+//!   P2/P0) collapses the cylinder at 0.987–0.999 p_L (from below), its stresses are poor (the
+//!   plastic front of tri6 is off by up to 7 % of the wall) and it needs more Newton
+//!   iterations; the linear one gives p_L within 2·10⁻⁵ from above, Hill's front within
+//!   0.12 % of the wall (ν = 0.49) and Prandtl's (2 + π)k within +0.55 % (+1.05 % on a coarse
+//!   mesh; full quad8: +1.5 % and still rising).
+//!   For straight-sided tri6 in plane strain θ is already linear, so there B-bar equals full
+//!   integration (P2/P1-discontinuous pressure), which on these problems does not lock.
+//! - Not uniform 2×2 reduced integration: quad8 with 2×2 points has a spurious zero-energy
+//!   mode, and the per-point state arrays and stress recovery would change.
+//!
+//! Properties: ε̄ is still linear in the nodal displacements, ε̄ = B̄ u with a fixed
+//! B̄ = B + ⅓ m (b̄_vol − mᵀB), so the tangent ∫ B̄ᵀ D B̄ dV is the exact derivative of the
+//! internal force ∫ B̄ᵀ σ(B̄ u) dV (symmetric, Newton stays quadratic); a constant strain field
+//! is reproduced exactly (θ̄ = θ: the patch test passes); and since the deviatoric part keeps
+//! the full rule the element has no spurious zero-energy (hourglass) modes. In plane strain
+//! ε̄_zz = ⅓ (θ̄ − θ) is not zero pointwise, only its projection is. Plane stress has no
+//! volumetric constraint (ε_zz is free), so the formulation does not apply there and is
+//! rejected (see [`Formulation::for_body`], which also sets the defaults).
 
-use nalgebra::SMatrix;
-
-use super::quadrature::{QuadPoint, cell_rule};
+use super::quadrature::{MAX_CELL_POINTS, QuadPoint, cell_rule};
 use super::shape::{ShapeValues, cell_shape};
 use super::{Analysis, ElementInput, ElementOutput};
 use crate::material::{Material, OutOfPlane, PointState, Voigt, ZZ};
 use crate::mesh::CellKind;
+use nalgebra::{SMatrix, SVector};
+
+/// How a continuum cell computes its strains (see the module docs); chosen per body by
+/// `formulation = "full" | "bbar"` in a case file's `[[body]]`
+/// ([`FormulationKind`](crate::config::FormulationKind)).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Formulation {
+    /// Standard displacement formulation, full integration.
+    #[default]
+    Full,
+    /// B-bar: projected volumetric strain, fully integrated deviatoric strain (locking-free).
+    Bbar,
+}
+
+/// Poisson's ratio from which elastic bodies in plane strain and axisymmetry get
+/// [`Formulation::Bbar`] by default (see [`Formulation::for_body`]).
+pub const BBAR_DEFAULT_NU: f64 = 0.45;
+
+impl Formulation {
+    /// The formulation of a body: the one `requested` in the case file, or by default
+    /// - [`Formulation::Bbar`] in plane strain and axisymmetry for plastic bodies (J2 flow is
+    ///   isochoric) and for elastic bodies with ν ≥ [`BBAR_DEFAULT_NU`];
+    /// - [`Formulation::Full`] otherwise, and always in plane stress.
+    ///
+    /// Asking for B-bar in plane stress is an error: there is no volumetric constraint to
+    /// relax there.
+    pub fn for_body(
+        requested: Option<Formulation>,
+        analysis: &Analysis,
+        plastic: bool,
+        nu: f64,
+    ) -> Result<Formulation, String> {
+        match requested {
+            Some(Formulation::Bbar) if analysis.is_plane_stress() => Err(
+                "formulation = \"bbar\" does not apply to plane stress (sigma_zz = 0 leaves \
+                 eps_zz free, so there is no volumetric locking to avoid); use \"full\" or omit \
+                 the key"
+                    .into(),
+            ),
+            Some(f) => Ok(f),
+            None if analysis.is_plane_stress() => Ok(Formulation::Full),
+            None if plastic || nu >= BBAR_DEFAULT_NU => Ok(Formulation::Bbar),
+            None => Ok(Formulation::Full),
+        }
+    }
+
+    /// Name as written in case files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Formulation::Full => "full",
+            Formulation::Bbar => "bbar",
+        }
+    }
+}
+
+/// Number of terms of the volumetric-strain projection of [`Formulation::Bbar`]: 1
+/// (constant, mean dilatation) or 3 (linear: 1, x, y). See the module docs for why 3.
+pub const PROJECTION_TERMS: usize = 3;
 
 /// Strain-displacement matrix: rows (xx, yy, xy, zz), columns (u_x1, u_y1, ..., u_x8, u_y8).
 pub type StrainDisplacement = SMatrix<f64, 4, 16>;
@@ -114,6 +210,7 @@ pub fn evaluate_cell(
     analysis: &Analysis,
     kind: CellKind,
     coords: &[[f64; 2]; 8],
+    formulation: Formulation,
     material: &dyn Material,
     input: &ElementInput<PointState>,
     output: ElementOutput<PointState>,
@@ -125,9 +222,8 @@ pub fn evaluate_cell(
     } else {
         OutOfPlane::StrainGiven
     };
-    for (g, p) in cell_rule(kind).iter().enumerate() {
-        let pk = point_kinematics(analysis, kind, coords, p)
-            .expect("cell Jacobians are checked when the model is built");
+    let points = cell_kinematics(analysis, kind, coords, formulation);
+    for (g, pk) in points.iter().enumerate() {
         let strain: Voigt = pk.b * u;
         let (state, d) = material.update(&strain, &committed[g], out_of_plane);
         f.gemv_tr(pk.dvol, &pk.b, &state.stress, 1.0);
@@ -136,5 +232,370 @@ pub fn evaluate_cell(
             k.gemm_tr(pk.dvol, &pk.b, &db, 1.0);
         }
         trial[g] = state;
+    }
+}
+
+/// The kinematics of a cell at all points of its rule, with the B matrices of
+/// `formulation` (B̄ for [`Formulation::Bbar`] outside plane stress; the plain B otherwise).
+pub fn cell_kinematics(
+    analysis: &Analysis,
+    kind: CellKind,
+    coords: &[[f64; 2]; 8],
+    formulation: Formulation,
+) -> CellPoints {
+    let rule = cell_rule(kind);
+    let mut points = CellPoints {
+        len: rule.len(),
+        points: [PointKinematics {
+            b: StrainDisplacement::zeros(),
+            dvol: 0.0,
+            x: [0.0; 2],
+        }; MAX_CELL_POINTS],
+    };
+    for (pk, p) in points.points.iter_mut().zip(rule) {
+        *pk = point_kinematics(analysis, kind, coords, p)
+            .expect("cell Jacobians are checked when the model is built");
+    }
+    if formulation == Formulation::Bbar && !analysis.is_plane_stress() {
+        project_volumetric::<PROJECTION_TERMS>(&mut points, &coords[..kind.node_count()]);
+    }
+    points
+}
+
+/// The points of one cell (fixed capacity, so evaluation allocates nothing).
+#[derive(Clone, Copy, Debug)]
+pub struct CellPoints {
+    len: usize,
+    points: [PointKinematics; MAX_CELL_POINTS],
+}
+
+impl std::ops::Deref for CellPoints {
+    type Target = [PointKinematics];
+    fn deref(&self) -> &[PointKinematics] {
+        &self.points[..self.len]
+    }
+}
+
+/// Replaces each point's B by B̄ = B + ⅓ m (b̄_vol − mᵀ B): the volumetric row mᵀ B
+/// (m = (1, 1, 0, 1)) is L2-projected over the cell (weight dV, so 2πr in axisymmetry) onto
+/// the N-term space π = (1, (x − x_c)/L, (y − y_c)/L) (N = 1: constants, N = 3: linear
+/// fields; x_c, L the node centroid and extent, for conditioning only):
+/// b̄_vol(x) = π(x)ᵀ H⁻¹ G, H = ∫ π πᵀ dV, G = ∫ π mᵀ B dV, with the cell's own rule.
+fn project_volumetric<const N: usize>(points: &mut CellPoints, coords: &[[f64; 2]]) {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for x in coords {
+        for c in 0..2 {
+            lo[c] = lo[c].min(x[c]);
+            hi[c] = hi[c].max(x[c]);
+        }
+    }
+    let centre = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
+    let size = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    let basis = |x: [f64; 2]| {
+        let all = [1.0, (x[0] - centre[0]) / size, (x[1] - centre[1]) / size];
+        SVector::<f64, N>::from_fn(|i, _| all[i])
+    };
+    let volumetric = |b: &StrainDisplacement| b.row(0) + b.row(1) + b.row(ZZ);
+    let mut h = SMatrix::<f64, N, N>::zeros();
+    let mut g = SMatrix::<f64, N, 16>::zeros();
+    for pk in points.iter() {
+        let pi = basis(pk.x);
+        h += pi * pi.transpose() * pk.dvol;
+        g += pi * volumetric(&pk.b) * pk.dvol;
+    }
+    let projector = h
+        .try_inverse()
+        .expect("the projection space is unisolvent on the cell rule")
+        * g;
+    for pk in points.points[..points.len].iter_mut() {
+        let change = (basis(pk.x).transpose() * projector - volumetric(&pk.b)) / 3.0;
+        for r in [0, 1, ZZ] {
+            let mut row = pk.b.row_mut(r);
+            row += change;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::element::{ElementMatrix, ElementVector};
+    use crate::material::elastic::LinearElastic;
+    use crate::material::j2::J2Plasticity;
+    use nalgebra::{DMatrix, SymmetricEigen};
+
+    const PLANE: Analysis = Analysis::PlaneStrain { thickness: 1.0 };
+    const AXI: Analysis = Analysis::Axisymmetric;
+
+    /// A distorted, curved quad8 and a distorted tri6 away from the axis.
+    fn cell(kind: CellKind) -> [[f64; 2]; 8] {
+        match kind {
+            CellKind::Quad8 => [
+                [1.0, 0.0],
+                [2.2, 0.1],
+                [2.0, 1.3],
+                [0.9, 1.0],
+                [1.6, 0.1],
+                [2.15, 0.7],
+                [1.45, 1.2],
+                [0.95, 0.5],
+            ],
+            CellKind::Tri6 => [
+                [1.0, 0.0],
+                [2.1, 0.2],
+                [1.3, 1.1],
+                [1.55, 0.05],
+                [1.75, 0.7],
+                [1.1, 0.55],
+                [0.0, 0.0],
+                [0.0, 0.0],
+            ],
+        }
+    }
+
+    fn evaluate(
+        analysis: &Analysis,
+        kind: CellKind,
+        formulation: Formulation,
+        material: &dyn Material,
+        committed: &[PointState],
+        u: &ElementVector,
+        k: Option<&mut ElementMatrix>,
+    ) -> (ElementVector, Vec<PointState>) {
+        let mut f = ElementVector::zeros();
+        let mut trial = vec![PointState::default(); MAX_CELL_POINTS];
+        evaluate_cell(
+            analysis,
+            kind,
+            &cell(kind),
+            formulation,
+            material,
+            &ElementInput {
+                u,
+                committed,
+                algorithm: Default::default(),
+            },
+            ElementOutput {
+                trial: &mut trial,
+                k,
+                f: &mut f,
+            },
+        );
+        (f, trial)
+    }
+
+    /// Element displacements of a smooth field with a large volumetric part, scaled by `s`.
+    fn field(kind: CellKind, s: f64) -> ElementVector {
+        let mut u = ElementVector::zeros();
+        for (i, x) in cell(kind)[..kind.node_count()].iter().enumerate() {
+            u[2 * i] = s * (0.8 * x[0] + 0.3 * x[1] * x[1] - 0.2 * x[0] * x[1]);
+            u[2 * i + 1] = s * (-0.4 * x[1] + 0.5 * x[0] * x[0] + 0.1 * x[1] * x[1]);
+        }
+        u
+    }
+
+    #[test]
+    fn tangent_matches_finite_differences_in_plastic_states() {
+        let elastic = LinearElastic::new(200_000.0, 0.3).unwrap();
+        let j2 = J2Plasticity::new(elastic, 250.0, 1500.0).unwrap();
+        for analysis in [PLANE, AXI] {
+            for kind in [CellKind::Quad8, CellKind::Tri6] {
+                for formulation in [Formulation::Full, Formulation::Bbar] {
+                    // Committed: a plastic state from a first load; then a further load.
+                    let committed = vec![PointState::default(); MAX_CELL_POINTS];
+                    let (_, committed) = evaluate(
+                        &analysis,
+                        kind,
+                        formulation,
+                        &j2,
+                        &committed,
+                        &field(kind, 2e-3),
+                        None,
+                    );
+                    let u = field(kind, 3e-3) + field(kind, 4e-4).map(|x| x.sin());
+                    let mut k = ElementMatrix::zeros();
+                    let (_, trial) = evaluate(
+                        &analysis,
+                        kind,
+                        formulation,
+                        &j2,
+                        &committed,
+                        &u,
+                        Some(&mut k),
+                    );
+                    let n = cell_rule(kind).len();
+                    assert!(
+                        trial[..n].iter().all(|s| s.yielding),
+                        "{analysis:?} {kind:?} {formulation:?}: every point should yield"
+                    );
+                    let h = 1e-8;
+                    let dofs = 2 * kind.node_count();
+                    let scale = k.amax();
+                    for j in 0..dofs {
+                        let (mut up, mut um) = (u, u);
+                        up[j] += h;
+                        um[j] -= h;
+                        let eval = |u: &ElementVector| {
+                            evaluate(&analysis, kind, formulation, &j2, &committed, u, None).0
+                        };
+                        let fd = (eval(&up) - eval(&um)) / (2.0 * h);
+                        for i in 0..dofs {
+                            // Central differences of a piecewise-smooth return map: error
+                            // O(h²) relative, far below 1e-6 of the largest entry.
+                            assert!(
+                                (fd[i] - k[(i, j)]).abs() < 1e-6 * scale,
+                                "{analysis:?} {kind:?} {formulation:?} K[{i},{j}] = {} vs fd {}",
+                                k[(i, j)],
+                                fd[i]
+                            );
+                        }
+                    }
+                    // The B-bar tangent is symmetric like the full one.
+                    assert!((k - k.transpose()).amax() < 1e-9 * scale);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bbar_leaves_linear_displacement_fields_unchanged() {
+        // A constant strain field: θ̄ = θ, so B̄ u = B u at every point (patch test), also
+        // in axisymmetry where u_r = c r gives a constant hoop strain.
+        for analysis in [PLANE, AXI] {
+            for kind in [CellKind::Quad8, CellKind::Tri6] {
+                let mut u = ElementVector::zeros();
+                for (i, x) in cell(kind)[..kind.node_count()].iter().enumerate() {
+                    u[2 * i] = 1e-3 * x[0] + if analysis == AXI { 0.0 } else { 4e-4 * x[1] };
+                    u[2 * i + 1] = -7e-4 * x[1] + 2e-4 * x[0];
+                }
+                let full = cell_kinematics(&analysis, kind, &cell(kind), Formulation::Full);
+                let bbar = cell_kinematics(&analysis, kind, &cell(kind), Formulation::Bbar);
+                for (p, q) in full.iter().zip(bbar.iter()) {
+                    assert!(
+                        (p.b * u - q.b * u).amax() < 1e-15,
+                        "{analysis:?} {kind:?}: {} vs {}",
+                        p.b * u,
+                        q.b * u
+                    );
+                    assert_eq!(p.dvol, q.dvol);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bbar_projects_the_volumetric_strain() {
+        // For a non-uniform field, B̄ differs from B only in its volumetric part: the
+        // deviatoric strain is unchanged pointwise, and the volumetric strain integrates to
+        // the same total over the cell (the constant is in the projection space).
+        let m = Voigt::new(1.0, 1.0, 0.0, 1.0);
+        for analysis in [PLANE, AXI] {
+            for kind in [CellKind::Quad8, CellKind::Tri6] {
+                let u = field(kind, 1e-3);
+                let full = cell_kinematics(&analysis, kind, &cell(kind), Formulation::Full);
+                let bbar = cell_kinematics(&analysis, kind, &cell(kind), Formulation::Bbar);
+                let (mut total, mut total_bar, mut change) = (0.0, 0.0, 0.0_f64);
+                for (p, q) in full.iter().zip(bbar.iter()) {
+                    let (e, e_bar) = (p.b * u, q.b * u);
+                    let (t, t_bar) = (m.dot(&e), m.dot(&e_bar));
+                    let dev = |e: Voigt, t: f64| e - m * (t / 3.0);
+                    assert!((dev(e, t) - dev(e_bar, t_bar)).amax() < 1e-16);
+                    total += t * p.dvol;
+                    total_bar += t_bar * q.dvol;
+                    change = change.max((t - t_bar).abs());
+                }
+                assert!((total - total_bar).abs() < 1e-13 * total.abs());
+                assert!(
+                    change > 1e-6,
+                    "{analysis:?} {kind:?}: nothing was projected"
+                );
+            }
+        }
+    }
+
+    /// Eigenvalues of the elastic stiffness of one cell, ascending.
+    fn spectrum(analysis: &Analysis, kind: CellKind, formulation: Formulation) -> Vec<f64> {
+        let elastic = LinearElastic::new(1.0, 0.3).unwrap();
+        let mut k = ElementMatrix::zeros();
+        let state = vec![PointState::default(); MAX_CELL_POINTS];
+        let u = ElementVector::zeros();
+        evaluate(
+            analysis,
+            kind,
+            formulation,
+            &elastic,
+            &state,
+            &u,
+            Some(&mut k),
+        );
+        let n = 2 * kind.node_count();
+        let k = DMatrix::from_fn(n, n, |i, j| k[(i, j)]);
+        let mut values: Vec<f64> = SymmetricEigen::new(k).eigenvalues.iter().copied().collect();
+        values.sort_by(f64::total_cmp);
+        values
+    }
+
+    #[test]
+    fn bbar_has_no_spurious_zero_energy_modes() {
+        // Rigid-body modes only: 3 in plane strain, 1 (axial translation) in axisymmetry.
+        // B-bar keeps the full rule for the deviatoric strain, so no hourglass modes appear
+        // (unlike uniform 2×2 reduced integration of quad8, which has one).
+        for (analysis, rigid) in [(PLANE, 3), (AXI, 1)] {
+            for kind in [CellKind::Quad8, CellKind::Tri6] {
+                for formulation in [Formulation::Full, Formulation::Bbar] {
+                    let values = spectrum(&analysis, kind, formulation);
+                    let largest = values.last().unwrap();
+                    let zero = values.iter().filter(|v| v.abs() < 1e-10 * largest).count();
+                    assert_eq!(
+                        zero, rigid,
+                        "{analysis:?} {kind:?} {formulation:?}: eigenvalues {values:?}"
+                    );
+                    // The smallest non-rigid eigenvalue is a fair fraction of the largest.
+                }
+            }
+        }
+        // For contrast, uniform 2×2 reduced integration of quad8 has one spurious mode.
+        let g = 1.0 / 3f64.sqrt();
+        let d = LinearElastic::new(1.0, 0.3)
+            .unwrap()
+            .stiffness(OutOfPlane::StrainGiven);
+        let mut k = DMatrix::<f64>::zeros(16, 16);
+        for (xi, eta) in [(-g, -g), (g, -g), (g, g), (-g, g)] {
+            let p = QuadPoint {
+                xi,
+                eta,
+                weight: 1.0,
+            };
+            let pk = point_kinematics(&PLANE, CellKind::Quad8, &cell(CellKind::Quad8), &p).unwrap();
+            let b = DMatrix::from_fn(4, 16, |i, j| pk.b[(i, j)]);
+            k += b.transpose() * DMatrix::from_fn(4, 4, |i, j| d[(i, j)]) * b * pk.dvol;
+        }
+        let values = SymmetricEigen::new(k).eigenvalues;
+        let largest = values.amax();
+        let zero = values.iter().filter(|v| v.abs() < 1e-10 * largest).count();
+        assert_eq!(zero, 4, "2×2 quad8: {values:?}");
+    }
+
+    #[test]
+    fn default_formulations() {
+        let stress = Analysis::PlaneStress { thickness: 1.0 };
+        let f = |requested, analysis: &Analysis, plastic, nu| {
+            Formulation::for_body(requested, analysis, plastic, nu)
+        };
+        assert_eq!(f(None, &PLANE, true, 0.3), Ok(Formulation::Bbar));
+        assert_eq!(f(None, &AXI, true, 0.3), Ok(Formulation::Bbar));
+        assert_eq!(f(None, &PLANE, false, 0.3), Ok(Formulation::Full));
+        assert_eq!(f(None, &AXI, false, 0.4999), Ok(Formulation::Bbar));
+        assert_eq!(f(None, &stress, true, 0.4999), Ok(Formulation::Full));
+        assert_eq!(
+            f(Some(Formulation::Full), &PLANE, true, 0.3),
+            Ok(Formulation::Full)
+        );
+        assert_eq!(
+            f(Some(Formulation::Bbar), &PLANE, false, 0.3),
+            Ok(Formulation::Bbar)
+        );
+        let e = f(Some(Formulation::Bbar), &stress, true, 0.3).unwrap_err();
+        assert!(e.contains("plane stress") && e.contains("bbar"), "{e}");
     }
 }

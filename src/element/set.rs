@@ -1,7 +1,7 @@
 //! Element sets: the [`ElementSet`] trait the assembler is generic over, and the model's two
 //! sets, the continuum cells of the bodies and the interface elements of the contact pairs.
 
-use super::continuum::evaluate_cell;
+use super::continuum::{Formulation, evaluate_cell};
 use super::interface6::{InterfaceElement, evaluate_interface};
 use super::quadrature::MAX_CELL_POINTS;
 use super::{Analysis, ElementInput, ElementOutput};
@@ -58,6 +58,8 @@ pub struct ContinuumSet {
     pub analysis: Analysis,
     pub cells: Vec<ContinuumCell>,
     pub materials: Vec<Box<dyn Material>>,
+    /// Element formulation of each body.
+    pub formulations: Vec<Formulation>,
 }
 
 impl ElementSet for ContinuumSet {
@@ -83,8 +85,18 @@ impl ElementSet for ContinuumSet {
         output: ElementOutput<PointState>,
     ) {
         let c = &self.cells[e];
-        let material = self.materials[c.body as usize].as_ref();
-        evaluate_cell(&self.analysis, c.kind, &c.coords, material, input, output);
+        let body = c.body as usize;
+        let material = self.materials[body].as_ref();
+        let formulation = self.formulations[body];
+        evaluate_cell(
+            &self.analysis,
+            c.kind,
+            &c.coords,
+            formulation,
+            material,
+            input,
+            output,
+        );
     }
 }
 

@@ -11,7 +11,10 @@ mod spec;
 
 pub use constraints::{AXIS_SUPPORT, Support};
 pub use loads::Schedule;
-pub use spec::{Body, Contact, LineLoad, Load, LoadKind, ModelSpec, Prescribed, load_factors};
+pub use spec::{
+    ArcLength, Body, Contact, Control, LineLoad, Load, LoadKind, ModelSpec, Prescribed,
+    load_factors,
+};
 
 use crate::assembly::{Coloring, DofMap, SparsityPattern};
 use crate::element::Analysis;
@@ -47,6 +50,10 @@ pub struct Model {
     pub nodal_loads: Vec<(usize, f64, usize)>,
     /// Load histories.
     pub schedule: Schedule,
+    /// How the steps are driven and checked.
+    pub control: Control,
+    /// Size of the model (bounding-box diagonal) in mm.
+    pub size: f64,
     pub dofs: DofMap,
     pub pattern: SparsityPattern,
 }
@@ -62,6 +69,7 @@ impl Model {
             loads,
             contacts,
             factors,
+            control,
         } = spec;
         // Interfaces first: splitting a conforming curve re-points body B's cells.
         let topologies = insert_interfaces(&mut mesh, &bodies, &contacts)?;
@@ -94,6 +102,8 @@ impl Model {
             prescribed,
             nodal_loads,
             schedule,
+            control,
+            size: scale,
             dofs,
             pattern,
         })
@@ -261,12 +271,14 @@ fn build_continuum(
     let mut owner: Vec<Option<u32>> = vec![None; mesh.cells.len()];
     let mut names: Vec<String> = Vec::new();
     let mut materials = Vec::new();
+    let mut formulations = Vec::new();
     let mut cells = Vec::new();
     for (
         b,
         Body {
             group: name,
             material,
+            formulation,
         },
     ) in bodies.into_iter().enumerate()
     {
@@ -308,9 +320,14 @@ fn build_continuum(
             let problem = GroupProblem::Empty;
             return Err(mesh.group_error("body", &name, GroupKind::Surface, problem));
         }
-        tracing::info!("body '{name}': {}", material.describe());
+        tracing::info!(
+            "body '{name}': {}, {} formulation",
+            material.describe(),
+            formulation.name()
+        );
         names.push(name);
         materials.push(material);
+        formulations.push(formulation);
     }
     for g in mesh
         .groups
@@ -328,6 +345,7 @@ fn build_continuum(
             analysis,
             cells,
             materials,
+            formulations,
         },
     ))
 }

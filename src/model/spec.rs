@@ -4,13 +4,14 @@
 //! checked before any mesh exists; [`Model::build`](super::Model::build) consumes the spec.
 
 use crate::config::{
-    AnalysisSpec, Case, ContactAlgorithmKind, Faces, IntegrationKind, LawSpec, MaterialSpec,
-    PairingKind, Steps,
+    AnalysisSpec, Case, ContactAlgorithmKind, ControlKind, Faces, FormulationKind, IntegrationKind,
+    LawSpec, MaterialSpec, PairingKind, Steps,
 };
 use crate::contact::linear::LinearCoulomb;
 use crate::contact::rough::RoughJoint;
 use crate::contact::{ContactAlgorithm, InterfaceLaw};
 use crate::element::Analysis;
+use crate::element::continuum::Formulation;
 use crate::element::interface6::InterfaceRule;
 use crate::error::ParameterError;
 use crate::material::Material;
@@ -30,13 +31,58 @@ pub struct ModelSpec {
     pub contacts: Vec<Contact>,
     /// The global load factor at the end of each step.
     pub factors: Vec<f64>,
+    /// How the steps are controlled and when a converged increment is implausible.
+    pub control: Control,
 }
 
-/// A body: a physical surface and its material.
+/// How the load steps are driven and checked (`[steps]` and the bounds of `[solver]`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Control {
+    /// Largest nodal displacement increment as a fraction of the model size.
+    pub max_displacement_increment: f64,
+    /// Largest equivalent strain increment at an integration point.
+    pub max_strain_increment: f64,
+    /// Collapse when the last converged secant stiffness Δλ/‖Δu‖ is below this fraction of
+    /// the first increment's.
+    pub collapse_stiffness_ratio: f64,
+    /// Whether some body is elasto-plastic.
+    pub plastic: bool,
+    /// Arc-length control instead of the load factors of the steps.
+    pub arc_length: Option<ArcLength>,
+}
+
+/// Settings of arc-length control (`[steps] control = "arc_length"`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ArcLength {
+    /// Load-factor increment of the first increment (sets the arc length).
+    pub initial_increment: f64,
+    pub max_increments: usize,
+    /// Stop once the load factor reaches this.
+    pub max_load_factor: f64,
+    /// Smallest and largest arc, relative to the first.
+    pub min_arc_length: f64,
+    pub max_arc_length: f64,
+}
+
+impl Default for Control {
+    fn default() -> Self {
+        let solver = crate::config::SolverSpec::default();
+        Self {
+            max_displacement_increment: solver.max_displacement_increment,
+            max_strain_increment: solver.max_strain_increment,
+            collapse_stiffness_ratio: solver.collapse_stiffness_ratio,
+            plastic: false,
+            arc_length: None,
+        }
+    }
+}
+
+/// A body: a physical surface, its material and its element formulation.
 #[derive(Debug)]
 pub struct Body {
     pub group: String,
     pub material: Box<dyn Material>,
+    pub formulation: Formulation,
 }
 
 /// Prescribed displacement components on the nodes of a physical curve or point, at load
@@ -100,24 +146,41 @@ impl ModelSpec {
                 format!("{} ({owner})", e.reason),
             )
         };
-        let bodies = case
-            .bodies
-            .iter()
-            .enumerate()
-            .map(|(i, b)| {
-                let material = build_material(&b.material).map_err(|e| {
-                    invalid(
-                        &format!("body[{i}].material"),
-                        &format!("body '{}'", b.group),
-                        e,
-                    )
-                })?;
-                Ok(Body {
-                    group: b.group.clone(),
-                    material,
+        let bodies =
+            case.bodies
+                .iter()
+                .enumerate()
+                .map(|(i, b)| {
+                    let material = build_material(&b.material).map_err(|e| {
+                        invalid(
+                            &format!("body[{i}].material"),
+                            &format!("body '{}'", b.group),
+                            e,
+                        )
+                    })?;
+                    let analysis: Analysis = case.analysis.into();
+                    let requested = b.formulation.map(|f| match f {
+                        FormulationKind::Full => Formulation::Full,
+                        FormulationKind::Bbar => Formulation::Bbar,
+                    });
+                    let plastic = b.material.yield_stress.is_some();
+                    let formulation =
+                        Formulation::for_body(requested, &analysis, plastic, b.material.nu)
+                            .map_err(|reason| {
+                                let value = requested.map_or("default", Formulation::name);
+                                case.invalid(
+                                    format!("body[{i}].formulation"),
+                                    format!("\"{value}\""),
+                                    format!("{reason} (body '{}')", b.group),
+                                )
+                            })?;
+                    Ok(Body {
+                        group: b.group.clone(),
+                        material,
+                        formulation,
+                    })
                 })
-            })
-            .collect::<Result<_>>()?;
+                .collect::<Result<_>>()?;
         let contacts = case
             .contacts
             .iter()
@@ -144,7 +207,7 @@ impl ModelSpec {
                 })
             })
             .collect::<Result<_>>()?;
-        let supports = case
+        let supports: Vec<Prescribed> = case
             .supports
             .iter()
             .map(|s| Prescribed {
@@ -153,7 +216,7 @@ impl ModelSpec {
                 factors: s.factors.clone(),
             })
             .collect();
-        let loads = case
+        let loads: Vec<Load> = case
             .loads
             .iter()
             .map(|l| {
@@ -175,6 +238,33 @@ impl ModelSpec {
                 })
             })
             .collect::<Result<_>>()?;
+        let solver = &case.solver;
+        for (key, value) in [
+            (
+                "max_displacement_increment",
+                solver.max_displacement_increment,
+            ),
+            ("max_strain_increment", solver.max_strain_increment),
+            ("collapse_stiffness_ratio", solver.collapse_stiffness_ratio),
+        ] {
+            if !(value > 0.0 && value.is_finite()) {
+                return Err(case.invalid(
+                    format!("solver.{key}"),
+                    value,
+                    "must be positive and finite",
+                ));
+            }
+        }
+        let control = Control {
+            max_displacement_increment: solver.max_displacement_increment,
+            max_strain_increment: solver.max_strain_increment,
+            collapse_stiffness_ratio: solver.collapse_stiffness_ratio,
+            plastic: case
+                .bodies
+                .iter()
+                .any(|b| b.material.yield_stress.is_some()),
+            arc_length: arc_length(case, &supports, &loads)?,
+        };
         Ok(Self {
             analysis: case.analysis.into(),
             bodies,
@@ -182,8 +272,74 @@ impl ModelSpec {
             loads,
             contacts,
             factors: load_factors(&case.steps),
+            control,
         })
     }
+}
+
+/// The arc-length settings of `[steps]`, checked, when `control = "arc_length"`: the loads
+/// must all follow the global load factor and no support may prescribe a non-zero value.
+fn arc_length(case: &Case, supports: &[Prescribed], loads: &[Load]) -> Result<Option<ArcLength>> {
+    let steps = &case.steps;
+    if steps.control != ControlKind::ArcLength {
+        return Ok(None);
+    }
+    let control = "steps.control";
+    if let Some(s) = supports
+        .iter()
+        .find(|s| s.values.iter().flatten().any(|&v| v != 0.0))
+    {
+        return Err(case.invalid(
+            control,
+            "\"arc_length\"",
+            format!(
+                "arc-length control drives forces and pressures only; support '{}' prescribes \
+                 a non-zero displacement (use load control, or a force instead)",
+                s.group
+            ),
+        ));
+    }
+    if let Some(l) = loads.iter().find(|l| l.factors.is_some()) {
+        return Err(case.invalid(
+            control,
+            "\"arc_length\"",
+            format!(
+                "under arc-length control every load follows the one load factor λ; load on '{}' \
+                 has its own factors",
+                l.group
+            ),
+        ));
+    }
+    let arc = ArcLength {
+        initial_increment: steps.initial_increment.unwrap_or(0.1),
+        max_increments: steps.max_increments.unwrap_or(100),
+        max_load_factor: steps.max_load_factor.unwrap_or(1.0),
+        min_arc_length: steps.min_arc_length.unwrap_or(1e-4),
+        max_arc_length: steps.max_arc_length.unwrap_or(10.0),
+    };
+    for (key, value) in [
+        ("initial_increment", arc.initial_increment),
+        ("max_load_factor", arc.max_load_factor),
+        ("min_arc_length", arc.min_arc_length),
+        ("max_arc_length", arc.max_arc_length),
+        ("max_increments", arc.max_increments as f64),
+    ] {
+        if !(value > 0.0 && value.is_finite()) {
+            return Err(case.invalid(format!("steps.{key}"), value, "must be positive"));
+        }
+    }
+    if arc.min_arc_length > 1.0 || arc.max_arc_length < 1.0 {
+        return Err(case.invalid(
+            "steps.min_arc_length",
+            arc.min_arc_length,
+            format!(
+                "need min_arc_length ≤ 1 ≤ max_arc_length (relative to the first arc; \
+                 max_arc_length = {})",
+                arc.max_arc_length
+            ),
+        ));
+    }
+    Ok(Some(arc))
 }
 
 /// The constitutive model of a body: linear elastic, or J2 plasticity when a yield stress
@@ -322,6 +478,7 @@ mod tests {
         let s = Steps {
             count: Some(4),
             factors: None,
+            ..Steps::default()
         };
         assert_eq!(load_factors(&s), vec![0.25, 0.5, 0.75, 1.0]);
         assert_eq!(spec(CASE).unwrap().factors, vec![1.0]);

@@ -120,7 +120,8 @@ impl CholeskySolver {
             .map_err(|_| {
                 Error::Linear(
                     "the stiffness matrix is not positive definite: a body is not supported against rigid-body \
-                     motion (check the supports), or the tangent lost definiteness"
+                     motion (check the supports), or the tangent lost definiteness (in a plastic model: a plastic \
+                     collapse mechanism, the load exceeding the limit load)"
                         .into(),
                 )
             })?;

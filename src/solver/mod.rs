@@ -2,6 +2,7 @@
 //! ([`newton`]), the mechanical problem it solves ([`mechanics`]) and the load stepping that
 //! drives it ([`stepping`]).
 
+pub mod arclength;
 pub mod condensed;
 pub mod linear;
 pub mod mechanics;
