@@ -124,7 +124,7 @@ pub enum Error {
     /// A load step did not converge, even after cutting it back.
     #[error("{0}")]
     NoConvergence(Box<NoConvergence>),
-    /// A step could not be completed because the structure collapsed (issue 17): the load
+    /// A step could not be completed because the structure collapsed: the load
     /// exceeds what it can carry. The converged steps before it have been written.
     #[error(
         "plastic collapse in step {step}: the load factor cannot exceed ≈ {converged_load_factor:.6} \

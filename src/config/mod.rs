@@ -421,7 +421,7 @@ pub struct SolverSpec {
     /// BiCGSTAB preconditioned with the elastic contact matrix for unsymmetric tangents).
     #[serde(default)]
     pub linear_solver: LinearSolverKind,
-    // --- plausibility of a converged increment and collapse detection (issue 17) ----------
+    // --- plausibility of a converged increment and collapse detection ----------
     /// Largest nodal displacement increment of a converged increment, as a fraction of the
     /// model size (bounding-box diagonal); a larger one is a failed increment (cut back).
     #[serde(default = "default_max_displacement_increment")]

@@ -14,7 +14,7 @@
 //!
 //! Why: fully integrated quadratic elements *lock* when the material is (nearly)
 //! incompressible — isochoric plastic flow, ν → ½ — because the 9 (6) volumetric constraints
-//! per cell leave the mesh too few isochoric displacement fields. Measured (issue 17): a
+//! per cell leave the mesh too few isochoric displacement fields. Measured: a
 //! perfectly plastic thick cylinder (b/a = 2, ε_z = 0) under 1.05 p_L "converges" with full
 //! integration to bore displacements of 7.7 mm, 117 mm and 1.8 m on 4, 8 and 16 quad8 through
 //! the wall (tri6: 22 mm to 10 m), where no equilibrium exists; with B-bar Newton fails above

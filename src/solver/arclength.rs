@@ -1,4 +1,4 @@
-//! Arc-length (Riks–Crisfield, cylindrical) control of the load factor (issue 17 item 3):
+//! Arc-length (Riks–Crisfield, cylindrical) control of the load factor:
 //! `[steps] control = "arc_length"`. The load is λ f_ref (f_ref: the case's loads at factor 1)
 //! and each increment is constrained to a displacement "arc" ‖Δu‖ = Δl (Crisfield 1981,
 //! cylindrical: no load term), so the load factor λ is an unknown and the path can be

@@ -269,7 +269,7 @@ pub fn distance(a: &[f64], b: &[f64]) -> f64 {
 /// small-strain theory, if it is: a nodal displacement increment larger than
 /// `[solver] max_displacement_increment` × the model size, or an equivalent strain increment
 /// √(⅔ Δε:Δε) larger than `[solver] max_strain_increment` at an integration point. Such an
-/// "equilibrium" is a locked mesh or a mechanism, not an answer (issue 17).
+/// "equilibrium" is a locked mesh or a mechanism, not an answer.
 pub fn implausible_increment(
     model: &Model,
     solution: &Solution,
