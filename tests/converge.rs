@@ -22,6 +22,7 @@ fn criteria(reference: Option<f64>, tolerance: f64, min_order: Option<f64>) -> C
         reference,
         tolerance,
         min_order,
+        noise: asperity::study::ROUND_OFF,
     }
 }
 

@@ -10,14 +10,20 @@ pub struct Criteria {
     pub reference: Option<f64>,
     pub tolerance: f64,
     pub min_order: Option<f64>,
+    /// Relative size of differences that cannot be told from solver error: the larger of
+    /// round-off ([`ROUND_OFF`]) and the Newton force tolerance the levels were solved to.
+    pub noise: f64,
 }
 
-impl From<&QuantitySpec> for Criteria {
-    fn from(q: &QuantitySpec) -> Self {
+impl Criteria {
+    /// The criteria of quantity `q` of levels solved to the relative force tolerance
+    /// `force_tolerance`.
+    pub fn new(q: &QuantitySpec, force_tolerance: f64) -> Self {
         Self {
             reference: q.reference,
             tolerance: q.tolerance,
             min_order: q.min_order,
+            noise: ROUND_OFF.max(force_tolerance),
         }
     }
 }
@@ -64,7 +70,7 @@ pub fn analyse(q: &[f64], h: &[f64], ratio: f64, criteria: &Criteria) -> Converg
     let n = q.len();
     let d: Vec<f64> = q.windows(2).map(|w| w[1] - w[0]).collect();
     let scale = q.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-    let floor = ROUND_OFF * scale;
+    let floor = criteria.noise * scale;
     let (qf, dc, df) = (q[n - 1], d[n - 3], d[n - 2]);
     let mut c = Convergence {
         values: q.to_vec(),

@@ -19,8 +19,10 @@
 //!
 //! A quantity whose differences do not decrease (p ≤ 0 or not finite), or grow anywhere
 //! along the levels (|d_{k+1}| > |d_k|), is *not converged*.
-//! Differences below 1e-10 of the values are round-off: such a quantity is exact on every
-//! level (an order cannot be measured and is not checked).
+//! Differences below 1e-10 of the values, or below the Newton force tolerance the levels were
+//! solved to (`[solver] force_tolerance`, relative), cannot be told from round-off and solver
+//! error: such a quantity is exact on every level (an order cannot be measured and is not
+//! checked).
 //!
 //! ## Checks (exit status)
 //! A quantity passes when it converges, the relative change |d_f| / |q_f| between the two
@@ -192,7 +194,12 @@ pub fn run(case: &Case, options: &Options) -> Result<Report> {
     let analyses = (0..quantities.len())
         .map(|i| {
             let q: Vec<f64> = levels.iter().map(|l| l.values[i]).collect();
-            analyse(&q, &h, options.ratio, &Criteria::from(&quantities[i]))
+            analyse(
+                &q,
+                &h,
+                options.ratio,
+                &Criteria::new(&quantities[i], case.solver.force_tolerance),
+            )
         })
         .collect();
     let mut report = Report {
