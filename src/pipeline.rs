@@ -260,13 +260,6 @@ pub fn newton_settings(spec: &SolverSpec) -> NewtonSettings {
     }
 }
 
-/// Lets callers that hold a case write `NewtonSettings::from(case.solver)`.
-impl From<SolverSpec> for NewtonSettings {
-    fn from(spec: SolverSpec) -> Self {
-        newton_settings(&spec)
-    }
-}
-
 // --- summary.json ---------------------------------------------------------------------------
 
 /// Records the analysis and size of the built `model` in `summary`.
