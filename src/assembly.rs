@@ -315,6 +315,14 @@ impl<T> SharedMut<T> {
     }
 }
 
+/// A dense block receiving element tangents: its values and the scatter map of the elements'
+/// dofs into it.
+#[derive(Debug)]
+pub struct DenseBlock<'a> {
+    pub values: MatMut<'a, f64>,
+    pub map: &'a DenseScatter,
+}
+
 impl GlobalSystem {
     /// Zeroed system over `pattern` with `dof_count` total dofs.
     pub fn new(pattern: SparsityPattern, dof_count: usize) -> Self {
@@ -372,9 +380,8 @@ impl GlobalSystem {
     }
 
     /// Adds the internal forces of every element of `set` into this system and, if
-    /// `input.tangent`, their tangents into the dense `block` through `map` (entries outside
-    /// the block are dropped: `map` must cover every free dof of the elements).
-    #[allow(clippy::too_many_arguments)]
+    /// `input.tangent`, their tangents into `dense` (entries outside the block are dropped:
+    /// its map must cover every free dof of the elements).
     pub fn assemble_dense<S: ElementSet>(
         &mut self,
         input: &AssemblyInput,
@@ -382,9 +389,9 @@ impl GlobalSystem {
         coloring: &Coloring,
         committed: &[S::State],
         trial: &mut [S::State],
-        block: MatMut<'_, f64>,
-        map: &DenseScatter,
+        dense: DenseBlock<'_>,
     ) {
+        let DenseBlock { values: block, map } = dense;
         assert_eq!(map.map.len(), set.len() * DenseScatter::STRIDE);
         let stride = block.col_stride();
         assert!(block.row_stride() == 1 && stride >= block.nrows() as isize);

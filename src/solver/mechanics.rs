@@ -4,7 +4,9 @@
 
 use faer::MatMut;
 
-use crate::assembly::{AssemblyInput, DenseScatter, DofMap, GlobalSystem, SparsityPattern};
+use crate::assembly::{
+    AssemblyInput, DenseBlock, DenseScatter, DofMap, GlobalSystem, SparsityPattern,
+};
 use crate::contact::{ContactAlgorithm, InterfaceState};
 use crate::element::interface6::evaluate_interface;
 use crate::element::set::{ElementSet, INTERFACE_POINTS, InterfaceSet};
@@ -150,8 +152,7 @@ impl Problem for Mechanics<'_> {
             &m.interface_coloring,
             ic,
             it,
-            block,
-            map,
+            DenseBlock { values: block, map },
         );
         !it.iter().any(InterfaceState::has_unsymmetric_tangent)
     }

@@ -70,51 +70,39 @@ pub trait Problem {
     /// trial states. Returns whether the tangent is symmetric.
     fn assemble(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) -> bool;
 
-    /// The free equations of the interface elements' nodes, sorted: empty (the default) if
-    /// the problem has no interface, which keeps it off the condensed path. The methods
-    /// below are called only when it is not empty.
-    fn interface_equations(&self, _dofs: &DofMap) -> Vec<usize> {
-        Vec::new()
-    }
+    /// The free equations of the interface elements' nodes, sorted: empty if the problem has
+    /// no interface, which keeps it off the condensed path. The methods below are called only
+    /// when it is not empty.
+    fn interface_equations(&self, dofs: &DofMap) -> Vec<usize>;
 
     /// Whether the bulk (continuum) is linear: constant tangent, internal force K_c · u.
-    fn bulk_is_linear(&self) -> bool {
-        false
-    }
+    fn bulk_is_linear(&self) -> bool;
 
     /// The pattern of the bulk's elements over the equations of `dofs` (for a linear bulk,
     /// whose stiffness over all dofs then gives its internal force, reactions included).
-    fn bulk_pattern(&self, _dofs: &DofMap) -> SparsityPattern {
-        unimplemented!("a problem with a linear bulk gives its pattern")
-    }
+    fn bulk_pattern(&self, dofs: &DofMap) -> SparsityPattern;
 
     /// The scatter map of the interface elements into the dense interface block, `local`
     /// giving the block index of a free equation.
     fn interface_scatter(
         &self,
-        _dofs: &DofMap,
-        _local: &dyn Fn(usize) -> Option<usize>,
-    ) -> DenseScatter {
-        unimplemented!("a problem with interface equations scatters its interface")
-    }
+        dofs: &DofMap,
+        local: &dyn Fn(usize) -> Option<usize>,
+    ) -> DenseScatter;
 
     /// Adds the bulk's internal force (and, if `input.tangent`, its tangent) into `system`.
-    fn assemble_bulk(&mut self, _system: &mut GlobalSystem, _input: &AssemblyInput) {
-        unimplemented!("a problem with interface equations assembles its bulk")
-    }
+    fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput);
 
     /// Adds the interface's internal force into `system` and, if `input.tangent`, its
     /// tangent into the dense interface `block` through `map`. Returns whether that tangent
     /// is symmetric.
     fn assemble_interface(
         &mut self,
-        _system: &mut GlobalSystem,
-        _input: &AssemblyInput,
-        _block: MatMut<'_, f64>,
-        _map: &DenseScatter,
-    ) -> bool {
-        unimplemented!("a problem with interface equations assembles its interface")
-    }
+        system: &mut GlobalSystem,
+        input: &AssemblyInput,
+        block: MatMut<'_, f64>,
+        map: &DenseScatter,
+    ) -> bool;
 }
 
 /// The condensed path's solver and workspaces (made at the first increment of a problem with
