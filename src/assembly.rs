@@ -211,18 +211,6 @@ impl SparsityPattern {
     pub fn symbolic(&self) -> &SymbolicSparseColMat<u32> {
         &self.symbolic
     }
-
-    /// Position in the value array of entry (`row`, `col`); the pattern guarantees it exists
-    /// for any two dofs of one element.
-    #[inline]
-    fn position(&self, row: usize, col: usize) -> usize {
-        let cp = self.symbolic.col_ptr();
-        let (a, b) = (cp[col] as usize, cp[col + 1] as usize);
-        let rows = &self.symbolic.row_idx()[a..b];
-        a + rows
-            .binary_search(&(row as u32))
-            .expect("entry of an element's dofs is in the pattern")
-    }
 }
 
 /// Marker for a dof outside the dense block in [`DenseScatter`].
@@ -295,6 +283,18 @@ pub struct GlobalSystem {
     /// Values of a symmetric positive-definite approximation of an unsymmetric tangent, used
     /// to precondition its solution (see [`GlobalSystem::assemble_preconditioner`]).
     pub preconditioner: Vec<f64>,
+    /// The constant part of the tangent of [`GlobalSystem::assemble_reusing`], made by its
+    /// first call.
+    reference: Option<Reference>,
+}
+
+/// The sum of the reference (elastic) matrices of the elements whose tangent is their
+/// reference one ("frozen"), kept between assemblies so that those elements need not be
+/// re-evaluated for the tangent nor scattered (see [`GlobalSystem::assemble_reusing`]).
+#[derive(Clone, Debug)]
+struct Reference {
+    values: Vec<f64>,
+    frozen: Vec<bool>,
 }
 
 /// A raw pointer that may be shared between threads; writes through it are made disjoint by
@@ -332,6 +332,7 @@ impl GlobalSystem {
             values: vec![0.0; nnz],
             internal_force: vec![0.0; dof_count],
             preconditioner: Vec::new(),
+            reference: None,
         }
     }
 
@@ -367,6 +368,7 @@ impl GlobalSystem {
             values: input.tangent.then_some(SharedMut(self.values.as_mut_ptr())),
             force: Some(SharedMut(self.internal_force.as_mut_ptr())),
             dense: None,
+            reference: None,
         };
         scatter(
             &self.pattern,
@@ -377,6 +379,65 @@ impl GlobalSystem {
             trial,
             targets,
         );
+    }
+
+    /// [`Self::assemble`] for a set whose elements' tangent is, most of the time, a constant
+    /// reference matrix (elastic elements of a plastic body: every point that did not yield
+    /// has the elastic tangent, see [`ElementSet::tangent_is_reference`]). The sum of the
+    /// reference matrices of such ("frozen") elements is kept in this system: a tangent
+    /// assembly adds it and then evaluates frozen elements for their forces and states only;
+    /// an element leaves the sum when a point yields and joins it when its tangent is the
+    /// reference one again. The result equals [`Self::assemble`]'s up to the rounding of
+    /// the kept sum. Meant for one set per system (the sum is reset if another set's size
+    /// is seen); the first call allocates the sum (one value array) and the flags.
+    pub fn assemble_reusing<S: ElementSet>(
+        &mut self,
+        input: &AssemblyInput,
+        set: &S,
+        coloring: &Coloring,
+        committed: &[S::State],
+        trial: &mut [S::State],
+    ) {
+        if !input.tangent {
+            return self.assemble(input, set, coloring, committed, trial);
+        }
+        let nnz = self.values.len();
+        let reference = match &mut self.reference {
+            Some(r) if r.frozen.len() == set.len() && r.values.len() == nnz => r,
+            slot => slot.insert(Reference {
+                values: vec![0.0; nnz],
+                frozen: vec![false; set.len()],
+            }),
+        };
+        for (v, r) in self.values.iter_mut().zip(&reference.values) {
+            *v += r;
+        }
+        let targets = Targets {
+            values: Some(SharedMut(self.values.as_mut_ptr())),
+            force: Some(SharedMut(self.internal_force.as_mut_ptr())),
+            dense: None,
+            reference: Some(Frozen {
+                values: SharedMut(reference.values.as_mut_ptr()),
+                frozen: SharedMut(reference.frozen.as_mut_ptr()),
+            }),
+        };
+        scatter(
+            &self.pattern,
+            input,
+            set,
+            coloring,
+            committed,
+            trial,
+            targets,
+        );
+    }
+
+    /// Number of elements whose reference matrix [`Self::assemble_reusing`] keeps in its sum
+    /// (frozen: not re-evaluated for the tangent).
+    pub fn frozen_elements(&self) -> usize {
+        self.reference
+            .as_ref()
+            .map_or(0, |r| r.frozen.iter().filter(|&&f| f).count())
     }
 
     /// Adds the internal forces of every element of `set` into this system and, if
@@ -403,6 +464,7 @@ impl GlobalSystem {
                 col_stride: stride as usize,
                 map,
             }),
+            reference: None,
         };
         scatter(
             &self.pattern,
@@ -432,6 +494,7 @@ impl GlobalSystem {
             values: Some(SharedMut(self.preconditioner.as_mut_ptr())),
             force: None,
             dense: None,
+            reference: None,
         };
         scatter(
             &self.pattern,
@@ -452,6 +515,15 @@ struct Targets<'m> {
     values: Option<SharedMut<f64>>,
     force: Option<SharedMut<f64>>,
     dense: Option<Dense<'m>>,
+    reference: Option<Frozen>,
+}
+
+/// The kept sum of frozen elements' reference matrices and the per-element flags of
+/// [`GlobalSystem::assemble_reusing`].
+#[derive(Clone, Copy)]
+struct Frozen {
+    values: SharedMut<f64>,
+    frozen: SharedMut<bool>,
 }
 
 /// A dense column-major block and the map of the elements' dofs into it.
@@ -460,6 +532,60 @@ struct Dense<'m> {
     values: SharedMut<f64>,
     col_stride: usize,
     map: &'m DenseScatter,
+}
+
+/// Adds `sign` · `ke` over the free dofs of the element with nodes `nodes` into the value
+/// array `values` over `pattern`.
+///
+/// One binary search per pair of nodes (not per pair of dofs): by construction of
+/// [`SparsityPattern`] the free dofs of a node have consecutive equation numbers, so they
+/// are adjacent rows of every column, and the columns of a node's dofs have the same rows.
+///
+/// # Safety
+/// `values` must point to a value array over `pattern` that no other thread writes at the
+/// entries of this element's dofs.
+unsafe fn add_element_matrix(
+    pattern: &SparsityPattern,
+    dofs: &DofMap,
+    nodes: &[u32],
+    ke: &ElementMatrix,
+    sign: f64,
+    values: *mut f64,
+) {
+    let (cp, ri) = (pattern.symbolic.col_ptr(), pattern.symbolic.row_idx());
+    let mut equations = [None; 16];
+    for (a, eq) in equations.iter_mut().enumerate().take(2 * nodes.len()) {
+        *eq = dofs.equation(2 * nodes[a / 2] as usize + a % 2);
+    }
+    // The first free dof of each node, as (component, equation).
+    let first = |n: usize| (0..2).find_map(|c| equations[2 * n + c].map(|eq| (c, eq)));
+    for b in 0..nodes.len() {
+        let Some((cb0, j0)) = first(b) else { continue };
+        let start = cp[j0] as usize;
+        let rows = &ri[start..cp[j0 + 1] as usize];
+        for a in 0..nodes.len() {
+            let Some((ca0, r0)) = first(a) else { continue };
+            let p0 = start
+                + rows
+                    .binary_search(&(r0 as u32))
+                    .expect("entry of an element's dofs is in the pattern");
+            for cb in cb0..2 {
+                let Some(j) = equations[2 * b + cb] else {
+                    continue;
+                };
+                let p0 = p0 - start + cp[j] as usize;
+                for ca in ca0..2 {
+                    let Some(r) = equations[2 * a + ca] else {
+                        continue;
+                    };
+                    let p = p0 + (r - r0);
+                    debug_assert_eq!(ri[p] as usize, r);
+                    // SAFETY: the caller's contract.
+                    unsafe { *values.add(p) += sign * ke[(2 * a + ca, 2 * b + cb)] };
+                }
+            }
+        }
+    }
 }
 
 /// Evaluates every element of `set` (colour by colour, in parallel within a colour) and adds
@@ -478,6 +604,7 @@ fn scatter<S: ElementSet>(
         values,
         force,
         dense,
+        reference,
     } = targets;
     let AssemblyInput {
         dofs, u, algorithm, ..
@@ -493,18 +620,21 @@ fn scatter<S: ElementSet>(
             ue[2 * a] = u[2 * n as usize];
             ue[2 * a + 1] = u[2 * n as usize + 1];
         }
-        let mut ke = ElementMatrix::zeros();
-        let mut fe = ElementVector::zeros();
-        // SAFETY: every element is evaluated exactly once, and its state slots are its own.
+        // SAFETY: every element is evaluated exactly once, and its state slots (and its
+        // frozen flag) are its own.
         let trial_e = unsafe { std::slice::from_raw_parts_mut(states.get().add(e * ppe), ppe) };
+        let frozen = reference.map(|r| unsafe { &mut *r.frozen.get().add(e) });
+        let was_frozen = frozen.as_deref().copied().unwrap_or(false);
         let element_input = ElementInput {
             u: &ue,
             committed: &committed[e * ppe..(e + 1) * ppe],
             algorithm,
         };
+        let mut ke = ElementMatrix::zeros();
+        let mut fe = ElementVector::zeros();
         let output = ElementOutput {
-            trial: trial_e,
-            k: (values.is_some() || dense.is_some()).then_some(&mut ke),
+            trial: &mut *trial_e,
+            k: ((values.is_some() || dense.is_some()) && !was_frozen).then_some(&mut ke),
             f: &mut fe,
         };
         set.evaluate(e, &element_input, output);
@@ -539,17 +669,38 @@ fn scatter<S: ElementSet>(
             }
         }
         let Some(values) = values else { return };
-        for b in 0..2 * nodes.len() {
-            let Some(col) = dofs.equation(global(b)) else {
-                continue;
-            };
-            for a in 0..2 * nodes.len() {
-                if let Some(row) = dofs.equation(global(a)) {
-                    // SAFETY: as above; (row, col) belong to this element's dofs only.
-                    unsafe { *values.get().add(pattern.position(row, col)) += ke[(a, b)] };
+        if let (Some(r), Some(frozen)) = (reference, frozen) {
+            let is_reference = set.tangent_is_reference(trial_e);
+            match (was_frozen, is_reference) {
+                // The kept sum already holds this element's tangent.
+                (true, true) => return,
+                // A point yielded: the element leaves the sum, its tangent is added.
+                (true, false) => {
+                    let output = ElementOutput {
+                        trial: &mut *trial_e,
+                        k: Some(&mut ke),
+                        f: &mut ElementVector::zeros(),
+                    };
+                    set.evaluate(e, &element_input, output);
+                    let mut kr = ElementMatrix::zeros();
+                    set.reference_tangent(e, &mut kr);
+                    // SAFETY: as above.
+                    unsafe { add_element_matrix(pattern, dofs, nodes, &kr, -1.0, r.values.get()) };
+                    ke -= kr;
+                    *frozen = false;
                 }
+                // Its tangent is the reference one: it joins the sum.
+                (false, true) => {
+                    // SAFETY: as above.
+                    unsafe { add_element_matrix(pattern, dofs, nodes, &ke, 1.0, r.values.get()) };
+                    *frozen = true;
+                }
+                (false, false) => {}
             }
         }
+        // SAFETY: as above; the entries of this element's dofs are written by no other
+        // element of its colour.
+        unsafe { add_element_matrix(pattern, dofs, nodes, &ke, 1.0, values.get()) };
     };
     let last = coloring.groups.len().saturating_sub(1);
     for (c, group) in coloring.groups.iter().enumerate() {
@@ -561,5 +712,129 @@ fn scatter<S: ElementSet>(
                 .with_min_len(64)
                 .for_each(|&e| element(e as usize));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::element::Analysis;
+    use crate::element::continuum::Formulation;
+    use crate::element::set::{ContinuumCell, ContinuumSet};
+    use crate::material::PointState;
+    use crate::material::elastic::LinearElastic;
+    use crate::material::j2::J2Plasticity;
+    use crate::mesh::CellKind;
+
+    /// An `nx` × `ny` grid of unit quad8 cells of a J2 material in plane strain, held at
+    /// its bottom, with its node count.
+    fn plastic_block(nx: usize, ny: usize) -> (ContinuumSet, usize, Vec<bool>) {
+        // Nodes on the (2nx+1) × (2ny+1) lattice of half-cells; mid-cell nodes unused.
+        let row = 2 * nx + 1;
+        let node = |i: usize, j: usize| (j * row + i) as u32;
+        let mut cells = Vec::new();
+        for cj in 0..ny {
+            for ci in 0..nx {
+                let (i, j) = (2 * ci, 2 * cj);
+                let lattice = [
+                    (i, j),
+                    (i + 2, j),
+                    (i + 2, j + 2),
+                    (i, j + 2),
+                    (i + 1, j),
+                    (i + 2, j + 1),
+                    (i + 1, j + 2),
+                    (i, j + 1),
+                ];
+                let nodes = lattice.map(|(i, j)| node(i, j));
+                // A slightly distorted cell, so that the points' stresses differ.
+                let coords =
+                    lattice.map(|(i, j)| [i as f64 / 2.0 + 0.03 * j as f64, j as f64 / 2.0]);
+                cells.push(ContinuumCell {
+                    kind: CellKind::Quad8,
+                    nodes,
+                    coords,
+                    body: 0,
+                    mesh_cell: cells.len() as u32,
+                });
+            }
+        }
+        let node_count = row * (2 * ny + 1);
+        let mut fixed = vec![false; 2 * node_count];
+        for i in 0..row {
+            fixed[2 * i] = true;
+            fixed[2 * i + 1] = true;
+        }
+        let elastic = LinearElastic::new(1000.0, 0.3).unwrap();
+        let set = ContinuumSet {
+            analysis: Analysis::PlaneStrain { thickness: 1.0 },
+            cells,
+            materials: vec![Box::new(J2Plasticity::new(elastic, 1.0, 50.0).unwrap())],
+            formulations: vec![Formulation::Full],
+        };
+        (set, node_count, fixed)
+    }
+
+    #[test]
+    fn reusing_assembly_equals_plain_assembly_while_cells_yield_and_unload() {
+        let (set, node_count, fixed) = plastic_block(4, 3);
+        let dofs = DofMap::new(&fixed);
+        let connectivity = (0..set.len()).map(|e| set.nodes(e));
+        let pattern = SparsityPattern::new(node_count, &dofs, connectivity);
+        let coloring = Coloring::new(&set, node_count);
+        let mut plain = GlobalSystem::new(pattern.clone(), dofs.dof_count());
+        let mut reusing = GlobalSystem::new(pattern, dofs.dof_count());
+        let points = set.len() * set.points_per_element();
+        let committed = vec![PointState::default(); points];
+        let (mut trial_a, mut trial_b) = (committed.clone(), committed.clone());
+        // A shear growing towards the right (γ = a (1 + x/4)): cells yield from the right
+        // as the amplitude a grows (pure shear yields at γ = √3 σ_Y / (3G) = 1.5e-3), and
+        // every point is elastic again at the small amplitudes (unloading).
+        let width = 4.0;
+        let mut u = vec![0.0; dofs.dof_count()];
+        let mut frozen = Vec::new();
+        for amplitude in [1e-5, 0.9e-3, 1.2e-3, 1.4e-3, 1e-5, 1.2e-3, 0.0] {
+            for n in 0..node_count {
+                let (i, j) = (n % 9, n / 9);
+                let (x, y) = (i as f64 / 2.0, j as f64 / 2.0);
+                u[2 * n] = amplitude * y * (1.0 + x / width);
+                u[2 * n + 1] = -0.3 * amplitude * y * x / width;
+            }
+            let input = AssemblyInput {
+                dofs: &dofs,
+                u: &u,
+                tangent: true,
+                algorithm: Default::default(),
+            };
+            plain.clear(true);
+            plain.assemble(&input, &set, &coloring, &committed, &mut trial_a);
+            reusing.clear(true);
+            reusing.assemble_reusing(&input, &set, &coloring, &committed, &mut trial_b);
+            assert_eq!(trial_a, trial_b);
+            assert_eq!(plain.internal_force, reusing.internal_force);
+            let scale = plain.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let difference = plain
+                .values
+                .iter()
+                .zip(&reusing.values)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            assert!(
+                difference <= 1e-13 * scale,
+                "amplitude {amplitude}: {difference:e}"
+            );
+            let yielded = (0..set.len())
+                .filter(|&e| trial_a[e * 9..(e + 1) * 9].iter().any(|s| s.yielding))
+                .count();
+            assert_eq!(reusing.frozen_elements(), set.len() - yielded);
+            frozen.push(reusing.frozen_elements());
+        }
+        // Elastic, partly plastic (more cells at larger amplitudes), elastic again.
+        assert_eq!(frozen[0], set.len());
+        assert!(
+            set.len() > frozen[1] && frozen[1] > frozen[2] && frozen[2] > frozen[3],
+            "{frozen:?}"
+        );
+        assert_eq!(frozen[4], set.len());
+        assert_eq!(frozen[6], set.len());
     }
 }

@@ -4,7 +4,7 @@
 use super::continuum::{Formulation, evaluate_cell};
 use super::interface6::{InterfaceElement, evaluate_interface};
 use super::quadrature::MAX_CELL_POINTS;
-use super::{Analysis, ElementInput, ElementOutput};
+use super::{Analysis, ElementInput, ElementMatrix, ElementOutput, ElementVector};
 use crate::contact::{InterfaceLaw, InterfaceState};
 use crate::material::{Material, PointState};
 use crate::mesh::CellKind;
@@ -37,6 +37,21 @@ pub trait ElementSet: Sync {
         input: &ElementInput<Self::State>,
         output: ElementOutput<Self::State>,
     );
+
+    /// Whether the tangent of an element whose evaluation produced the trial states `trial`
+    /// is its constant reference matrix ([`Self::reference_tangent`]), bit for bit — e.g. a
+    /// cell none of whose points yielded has its elastic stiffness. Lets assembly keep such
+    /// elements' matrices instead of re-evaluating them
+    /// ([`GlobalSystem::assemble_reusing`](crate::assembly::GlobalSystem::assemble_reusing)).
+    /// Default: never (the set has no reference matrix).
+    fn tangent_is_reference(&self, _trial: &[Self::State]) -> bool {
+        false
+    }
+
+    /// Adds the reference matrix of element `e` (see [`Self::tangent_is_reference`]) to `k`.
+    /// Called only for sets whose [`Self::tangent_is_reference`] can be true; the default
+    /// adds nothing, matching the default "never".
+    fn reference_tangent(&self, _e: usize, _k: &mut ElementMatrix) {}
 }
 
 /// A continuum cell of the model with its node coordinates copied in (so assembly reads one
@@ -97,6 +112,29 @@ impl ElementSet for ContinuumSet {
             input,
             output,
         );
+    }
+
+    /// A point that did not yield got its material's elastic tangent (the [`Material`]
+    /// contract of [`PointState::yielding`]).
+    fn tangent_is_reference(&self, trial: &[PointState]) -> bool {
+        !trial.iter().any(|s| s.yielding)
+    }
+
+    /// The elastic stiffness: the tangent at zero displacement from virgin states.
+    fn reference_tangent(&self, e: usize, k: &mut ElementMatrix) {
+        let virgin = [PointState::default(); MAX_CELL_POINTS];
+        let mut scratch = virgin;
+        let input = ElementInput {
+            u: &ElementVector::zeros(),
+            committed: &virgin,
+            algorithm: Default::default(),
+        };
+        let output = ElementOutput {
+            trial: &mut scratch,
+            k: Some(k),
+            f: &mut ElementVector::zeros(),
+        };
+        self.evaluate(e, &input, output);
     }
 }
 

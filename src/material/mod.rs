@@ -39,7 +39,11 @@ pub struct PointState {
     pub plastic_strain: Voigt,
     /// Accumulated equivalent plastic strain ε̄ᵖ = ∫ √(2/3 dεᵖ:dεᵖ).
     pub equivalent_plastic_strain: f64,
-    /// Whether the point yielded in the step that produced this state.
+    /// Whether the point yielded in the step that produced this state. A state with
+    /// `yielding == false` must have come with the material's elastic tangent, the one of an
+    /// update at zero strain from the default state (assembly keeps the matrices of cells
+    /// none of whose points yielded, see
+    /// [`ElementSet::tangent_is_reference`](crate::element::set::ElementSet::tangent_is_reference)).
     pub yielding: bool,
 }
 

@@ -1,8 +1,11 @@
 //! Sparse symmetric positive-definite solves with faer's supernodal Cholesky.
 //!
 //! The fill-reducing ordering and symbolic factorisation are computed once per sparsity
-//! pattern ([`CholeskySolver::new`]); every Newton iteration then only refactors numerically
-//! into the same factor storage with the same workspace ([`CholeskySolver::factorize`]).
+//! pattern, by the first [`CholeskySolver::factorize`] (not by [`CholeskySolver::new`]: a
+//! contact model solved by the condensed solver never factors the whole pattern, and at a
+//! million unknowns the unused analysis cost seconds and the factor storage hundreds of
+//! megabytes); every later factorisation only refactors numerically into the same factor
+//! storage with the same workspace.
 //! faer's high-level API would allocate a fresh workspace on every call (about 1.3 GB at a
 //! million unknowns, measured), so the low-level API is used with a buffer kept here.
 //!
@@ -22,10 +25,10 @@ use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::matrix_free::bicgstab::{BicgParams, bicgstab, bicgstab_scratch};
 use faer::matrix_free::{IdentityPrecond, InitialGuessStatus, LinOp, Precond};
-use faer::sparse::SparseColMatRef;
 use faer::sparse::linalg::cholesky::{
     LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
 };
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, Mat, MatMut, MatRef, Par, Side};
 
 use crate::assembly::SparsityPattern;
@@ -33,15 +36,50 @@ use crate::{Error, Result};
 
 /// Cholesky factorisation of matrices sharing one sparsity pattern.
 pub struct CholeskySolver {
-    symbolic: SymbolicCholesky<u32>,
-    factor: Vec<f64>,
-    workspace: MemBuffer,
+    /// Size of the pattern the solver was made for.
+    n: usize,
+    /// Symbolic factorisation, factor storage and workspace, made by the first factorisation.
+    analysis: Option<Analysis>,
     /// BiCGSTAB's workspace, made by the first unsymmetric solve: runs whose tangent stays
     /// symmetric (no slipping point) never pay for it.
     krylov: Option<KrylovWorkspace>,
     par: Par,
     factorized: bool,
     symbolic_seconds: f64,
+}
+
+/// The pattern-dependent part of the solver: ordering and symbolic factorisation, the numeric
+/// factor's storage and the workspace of factorisations and solves.
+struct Analysis {
+    symbolic: SymbolicCholesky<u32>,
+    factor: Vec<f64>,
+    workspace: MemBuffer,
+}
+
+impl Analysis {
+    /// Orders (AMD) and symbolically factors the lower triangle of `pattern`, and allocates
+    /// the factor and the workspace for numeric factorisation and solves.
+    fn new(pattern: SymbolicSparseColMatRef<'_, u32>, par: Par) -> Result<Self> {
+        let symbolic = factorize_symbolic_cholesky(
+            pattern,
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            Default::default(),
+        )
+        .map_err(|e| Error::Linear(format!("symbolic Cholesky factorisation failed: {e:?}")))?;
+        let req = StackReq::any_of(&[
+            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(1, par),
+        ]);
+        let workspace = MemBuffer::try_new(req)
+            .map_err(|_| Error::Linear("out of memory for the factorisation workspace".into()))?;
+        let factor = vec![0.0; symbolic.len_val()];
+        Ok(Self {
+            symbolic,
+            factor,
+            workspace,
+        })
+    }
 }
 
 /// Scratch memory of BiCGSTAB (sized for its requirement `req`) and its solution vector.
@@ -54,51 +92,36 @@ struct KrylovWorkspace {
 impl std::fmt::Debug for CholeskySolver {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("CholeskySolver")
-            .field("n", &self.symbolic.nrows())
-            .field("factor_nnz", &self.factor.len())
+            .field("n", &self.n)
+            .field("factor_nnz", &self.factor_nnz())
             .finish()
     }
 }
 
 impl CholeskySolver {
-    /// Orders (AMD) and symbolically factors the lower triangle of `pattern`, and allocates
-    /// the factor and the workspace for numeric factorisation and solves.
+    /// A solver for matrices with the pattern `pattern`. The ordering, the symbolic
+    /// factorisation and the storage are made by the first [`Self::factorize`].
     pub fn new(pattern: &SparsityPattern) -> Result<Self> {
-        let t = std::time::Instant::now();
-        let symbolic = factorize_symbolic_cholesky(
-            pattern.symbolic().as_ref(),
-            Side::Lower,
-            SymmetricOrdering::Amd,
-            Default::default(),
-        )
-        .map_err(|e| Error::Linear(format!("symbolic Cholesky factorisation failed: {e:?}")))?;
-        let par = Par::rayon(0);
-        let req = StackReq::any_of(&[
-            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1, par),
-        ]);
-        let workspace = MemBuffer::try_new(req)
-            .map_err(|_| Error::Linear("out of memory for the factorisation workspace".into()))?;
-        let factor = vec![0.0; symbolic.len_val()];
         Ok(Self {
-            symbolic,
-            factor,
-            workspace,
+            n: pattern.size(),
+            analysis: None,
             krylov: None,
-            par,
+            par: Par::rayon(0),
             factorized: false,
-            symbolic_seconds: t.elapsed().as_secs_f64(),
+            symbolic_seconds: 0.0,
         })
     }
 
-    /// Seconds [`CholeskySolver::new`] took (ordering, symbolic factorisation, allocation).
+    /// Seconds the ordering, symbolic factorisation and allocation took (0 before the first
+    /// factorisation, which makes them).
     pub fn symbolic_seconds(&self) -> f64 {
         self.symbolic_seconds
     }
 
-    /// Number of stored entries of the Cholesky factor (a measure of fill-in).
+    /// Number of stored entries of the Cholesky factor (a measure of fill-in; 0 before the
+    /// first factorisation).
     pub fn factor_nnz(&self) -> usize {
-        self.factor.len()
+        self.analysis.as_ref().map_or(0, |a| a.factor.len())
     }
 
     /// Numeric factorisation of `matrix` (lower triangle read), reusing storage. Fails with a
@@ -106,10 +129,28 @@ impl CholeskySolver {
     /// means a body is not held against rigid-body motion.
     pub fn factorize(&mut self, matrix: SparseColMatRef<'_, u32, f64>) -> Result<()> {
         self.factorized = false;
-        let stack = MemStack::new(&mut self.workspace);
-        self.symbolic
+        if matrix.nrows() != self.n || matrix.ncols() != self.n {
+            return Err(Error::Linear(format!(
+                "a {}×{} matrix given to the Cholesky solver of {} unknowns",
+                matrix.nrows(),
+                matrix.ncols(),
+                self.n
+            )));
+        }
+        if self.analysis.is_none() {
+            let t = std::time::Instant::now();
+            self.analysis = Some(Analysis::new(matrix.symbolic(), self.par)?);
+            self.symbolic_seconds = t.elapsed().as_secs_f64();
+        }
+        let Analysis {
+            symbolic,
+            factor,
+            workspace,
+        } = self.analysis.as_mut().expect("made above");
+        let stack = MemStack::new(workspace);
+        symbolic
             .factorize_numeric_llt(
-                &mut self.factor,
+                factor,
                 matrix,
                 Side::Lower,
                 LltRegularization::default(),
@@ -142,8 +183,9 @@ impl CholeskySolver {
     ) -> Result<usize> {
         self.factorize(preconditioner)?;
         let n = rhs.len();
+        let analysis = self.analysis.as_ref().expect("factorised above");
         let precond = CholeskyPreconditioner {
-            llt: LltRef::new(&self.symbolic, &self.factor),
+            llt: LltRef::new(&analysis.symbolic, &analysis.factor),
             n,
         };
         let identity = IdentityPrecond { dim: n };
@@ -195,14 +237,14 @@ impl CholeskySolver {
     pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
         assert!(self.factorized, "solve before factorize");
         let n = rhs.len();
-        let stack = MemStack::new(&mut self.workspace);
+        let Analysis {
+            symbolic,
+            factor,
+            workspace,
+        } = self.analysis.as_mut().expect("factorised");
+        let stack = MemStack::new(workspace);
         let rhs = MatMut::from_column_major_slice_mut(rhs, n, 1);
-        LltRef::new(&self.symbolic, &self.factor).solve_in_place_with_conj(
-            Conj::No,
-            rhs,
-            self.par,
-            stack,
-        );
+        LltRef::new(symbolic, factor).solve_in_place_with_conj(Conj::No, rhs, self.par, stack);
     }
 }
 

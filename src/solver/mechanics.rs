@@ -86,9 +86,8 @@ pub struct Mechanics<'a> {
 
 impl Problem for Mechanics<'_> {
     fn assemble(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) -> bool {
+        self.assemble_bulk(system, input);
         let m = self.model;
-        let (cc, ct) = (self.committed, &mut *self.trial);
-        system.assemble(input, &m.continuum, &m.continuum_coloring, cc, ct);
         let (ic, it) = (self.interface_committed, &mut *self.interface_trial);
         system.assemble(input, &m.interface, &m.interface_coloring, ic, it);
         // Each point records whether the interface tangent it contributed was unsymmetric
@@ -131,10 +130,18 @@ impl Problem for Mechanics<'_> {
         DenseScatter::new(&self.model.interface, dofs, local)
     }
 
+    /// A nonlinear (plastic) continuum keeps the elastic matrices of its cells without a
+    /// yielding point between assemblies ([`GlobalSystem::assemble_reusing`]); a linear one
+    /// is assembled plainly (its stiffness is assembled once per model, and keeping a copy
+    /// would only cost memory).
     fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) {
         let m = self.model;
         let (cc, ct) = (self.committed, &mut *self.trial);
-        system.assemble(input, &m.continuum, &m.continuum_coloring, cc, ct);
+        if m.continuum.is_linear() {
+            system.assemble(input, &m.continuum, &m.continuum_coloring, cc, ct);
+        } else {
+            system.assemble_reusing(input, &m.continuum, &m.continuum_coloring, cc, ct);
+        }
     }
 
     fn assemble_interface(
