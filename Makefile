@@ -11,6 +11,7 @@
 #   make convergence             mesh-convergence verification studies -> out/convergence
 #   make mesh GEO=geo/X.geo SIZE=0.5   mesh a .geo script into build/mesh/
 #   make bench                   timings at ~10k, ~100k, ~1M unknowns, appended to BENCHMARKS.md
+#   make bench-scale             the ~1M-unknown frictional tapered press fit (part of make bench) -> BENCHMARKS.md
 #   make bench-calculix          asperity against CalculiX 2.20 on the same meshes, increments and answers -> BENCHMARKS.md
 
 SHELL   := /bin/bash
@@ -22,7 +23,7 @@ BIN     := target/release/asperity
 SIZE    ?= 1
 
 .PHONY: all deps gmsh venv build test mesh bench examples tapered_joint plane_punch indentation thick_cylinder shrink_fit prandtl clean
-.PHONY: convergence bench-calculix
+.PHONY: convergence bench-calculix bench-scale
 
 all: build
 
@@ -129,6 +130,11 @@ bench: gmsh venv build
 	$(CARGO) bench --bench elastic
 	$(CARGO) bench --bench contact
 	$(PYTHON) pipelines/compare_algorithms.py pipelines/tapered_joint/coulomb.toml pipelines/tapered_joint/compliant_1.toml pipelines/tapered_joint/compliant_2.toml
+	$(MAKE) bench-scale
+
+# ~1M-unknown frictional tapered press fit, 10 increments: breakdown + peak RSS -> BENCHMARKS.md
+bench-scale: gmsh venv build
+	nice -n 10 $(PYTHON) benches/bench_scale.py --write
 
 # make bench-calculix QUICK=1: small meshes, agreement check in minutes, BENCHMARKS.md untouched
 bench-calculix: gmsh venv build

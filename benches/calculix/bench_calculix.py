@@ -125,6 +125,7 @@ class Measured:
     rss_mb: float
     stdout: str
     stderr: str
+    cpu: float = 0.0  # user + system seconds of the run (wait4's rusage)
 
 
 GNU_TIME = Path("/usr/bin/time")
@@ -164,7 +165,7 @@ def measure(cmd: list[str], cwd: Path, env: dict | None = None, timeout: float |
         if numbers:
             rss_kb = float(numbers[-1])
     return Measured(proc.returncode, wall, rss_kb / 1024.0, out_path.read_text(errors="replace"),
-                    err_path.read_text(errors="replace"))
+                    err_path.read_text(errors="replace"), usage.ru_utime + usage.ru_stime)
 
 
 # --------------------------------------------------------------------------------------------

@@ -1,0 +1,108 @@
+#!/usr/bin/env python3
+"""`make bench` (scale): the tapered press fit refined to about a million unknowns (issue 12,
+item 6): axisymmetric, Coulomb friction μ = 0.2 with the whole cone slipping, ten increments.
+
+The case is CalculiX benchmark case 2 (benches/calculix/cases/tapered_press_fit.toml, mesh
+geo/bench_tapered_joint.geo: about 1 600 / s² unknowns at size factor s) on a finer mesh;
+the default s = 0.0387 gives about 0.97 M unknowns. Meshes with gmsh, runs `asperity run`
+under GNU time, and prints the breakdown: gmsh, mesh reading, model building, assembly,
+factorisation, solves and output from asperity's closing summary, wall and CPU time, peak
+resident memory and the Newton iterations. With --write the table is appended to
+BENCHMARKS.md with the machine, the date and the load average (a busy machine makes the
+wall times unrepresentative; the CPU time suffers less).
+
+The bar (issue 12): under 5 minutes and under 8 GB on a 2-core machine.
+"""
+from __future__ import annotations
+
+import argparse
+import datetime as _dt
+import os
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE / "calculix"))
+
+import bench_calculix as bc  # noqa: E402  (the CalculiX comparison's mesh/run/parse helpers)
+
+CASE = bc.CASE_DIR / "tapered_press_fit.toml"
+WALL_LIMIT_S, MEMORY_LIMIT_MB = 300.0, 8192.0
+
+
+def commit() -> str:
+    done = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=bc.ROOT, capture_output=True, text=True)
+    return done.stdout.strip() or "?"
+
+
+def run(size: float, work: Path, binary: Path, timeout: float) -> dict:
+    spec = tomllib.loads(CASE.read_text())
+    work.mkdir(parents=True, exist_ok=True)
+    msh = work / "mesh.msh"
+    gmsh_s = bc.mesh_case(CASE, spec, size, msh)
+    run_toml = work / "case.toml"
+    bc.case_with_mesh(CASE, msh.resolve(), run_toml)
+    adir = work / "asperity"
+    adir.mkdir(exist_ok=True)
+    m = bc.measure([str(binary), "run", str(run_toml), "--out", str(adir / "out")], adir, timeout=timeout)
+    info = bc.parse_asperity_summary(m.stdout, adir / "out")
+    if m.returncode != 0:
+        sys.exit(f"asperity failed (exit status {m.returncode}):\n{m.stderr[-2000:]}")
+    info.update({"size": size, "gmsh_s": gmsh_s, "wall_s": m.wall, "cpu_s": m.cpu, "rss_mb": m.rss_mb})
+    return info
+
+
+def table(r: dict, load: tuple[float, float]) -> str:
+    p = r.get("phases", {})
+    phase = lambda k: f"{p[k]:.2f}" if k in p else "–"  # noqa: E731
+    now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    busy = (" (the machine was busy: wall times are not representative)" if load[0] > 1.5 * (os.cpu_count() or 1)
+            else "")
+    verdict = ("within" if r["wall_s"] < WALL_LIMIT_S and r["rss_mb"] < MEMORY_LIMIT_MB else "OUTSIDE")
+    return "\n".join([
+        f"### Scale: tapered press fit at {r.get('unknowns', 0) / 1e6:.2f} M unknowns, {now}, {bc.cpu_name()}, "
+        f"{os.cpu_count()} cores",
+        "",
+        f"`make bench` (`benches/bench_scale.py --size {r['size']}`, commit {commit()}): "
+        "benches/calculix/cases/tapered_press_fit.toml (axisymmetric, μ = 0.2, whole cone slipping, "
+        f"10 increments) on a finer mesh; asperity's defaults. Load average (1 min) before the run "
+        f"{load[0]:.2f}, after it {load[1]:.2f}{busy}. *gmsh* ran beforehand and is not in *wall*; "
+        "*mesh* is reading the mesh file. *CPU* is user + system time over both cores. "
+        f"Bar: < {WALL_LIMIT_S:.0f} s and < {MEMORY_LIMIT_MB / 1024:.0f} GB: {verdict}.",
+        "",
+        "| unknowns | elements | increments | Newton its (cut-backs) | gmsh [s] | mesh [s] | model [s] | assembly [s] "
+        "| factorisation [s] | solve [s] | output [s] | wall [s] | CPU [s] | peak RSS [MB] |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        f"| {r.get('unknowns', '?')} | {r.get('elements', '?')} | {r.get('increments', '?')} | "
+        f"{r.get('iterations', '?')} ({r.get('cutbacks', '?')}) | {r['gmsh_s']:.2f} | {phase('mesh')} | "
+        f"{phase('model')} | {phase('assembly')} | {phase('factorisation')} | {phase('solve')} | "
+        f"{phase('output')} | {r['wall_s']:.2f} | {r['cpu_s']:.2f} | {r['rss_mb']:.0f} |",
+        "",
+    ])
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--size", type=float, default=0.0387, help="mesh size factor (default 0.0387: ~0.97 M unknowns)")
+    ap.add_argument("--write", action="store_true", help="append the table to BENCHMARKS.md")
+    ap.add_argument("--benchmarks", default=str(bc.ROOT / "BENCHMARKS.md"), help="the file --write appends to")
+    ap.add_argument("--bin", default=None, help="asperity binary (default target/release/asperity)")
+    ap.add_argument("--out", default=str(bc.ROOT / "build" / "bench_scale"), help="work folder")
+    ap.add_argument("--timeout", type=float, default=3600.0, help="seconds allowed for the run")
+    args = ap.parse_args()
+    binary = bc.find_binary(args.bin)
+    before = os.getloadavg()[0]
+    r = run(args.size, Path(args.out), binary, args.timeout)
+    block = table(r, (before, os.getloadavg()[0]))
+    print(block)
+    if args.write:
+        with open(args.benchmarks, "a") as f:
+            f.write("\n" + block)
+        print(f"appended to {args.benchmarks}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
