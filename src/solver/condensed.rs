@@ -109,11 +109,11 @@ pub struct CondensedSolver {
     lower: SymbolicSparseColMat<u32>,
     lower_values: Vec<f64>,
     source: Vec<u32>,
-    /// Position in `lower_values` of each column's diagonal entry, and the magnitude of the
-    /// (unshifted) diagonal of the last factored matrix: the scale of the change test of
-    /// [`Self::factor_bulk`].
+    /// Position in `lower_values` of each column's diagonal entry, and 1/√|K̃_ii| of the
+    /// (unshifted) diagonal of the last factored matrix K̃ (∞ for a zero): the scale of the
+    /// change test of [`Self::factor_bulk`].
     diagonal: Vec<u32>,
-    factored_diagonal: Vec<f64>,
+    inverse_scale: Vec<f64>,
     /// The scaled change measured by the last [`Self::factor_bulk`] that had a factor.
     last_change: f64,
     /// Largest scaled change of the continuum matrix for which the last factorisation is
@@ -330,7 +330,7 @@ impl CondensedSolver {
             lower,
             source,
             diagonal,
-            factored_diagonal: vec![0.0; n],
+            inverse_scale: vec![0.0; n],
             last_change: f64::INFINITY,
             reuse_threshold: DEFAULT_REUSE_THRESHOLD,
             factorizations: 0,
@@ -396,7 +396,7 @@ impl CondensedSolver {
         let mut largest = 0.0f64;
         for col in 0..self.n {
             let range = col_ptr[col] as usize..col_ptr[col + 1] as usize;
-            let scale_col = self.factored_diagonal[col];
+            let scale_col = self.inverse_scale[col];
             for k in range {
                 let row = row_idx[k] as usize;
                 let mut old = self.lower_values[k];
@@ -407,7 +407,7 @@ impl CondensedSolver {
                 if difference == 0.0 {
                     continue;
                 }
-                let relative = difference / (self.factored_diagonal[row] * scale_col).sqrt();
+                let relative = difference * self.inverse_scale[row] * scale_col;
                 if !relative.is_finite() {
                     return f64::INFINITY;
                 }
@@ -491,8 +491,8 @@ impl CondensedSolver {
         for (v, &p) in values.iter_mut().zip(&self.source) {
             *v = continuum.val()[p as usize];
         }
-        for (d, &slot) in self.factored_diagonal.iter_mut().zip(&self.diagonal) {
-            *d = values[slot as usize].abs();
+        for (d, &slot) in self.inverse_scale.iter_mut().zip(&self.diagonal) {
+            *d = values[slot as usize].abs().sqrt().recip();
         }
         // Shift D on the interface diagonal: makes the trailing block S_c + D definite even
         // when S_c is singular (a body held only through the interface).
