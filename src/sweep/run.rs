@@ -215,10 +215,13 @@ pub fn collect(study: &Path, plot: bool) -> Result<Collected> {
             }
             row.push(value.map_or(Cell::Empty, Cell::Number));
         }
+        // One line per run, so that `grep failed sweep.csv` shows whole errors (the full
+        // text stays in the run's summary.json).
+        let one_line = error.lines().map(str::trim).collect::<Vec<_>>().join("; ");
         row.push(if error.is_empty() {
             Cell::Empty
         } else {
-            Cell::Text(error.clone())
+            Cell::Text(one_line)
         });
         if status != "converged" || !error.is_empty() {
             failures.push((run.id, status, error));
