@@ -415,11 +415,11 @@ impl Statistics {
                 .iter()
                 .enumerate()
                 .filter(|(_, c)| c.abs() > 0.1)
-                .map(|(k, c)| format!("{c:+.3}·d{}/{}", names[k], names[k]))
+                .map(|(k, c)| format!("{c:+.3} {}", names[k]))
                 .collect();
             out.push(format!(
-                "not identifiable: the data do not change when the parameters move along {} (relative changes): \
-                 fix one of {} or add a test that separates them (e.g. another pressure level)",
+                "not identifiable: the data do not change along the direction {} (each parameter scaled by its \
+                 sensitivity): fix one of {} or add a test that separates them (e.g. another pressure level)",
                 involved.join(" "),
                 v.iter()
                     .enumerate()
