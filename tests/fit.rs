@@ -44,6 +44,26 @@ fn displacements() -> Vec<f64> {
     (1..=30).map(|i| 1e-4 * (i as f64).powi(2)).collect()
 }
 
+/// A cycle: out to 0.09 mm, back to −0.09 mm and out again (reversed slip, hardening on).
+fn cycle() -> Vec<f64> {
+    let out = displacements();
+    let back = out
+        .iter()
+        .rev()
+        .skip(1)
+        .chain(&[0.0])
+        .copied()
+        .chain(out.iter().map(|u| -u));
+    let again = out
+        .iter()
+        .rev()
+        .skip(1)
+        .map(|u| -u)
+        .chain([0.0])
+        .chain(out.iter().copied());
+    out.iter().copied().chain(back).chain(again).collect()
+}
+
 /// Writes a CSV with a units comment.
 fn write_csv(path: &Path, units: &str, names: [&str; 2], x: &[f64], y: &[f64]) {
     let mut s = format!("# units: {units}\n{},{}\n", names[0], names[1]);
@@ -80,8 +100,13 @@ fn write_curves(
         &noisy(normal(law.as_ref(), &c)),
     );
     let mut tests = format!("[[test]]\nkind = \"normal\"\ndata = \"normal.csv\"\n{errors}\n");
-    let u = displacements();
-    for p in pressures {
+    for (k, p) in pressures.iter().enumerate() {
+        // The last pressure level is cycled, the others loaded monotonically.
+        let u = if k + 1 == pressures.len() && k > 0 {
+            cycle()
+        } else {
+            displacements()
+        };
         let name = format!("shear_{p}.csv");
         let y = noisy(tangential(law.as_ref(), *p, &u));
         write_csv(

@@ -17,6 +17,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use super::data::{Dimension, Table};
+use super::params::LawKind;
 use super::specimen::Specimen;
 use crate::contact::{InterfaceLaw, InterfaceState};
 use crate::{Error, Result};
@@ -186,15 +187,16 @@ impl Experiment {
         })
     }
 
-    /// The simulated responses with `law` (a model test gets the parameter values `x`).
-    pub fn simulate(&self, law: &dyn InterfaceLaw, x: &[f64], names: &[&str]) -> Result<Vec<f64>> {
+    /// The simulated responses with `law` (a model test gets the law's `kind` and parameter
+    /// values `x`).
+    pub fn simulate(&self, law: &dyn InterfaceLaw, kind: LawKind, x: &[f64]) -> Result<Vec<f64>> {
         Ok(match &self.kind {
             Kind::Normal { closure } => normal(law, closure),
             Kind::Tangential {
                 pressure,
                 displacement,
             } => tangential(law, *pressure, displacement),
-            Kind::Model(specimen) => specimen.simulate(x, names)?,
+            Kind::Model(specimen) => specimen.simulate(x, kind)?,
         })
     }
 }

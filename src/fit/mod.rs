@@ -183,23 +183,12 @@ impl Fit {
         Ok(fit)
     }
 
-    /// Parameter names in the law's order.
-    fn names(&self) -> Vec<&'static str> {
-        self.parameters
-            .law
-            .parameters()
-            .iter()
-            .map(|(n, _)| *n)
-            .collect()
-    }
-
     /// The simulated responses of every test with parameter values `x`, one vector per test.
     pub fn simulate(&self, x: &[f64]) -> Result<Vec<Vec<f64>>> {
         let law = self.parameters.build(x)?;
-        let names = self.names();
         self.experiments
             .iter()
-            .map(|e| e.simulate(law.as_ref(), x, &names))
+            .map(|e| e.simulate(law.as_ref(), self.parameters.law, x))
             .collect()
     }
 

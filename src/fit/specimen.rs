@@ -6,6 +6,7 @@
 
 use std::path::Path;
 
+use super::params::LawKind;
 use crate::config::Case;
 use crate::mesh::Mesh;
 use crate::pipeline;
@@ -85,15 +86,12 @@ impl Specimen {
         })
     }
 
-    /// The case with the fitted law's parameters set to `x` (named `names`; NaN: left out).
-    fn case_with(&self, x: &[f64], names: &[&str]) -> Result<Case> {
+    /// The case with the fitted law (`kind`, parameters `x` in its order; NaN: left out).
+    fn case_with(&self, x: &[f64], kind: LawKind) -> Result<Case> {
         let mut law = toml::Table::new();
-        let kind = keys::get(&self.tree, &format!("contact.{}.law.type", self.contact)).cloned();
-        law.insert(
-            "type".into(),
-            kind.unwrap_or(toml::Value::String("rough_joint".into())),
-        );
-        for (name, v) in names.iter().zip(x).filter(|(_, v)| !v.is_nan()) {
+        law.insert("type".into(), toml::Value::String(kind.name().into()));
+        let names = kind.parameters().iter().map(|(n, _)| n);
+        for (name, v) in names.zip(x).filter(|(_, v)| !v.is_nan()) {
             law.insert(name.to_string(), toml::Value::Float(*v));
         }
         let mut tree = self.tree.clone();
@@ -115,8 +113,8 @@ impl Specimen {
     }
 
     /// The quantity at the measured steps with the law's parameters `x`.
-    pub fn simulate(&self, x: &[f64], names: &[&str]) -> Result<Vec<f64>> {
-        let case = self.case_with(x, names)?;
+    pub fn simulate(&self, x: &[f64], kind: LawKind) -> Result<Vec<f64>> {
+        let case = self.case_with(x, kind)?;
         let tmp = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
         pipeline::run_mesh(&case, self.mesh.clone(), 0.0, tmp.path(), false, |_, _| {
             Ok(())
