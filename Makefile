@@ -24,6 +24,7 @@ SIZE    ?= 1
 
 .PHONY: all deps gmsh venv build test mesh bench examples tapered_joint plane_punch indentation thick_cylinder shrink_fit prandtl clean
 .PHONY: convergence bench-calculix bench-scale
+.PHONY: fit-example sweep-test gnu-parallel
 
 all: build
 
@@ -94,6 +95,41 @@ test: deps
 	  $(PYTHON) pipelines/plot_fields.py build/test/$$c >/dev/null 2>&1 || { echo "plot_fields.py failed on $$c"; exit 1; }; \
 	done
 	$(call convergence_studies,3,3,build/test/convergence,$(CONVERGENCE_SUMMARY))
+	@$(MAKE) --no-print-directory sweep-test fit-example OUT_FIT=build/test/fit
+
+## --- fitting and sweeps --------------------------------------------------------
+# `make fit-example`: the README's worked example (pipelines/fit/joint.toml) -> out/fit/joint.
+OUT_FIT ?= out/fit
+fit-example sweep-test: export ASPERITY_PIPELINES := $(CURDIR)/pipelines
+fit-example: venv build
+	$(BIN) fit pipelines/fit/joint.toml --out $(OUT_FIT)/joint
+	@test -s $(OUT_FIT)/joint/fit.png && test -s $(OUT_FIT)/joint/residuals.png || { echo "fit-example: plots missing"; exit 1; }
+
+gnu-parallel:
+	@command -v parallel >/dev/null || { echo "installing parallel (apt-get)"; \
+	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq parallel >/dev/null; }
+
+# `make sweep-test`: the specimen sweep (pipelines/sweep/specimen.toml) run by the local pool and
+# by GNU parallel from jobs.txt must give identical tables; array.sbatch is checked for its
+# array range, per-task command and resource lines.
+SWEEP_TEST := build/test/sweep
+sweep-test: gnu-parallel venv build
+	@rm -rf $(SWEEP_TEST) && mkdir -p $(SWEEP_TEST)
+	$(BIN) sweep plan pipelines/sweep/specimen.toml --out $(SWEEP_TEST)/local
+	$(BIN) sweep plan pipelines/sweep/specimen.toml --out $(SWEEP_TEST)/parallel
+	$(BIN) sweep run $(SWEEP_TEST)/local --jobs 2
+	parallel --will-cite --jobs 2 --halt now,fail=1 < $(SWEEP_TEST)/parallel/jobs.txt >/dev/null
+	$(BIN) sweep collect $(SWEEP_TEST)/local
+	$(BIN) sweep collect $(SWEEP_TEST)/parallel --no-plot
+	cmp $(SWEEP_TEST)/local/sweep.csv $(SWEEP_TEST)/parallel/sweep.csv
+	@test -s $(SWEEP_TEST)/local/force.png || { echo "sweep-test: force.png missing"; exit 1; }
+	@s=$(SWEEP_TEST)/parallel/array.sbatch; bash -n $$s && \
+	  grep -qx '#SBATCH --array=0-5' $$s && grep -qx '#SBATCH --ntasks=1' $$s && \
+	  grep -qx '#SBATCH --cpus-per-task=1' $$s && grep -qx '#SBATCH --mem=1G' $$s && \
+	  grep -qx '#SBATCH --time=00:10:00' $$s && \
+	  grep -q "sweep run '.*/$(SWEEP_TEST)/parallel' --task \"\$$SLURM_ARRAY_TASK_ID\"$$" $$s \
+	  || { echo "sweep-test: $$s lacks the array range, resource lines or per-task command"; exit 1; }
+	@echo "sweep-test: local pool and GNU parallel give identical tables; array.sbatch checked"
 
 ## --- convergence studies ------------------------------------------------------
 # pipelines/convergence/*.toml (README "Convergence studies"): every study must pass, and the

@@ -28,6 +28,7 @@ pub mod config;
 pub mod contact;
 pub mod element;
 pub mod error;
+pub mod fit;
 pub mod material;
 pub mod mesh;
 pub mod model;
@@ -36,5 +37,6 @@ pub mod pipeline;
 pub mod post;
 pub mod solver;
 pub mod study;
+pub mod sweep;
 
 pub use error::{Error, Result};

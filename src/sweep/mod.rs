@@ -1,0 +1,484 @@
+//! Parameter sweeps as independent jobs (`asperity sweep plan|run|collect`).
+//!
+//! A sweep file names a base case, the keys to vary (dotted paths into the case, [`keys`])
+//! with a list of values or a range, how to combine them (`grid`: every combination; `zip`:
+//! element by element; `latin_hypercube`: `samples` points, one in each of `samples` equal
+//! strata of every range, strata paired by seeded random permutations), and the quantities to
+//! collect (dotted paths into `summary.json`, e.g. `steps.-1.reactions.top.y`).
+//!
+//! `plan` writes `runs/NNNN/case.toml` per run (checked by parsing it into a
+//! [`Case`] and building its model spec), `manifest.json`, `jobs.txt` (one command per line,
+//! for GNU parallel) and `array.sbatch` (a Slurm job array, the task id selecting the run).
+//! Every job is `asperity sweep run STUDY --task K`, which skips a run whose `summary.json`
+//! exists, so a sweep is restartable by any of the three means; a run that fails leaves a
+//! `summary.json` with its error. `collect` gathers the runs into `sweep.csv` and plots.
+
+pub mod keys;
+pub(crate) mod python;
+mod run;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use rand::Rng;
+use rand::SeedableRng;
+use rand::seq::SliceRandom;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use toml::Value;
+
+use crate::config::Case;
+use crate::model::ModelSpec;
+use crate::output::atomic::write_atomically;
+use crate::{Error, Result};
+
+pub use run::{Collected, collect, run_local, run_task};
+
+/// A sweep file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepFile {
+    /// The base case (relative to the sweep file).
+    pub base: PathBuf,
+    #[serde(default)]
+    pub method: Method,
+    /// Latin hypercube: number of runs.
+    pub samples: Option<usize>,
+    /// Latin hypercube: seed of the permutations and of the points within strata.
+    #[serde(default)]
+    pub seed: u64,
+    #[serde(rename = "vary")]
+    pub keys: Vec<Vary>,
+    /// Quantities to collect: name = dotted path into `summary.json`.
+    #[serde(default)]
+    pub quantities: BTreeMap<String, String>,
+    #[serde(default)]
+    pub slurm: Slurm,
+}
+
+/// How the keys' values are combined into runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    #[default]
+    Grid,
+    Zip,
+    LatinHypercube,
+}
+
+/// One varied key.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Vary {
+    pub key: String,
+    /// Explicit values.
+    pub values: Option<Vec<Value>>,
+    /// `{ from, to, count }`: `count` values from `from` to `to` (geometric with `log = true`).
+    pub range: Option<Range>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Range {
+    pub from: f64,
+    pub to: f64,
+    /// Values of a grid or zip (a Latin hypercube takes `samples`).
+    pub count: Option<usize>,
+    #[serde(default)]
+    pub log: bool,
+}
+
+/// The resource lines of `array.sbatch`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Slurm {
+    #[serde(default = "default_time")]
+    pub time: String,
+    #[serde(default = "default_memory")]
+    pub memory: String,
+    #[serde(default = "one")]
+    pub cpus: usize,
+    pub partition: Option<String>,
+}
+
+fn default_time() -> String {
+    "01:00:00".into()
+}
+fn default_memory() -> String {
+    "4G".into()
+}
+fn one() -> usize {
+    1
+}
+
+impl Default for Slurm {
+    fn default() -> Self {
+        Self {
+            time: default_time(),
+            memory: default_memory(),
+            cpus: 1,
+            partition: None,
+        }
+    }
+}
+
+/// `manifest.json` of a study folder.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Manifest {
+    pub sweep: PathBuf,
+    pub base: PathBuf,
+    pub method: Method,
+    pub keys: Vec<String>,
+    pub quantities: BTreeMap<String, String>,
+    pub runs: Vec<RunEntry>,
+}
+
+/// One run of the manifest.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct RunEntry {
+    pub id: usize,
+    /// Folder relative to the study (`runs/0003`), holding `case.toml` and the results.
+    pub dir: PathBuf,
+    /// The value of each key, in the order of `keys`.
+    pub values: Vec<Value>,
+}
+
+impl Manifest {
+    /// Reads `study/manifest.json`.
+    pub fn read(study: &Path) -> Result<Self> {
+        let path = study.join("manifest.json");
+        let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+        serde_json::from_str(&text).map_err(|e| Error::Case {
+            path,
+            message: format!("not a sweep manifest: {e}"),
+        })
+    }
+}
+
+/// An error of sweep file `path` at `key`.
+fn invalid(path: &Path, key: String, value: impl ToString, reason: impl Into<String>) -> Error {
+    Error::InvalidParameter {
+        path: path.to_path_buf(),
+        key,
+        value: value.to_string(),
+        reason: reason.into(),
+    }
+}
+
+/// Plans sweep file `path` into the folder `study`; `exe` is the asperity executable the job
+/// files call.
+pub fn plan(path: &Path, study: &Path, exe: &Path) -> Result<Manifest> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let sweep: SweepFile = toml::from_str(&text).map_err(|e| Error::Case {
+        path: path.to_path_buf(),
+        message: e.to_string().trim_end().to_string(),
+    })?;
+    if sweep.keys.is_empty() {
+        return Err(invalid(path, "vary".into(), "[]", "no [[vary]] key"));
+    }
+    let base = path.parent().unwrap_or(Path::new("")).join(&sweep.base);
+    let base = base.canonicalize().map_err(|e| Error::io(&base, e))?;
+    let base_text = std::fs::read_to_string(&base).map_err(|e| Error::io(&base, e))?;
+    let mut tree: Value = toml::from_str(&base_text).map_err(|e| Error::Case {
+        path: base.clone(),
+        message: e.to_string(),
+    })?;
+    absolute_mesh_paths(&mut tree, base.parent().unwrap_or(Path::new("/")));
+    let points = points(&sweep, path)?;
+    std::fs::create_dir_all(study).map_err(|e| Error::io(study, e))?;
+    let study = study.canonicalize().map_err(|e| Error::io(study, e))?;
+    let mut runs = Vec::with_capacity(points.len());
+    for (id, values) in points.into_iter().enumerate() {
+        let dir = PathBuf::from(format!("runs/{id:04}"));
+        let case_path = study.join(&dir).join("case.toml");
+        let mut t = tree.clone();
+        for (i, (vary, v)) in sweep.keys.iter().zip(&values).enumerate() {
+            keys::set(&mut t, &vary.key, v.clone())
+                .map_err(|reason| invalid(path, format!("vary[{i}].key"), &vary.key, reason))?;
+        }
+        let text = toml::to_string(&t).map_err(|e| Error::External(e.to_string()))?;
+        check_run(&text, &case_path).map_err(|e| {
+            invalid(
+                path,
+                format!("vary ({})", describe(&sweep.keys, &values)),
+                "",
+                format!("run {id} is not a valid case: {e}"),
+            )
+        })?;
+        let header = format!(
+            "# run {id} of sweep {}: {}\n",
+            path.display(),
+            describe(&sweep.keys, &values)
+        );
+        write_atomically(&case_path, |w| {
+            w.write_all(format!("{header}{text}").as_bytes())
+        })?;
+        runs.push(RunEntry { id, dir, values });
+    }
+    let manifest = Manifest {
+        sweep: path.to_path_buf(),
+        base,
+        method: sweep.method,
+        keys: sweep.keys.iter().map(|k| k.key.clone()).collect(),
+        quantities: sweep.quantities.clone(),
+        runs,
+    };
+    let json =
+        serde_json::to_string_pretty(&manifest).map_err(|e| Error::External(e.to_string()))?;
+    write_atomically(&study.join("manifest.json"), |w| {
+        w.write_all(json.as_bytes())
+    })?;
+    write_jobs(&study, manifest.runs.len(), exe, &sweep.slurm)?;
+    Ok(manifest)
+}
+
+/// `key = value, ...` of one run.
+fn describe(keys: &[Vary], values: &[Value]) -> String {
+    keys.iter()
+        .zip(values)
+        .map(|(k, v)| format!("{} = {v}", k.key))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// A run's case must parse and give a model spec (the law and material parameters valid).
+fn check_run(text: &str, path: &Path) -> Result<()> {
+    let case = Case::from_toml(text, path)?;
+    ModelSpec::new(&case).map(|_| ())
+}
+
+/// Makes `mesh.file` and `mesh.geo` absolute (relative to the base case's folder `dir`), so
+/// the run's case can live in another folder; drops `output.dir` (runs write to their own).
+fn absolute_mesh_paths(tree: &mut Value, dir: &Path) {
+    if let Some(Value::Table(mesh)) = tree.get_mut("mesh") {
+        for key in ["file", "geo"] {
+            if let Some(Value::String(p)) = mesh.get_mut(key) {
+                *p = dir.join(&*p).display().to_string();
+            }
+        }
+    }
+    if let Some(Value::Table(output)) = tree.get_mut("output") {
+        output.remove("dir");
+    }
+}
+
+/// The values of every run (one vector per run, one value per key).
+fn points(sweep: &SweepFile, path: &Path) -> Result<Vec<Vec<Value>>> {
+    let mut columns = Vec::with_capacity(sweep.keys.len());
+    for (i, k) in sweep.keys.iter().enumerate() {
+        let key = |field: &str| format!("vary[{i}].{field}");
+        let values = match (&k.values, k.range, sweep.method) {
+            (Some(v), None, Method::Grid | Method::Zip) if !v.is_empty() => v.clone(),
+            (None, Some(r), m) => {
+                if !(r.from.is_finite() && r.to.is_finite())
+                    || (r.log && (r.from <= 0.0 || r.to <= 0.0))
+                {
+                    return Err(invalid(
+                        path,
+                        key("range"),
+                        format!("{} .. {}", r.from, r.to),
+                        "must be finite (and positive with log = true)",
+                    ));
+                }
+                if m == Method::LatinHypercube {
+                    Vec::new() // sampled below
+                } else {
+                    let n = r.count.filter(|n| *n >= 1).ok_or_else(|| {
+                        invalid(
+                            path,
+                            key("range.count"),
+                            "",
+                            "a grid or zip range needs `count` ≥ 1",
+                        )
+                    })?;
+                    (0..n)
+                        .map(|j| {
+                            Value::Float(r.at(if n == 1 {
+                                0.0
+                            } else {
+                                j as f64 / (n - 1) as f64
+                            }))
+                        })
+                        .collect()
+                }
+            }
+            (_, _, Method::LatinHypercube) => {
+                return Err(invalid(
+                    path,
+                    key("range"),
+                    "",
+                    "a Latin hypercube needs `range = { from, to }` for every key",
+                ));
+            }
+            _ => {
+                return Err(invalid(
+                    path,
+                    key("values"),
+                    "",
+                    "give a non-empty `values` list or a `range`, not both",
+                ));
+            }
+        };
+        columns.push(values);
+    }
+    Ok(match sweep.method {
+        Method::Grid => columns.iter().fold(vec![Vec::new()], |acc, col| {
+            acc.iter()
+                .flat_map(|prefix| {
+                    col.iter().map(move |v| {
+                        let mut p = prefix.clone();
+                        p.push(v.clone());
+                        p
+                    })
+                })
+                .collect()
+        }),
+        Method::Zip => {
+            let n = columns[0].len();
+            if let Some(i) = columns.iter().position(|c| c.len() != n) {
+                return Err(invalid(
+                    path,
+                    format!("vary[{i}]"),
+                    columns[i].len(),
+                    format!("zip needs every key to have the same number of values ({n})"),
+                ));
+            }
+            (0..n)
+                .map(|j| columns.iter().map(|c| c[j].clone()).collect())
+                .collect()
+        }
+        Method::LatinHypercube => {
+            let n = sweep.samples.filter(|n| *n >= 1).ok_or_else(|| {
+                invalid(
+                    path,
+                    "samples".into(),
+                    "",
+                    "a Latin hypercube needs `samples` ≥ 1",
+                )
+            })?;
+            let ranges: Vec<Range> = sweep
+                .keys
+                .iter()
+                .map(|k| k.range.expect("checked"))
+                .collect();
+            latin_hypercube(&ranges, n, sweep.seed)
+        }
+    })
+}
+
+impl Range {
+    /// The value at fraction `s` ∈ [0, 1] of the range.
+    fn at(&self, s: f64) -> f64 {
+        if self.log {
+            self.from * (self.to / self.from).powf(s)
+        } else {
+            self.from + s * (self.to - self.from)
+        }
+    }
+}
+
+/// `n` points of a Latin hypercube over `ranges`: for each key, one uniform point in each of
+/// the n strata [j/n, (j+1)/n), the strata shuffled independently per key (ChaCha8, seeded:
+/// the same seed gives the same points on every platform).
+pub fn latin_hypercube(ranges: &[Range], n: usize, seed: u64) -> Vec<Vec<Value>> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let columns: Vec<Vec<f64>> = ranges
+        .iter()
+        .map(|r| {
+            let mut strata: Vec<usize> = (0..n).collect();
+            strata.shuffle(&mut rng);
+            strata
+                .into_iter()
+                .map(|j| r.at((j as f64 + rng.random::<f64>()) / n as f64))
+                .collect()
+        })
+        .collect();
+    (0..n)
+        .map(|j| columns.iter().map(|c| Value::Float(c[j])).collect())
+        .collect()
+}
+
+/// Single-quotes `s` for a POSIX shell.
+fn quote(s: &Path) -> String {
+    format!("'{}'", s.display().to_string().replace('\'', r"'\''"))
+}
+
+/// `jobs.txt` (GNU parallel) and `array.sbatch` (Slurm) of a study with `n` runs.
+fn write_jobs(study: &Path, n: usize, exe: &Path, slurm: &Slurm) -> Result<()> {
+    let (exe, dir) = (quote(exe), quote(study));
+    let jobs: String = (0..n)
+        .map(|k| format!("{exe} sweep run {dir} --task {k}\n"))
+        .collect();
+    write_atomically(&study.join("jobs.txt"), |w| w.write_all(jobs.as_bytes()))?;
+    let partition = slurm
+        .partition
+        .as_ref()
+        .map(|p| format!("#SBATCH --partition={p}\n"))
+        .unwrap_or_default();
+    let script = format!(
+        "#!/bin/bash\n\
+         # Slurm job array of the sweep in {study}: one task per run, the task id selecting the run.\n\
+         # Submit with `sbatch {study}/array.sbatch`; finished runs are skipped, so resubmitting\n\
+         # completes an interrupted sweep. Then `asperity sweep collect {study}`.\n\
+         #SBATCH --job-name=asperity-sweep\n\
+         #SBATCH --array=0-{last}\n\
+         #SBATCH --ntasks=1\n\
+         #SBATCH --cpus-per-task={cpus}\n\
+         #SBATCH --mem={mem}\n\
+         #SBATCH --time={time}\n\
+         {partition}\
+         #SBATCH --output={study}/runs/slurm-%A_%a.out\n\
+         export RAYON_NUM_THREADS=\"${{SLURM_CPUS_PER_TASK:-1}}\"\n\
+         exec {exe} sweep run {dir} --task \"$SLURM_ARRAY_TASK_ID\"\n",
+        study = study.display(),
+        last = n - 1,
+        cpus = slurm.cpus,
+        mem = slurm.memory,
+        time = slurm.time,
+    );
+    write_atomically(&study.join("array.sbatch"), |w| {
+        w.write_all(script.as_bytes())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn latin_hypercube_has_one_point_per_stratum_and_is_seeded() {
+        let r = [
+            Range {
+                from: 0.0,
+                to: 1.0,
+                count: None,
+                log: false,
+            },
+            Range {
+                from: 1.0,
+                to: 100.0,
+                count: None,
+                log: true,
+            },
+        ];
+        let a = latin_hypercube(&r, 10, 7);
+        assert_eq!(a, latin_hypercube(&r, 10, 7));
+        assert_ne!(a, latin_hypercube(&r, 10, 8));
+        for (k, range) in r.iter().enumerate() {
+            let mut strata: Vec<usize> = a
+                .iter()
+                .map(|p| {
+                    let v = p[k].as_float().unwrap();
+                    let s = if range.log {
+                        (v / range.from).ln() / (range.to / range.from).ln()
+                    } else {
+                        v
+                    };
+                    (s * 10.0).floor() as usize
+                })
+                .collect();
+            strata.sort();
+            assert_eq!(strata, (0..10).collect::<Vec<_>>());
+        }
+    }
+}

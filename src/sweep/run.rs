@@ -1,0 +1,244 @@
+//! Running the runs of a planned study (one task, or all of them on a local pool of child
+//! processes) and collecting their results.
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+use super::python::run_python;
+use super::{Manifest, keys};
+use crate::config::Case;
+use crate::output::csv::{Cell, CsvTable, write_csv};
+use crate::output::summary::Summary;
+use crate::pipeline;
+use crate::study::available_memory;
+use crate::{Error, Result};
+
+/// Whether run `dir` is done: its `summary.json` exists (converged, or failed and not
+/// `retry_failed`).
+fn done(dir: &Path, retry_failed: bool) -> bool {
+    match read_summary(dir) {
+        Ok(s) => !(retry_failed && s.get("status").and_then(|v| v.as_str()) != Some("converged")),
+        Err(_) => false,
+    }
+}
+
+fn read_summary(dir: &Path) -> Result<serde_json::Value> {
+    let path = dir.join("summary.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+    serde_json::from_str(&text).map_err(|e| Error::Case {
+        path,
+        message: format!("not a summary: {e}"),
+    })
+}
+
+/// Runs task `k` of `study` unless it is done; returns whether it ran. A run that fails still
+/// leaves its `summary.json` (with the error) and returns the error.
+pub fn run_task(study: &Path, k: usize, retry_failed: bool) -> Result<bool> {
+    let manifest = Manifest::read(study)?;
+    let entry = manifest
+        .runs
+        .get(k)
+        .ok_or_else(|| Error::InvalidParameter {
+            path: study.join("manifest.json"),
+            key: "--task".into(),
+            value: k.to_string(),
+            reason: format!(
+                "the study has runs 0 to {}",
+                manifest.runs.len().saturating_sub(1)
+            ),
+        })?;
+    let dir = study.join(&entry.dir);
+    if done(&dir, retry_failed) {
+        return Ok(false);
+    }
+    let case_path = dir.join("case.toml");
+    let result = Case::from_file(&case_path).and_then(|case| pipeline::run(&case, &dir, false));
+    if let Err(e) = result {
+        // Errors before the model exists leave no summary: record them, so that `collect`
+        // reports the run with its error.
+        if read_summary(&dir).is_err() {
+            let mut summary = Summary::new(&case_path);
+            summary.fail(&e);
+            summary.write(&dir.join("summary.json"))?;
+        }
+        return Err(e);
+    }
+    Ok(true)
+}
+
+/// Peak resident memory (VmHWM) of process `pid` in bytes, from `/proc` (Linux).
+fn peak_memory(pid: u32) -> Option<u64> {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// Runs every run of `study` that is not done, at most `jobs` at once, each as a child
+/// process `exe sweep run STUDY --task K` (so a crash stays in its run; output in the run's
+/// `log.txt`). Memory: another run starts only while `MemAvailable` exceeds twice the largest
+/// peak seen so far of a run (the runs of a sweep are of similar size), so runs whose memory
+/// is large wait instead of swapping. Returns (ran, failed) task ids.
+pub fn run_local(
+    study: &Path,
+    jobs: usize,
+    exe: &Path,
+    retry_failed: bool,
+) -> Result<(Vec<usize>, Vec<usize>)> {
+    let manifest = Manifest::read(study)?;
+    let mut pending: Vec<usize> = manifest
+        .runs
+        .iter()
+        .filter(|r| !done(&study.join(&r.dir), retry_failed))
+        .map(|r| r.id)
+        .rev()
+        .collect();
+    let threads =
+        (std::thread::available_parallelism().map_or(1, |n| n.get()) / jobs.max(1)).max(1);
+    let mut running: Vec<(usize, Child)> = Vec::new();
+    let (mut ran, mut failed) = (Vec::new(), Vec::new());
+    let mut peak = 0u64;
+    while !pending.is_empty() || !running.is_empty() {
+        let fits = running.is_empty() || available_memory().is_none_or(|m| m > 2 * peak);
+        if running.len() < jobs.max(1)
+            && fits
+            && let Some(k) = pending.pop()
+        {
+            let dir = study.join(&manifest.runs[k].dir);
+            let log = std::fs::File::create(dir.join("log.txt"))
+                .map_err(|e| Error::io(dir.join("log.txt"), e))?;
+            let err = log
+                .try_clone()
+                .map_err(|e| Error::io(dir.join("log.txt"), e))?;
+            let mut command = Command::new(exe);
+            command
+                .args(["sweep", "run"])
+                .arg(study)
+                .args(["--task", &k.to_string()]);
+            if retry_failed {
+                command.arg("--retry-failed");
+            }
+            let child = command
+                .env("RAYON_NUM_THREADS", threads.to_string())
+                .stdin(Stdio::null())
+                .stdout(log)
+                .stderr(err)
+                .spawn()
+                .map_err(|e| Error::io(exe, e))?;
+            running.push((k, child));
+            continue;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+        let mut i = 0;
+        while i < running.len() {
+            peak = peak.max(peak_memory(running[i].1.id()).unwrap_or(0));
+            match running[i].1.try_wait().map_err(|e| Error::io(exe, e))? {
+                Some(status) => {
+                    let (k, _) = running.swap_remove(i);
+                    ran.push(k);
+                    if !status.success() {
+                        failed.push(k);
+                    }
+                }
+                None => i += 1,
+            }
+        }
+    }
+    ran.sort();
+    failed.sort();
+    Ok((ran, failed))
+}
+
+/// What `collect` found.
+#[derive(Clone, Debug)]
+pub struct Collected {
+    pub csv: PathBuf,
+    pub runs: usize,
+    /// (run id, status, error) of every run that did not converge.
+    pub failures: Vec<(usize, String, String)>,
+    /// What happened to the plots.
+    pub plots: String,
+}
+
+/// Gathers every run's status and quantities into `study/sweep.csv` (columns: run, the keys,
+/// status, the quantities, error) and plots each quantity against each key.
+pub fn collect(study: &Path, plot: bool) -> Result<Collected> {
+    let manifest = Manifest::read(study)?;
+    let mut columns = vec!["run".to_string()];
+    columns.extend(manifest.keys.iter().cloned());
+    columns.push("status".into());
+    columns.extend(manifest.quantities.keys().cloned());
+    columns.push("error".into());
+    let mut table = CsvTable::new(columns);
+    let mut failures = Vec::new();
+    for run in &manifest.runs {
+        let mut row: Vec<Cell> = vec![Cell::Number(run.id as f64)];
+        row.extend(run.values.iter().map(|v| match v {
+            toml::Value::Float(x) => Cell::Number(*x),
+            toml::Value::Integer(i) => Cell::Number(*i as f64),
+            other => Cell::Text(other.to_string().trim_matches('"').to_string()),
+        }));
+        let dir = study.join(&run.dir);
+        let (status, mut error, summary) = match read_summary(&dir) {
+            Ok(s) => {
+                let status = s
+                    .get("status")
+                    .and_then(|v| v.as_str())
+                    .unwrap_or("unknown")
+                    .to_string();
+                let error = s
+                    .get("error")
+                    .and_then(|v| v.as_str())
+                    .unwrap_or_default()
+                    .to_string();
+                (status, error, Some(s))
+            }
+            Err(_) => (
+                "not_run".to_string(),
+                format!(
+                    "no summary.json in {} (not run yet, or stopped)",
+                    dir.display()
+                ),
+                None,
+            ),
+        };
+        row.push(Cell::Text(status.clone()));
+        for (name, path) in &manifest.quantities {
+            let value = summary
+                .as_ref()
+                .filter(|_| status == "converged")
+                .and_then(|s| keys::get_json(s, path))
+                .and_then(|v| v.as_f64());
+            if value.is_none() && status == "converged" {
+                error = format!("quantity '{name}': summary.json has no number at `{path}`");
+            }
+            row.push(value.map_or(Cell::Empty, Cell::Number));
+        }
+        // One line per run, so that `grep failed sweep.csv` shows whole errors (the full
+        // text stays in the run's summary.json).
+        let one_line = error.lines().map(str::trim).collect::<Vec<_>>().join("; ");
+        row.push(if error.is_empty() {
+            Cell::Empty
+        } else {
+            Cell::Text(one_line)
+        });
+        if status != "converged" || !error.is_empty() {
+            failures.push((run.id, status, error));
+        }
+        table.rows.push(row);
+    }
+    let csv = study.join("sweep.csv");
+    write_csv(&csv, &table)?;
+    let plots = if plot {
+        run_python("sweep/plot_sweep.py", study, "one PNG per quantity")
+    } else {
+        "not made (--no-plot)".into()
+    };
+    Ok(Collected {
+        csv,
+        runs: manifest.runs.len(),
+        failures,
+        plots,
+    })
+}
