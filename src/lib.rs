@@ -28,6 +28,7 @@ pub mod config;
 pub mod contact;
 pub mod element;
 pub mod error;
+pub mod init;
 pub mod material;
 pub mod mesh;
 pub mod model;
