@@ -150,6 +150,30 @@ def read_contact(out: Path, pair: str, step: int | None = None) -> dict[str, np.
     return read_csv(files[-1])
 
 
+def read_step(out: Path, step: int | None = None):
+    """The VTU files of step `step` (1-based; default: the last) that results.pvd lists, as a
+    pyvista MultiBlock whose blocks carry the PVD's part names (`bodies`, `interface`), and
+    whose own field_data `step` is the step (its position in the series). pyvista's own PVD
+    reader drops the names (Block-00, Block-01). Each block's field_data holds what its VTU
+    records (`TimeValue`, `load_factor`, names of bodies and pairs)."""
+    import xml.etree.ElementTree as ET
+
+    import pyvista as pv
+
+    entries = [(float(d.get("timestep")), d.get("name") or f"part_{d.get('part')}", d.get("file"))
+               for d in ET.parse(out / "results.pvd").getroot().iter("DataSet")]
+    times = sorted({t for t, _, _ in entries})
+    if not times or (step is not None and not 1 <= step <= len(times)):
+        raise ValueError(f"{out / 'results.pvd'}: no step {step} (it lists {len(times)})")
+    time = times[-1] if step is None else times[step - 1]
+    blocks = pv.MultiBlock()
+    blocks.field_data["step"] = [times.index(time) + 1]
+    for t, name, file in entries:
+        if t == time:
+            blocks[name] = pv.read(out / file)
+    return blocks
+
+
 def write_report(path: Path, title: str, sections: list[tuple[str, str]]) -> None:
     """REPORT.md with a title and (heading, markdown) sections."""
     parts = [f"# {title}\n"] + [f"## {h}\n\n{body.strip()}\n" for h, body in sections]

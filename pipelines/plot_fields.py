@@ -18,14 +18,14 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pyvista as pv  # noqa: E402
+from asperity_tools import read_step  # noqa: E402
 
 pv.OFF_SCREEN = True
 
 
 def von_mises_picture(out: Path, scale: float | None) -> Path:
-    reader = pv.get_reader(out / "results.pvd")
-    reader.set_active_time_value(reader.time_values[-1])
-    grid = reader.read()[0]
+    blocks = read_step(out)
+    grid = blocks["bodies"]
     u = np.asarray(grid.point_data["displacement"])
     size = max(grid.bounds[1] - grid.bounds[0], grid.bounds[3] - grid.bounds[2])
     umax = np.abs(u).max()
@@ -35,7 +35,7 @@ def von_mises_picture(out: Path, scale: float | None) -> Path:
     plotter.add_mesh(warped.extract_surface(nonlinear_subdivision=3, algorithm='dataset_surface'), scalars="von_mises", cmap="viridis",
                      scalar_bar_args={"title": "von Mises stress [MPa]"})
     plotter.add_mesh(grid.extract_feature_edges(), color="gray", opacity=0.4)
-    plotter.add_text(f"step {int(reader.time_values[-1])}, deformation x {factor:.3g}", font_size=10)
+    plotter.add_text(f"step {int(blocks.field_data['step'][0])}, deformation x {factor:.3g}", font_size=10)
     plotter.view_xy()
     path = out / "von_mises.png"
     plotter.screenshot(path)

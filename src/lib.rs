@@ -29,6 +29,7 @@ pub mod contact;
 pub mod element;
 pub mod error;
 pub mod fit;
+pub mod init;
 pub mod material;
 pub mod mesh;
 pub mod model;

@@ -1,13 +1,21 @@
 //! `asperity`: the command-line front end. All work is done by the library; this file only
 //! parses arguments, sets up logging and prints results.
 
-use std::path::PathBuf;
+use std::fs::File;
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::{Arc, Mutex, MutexGuard};
 
 use clap::{Parser, Subcommand};
+use tracing_subscriber::filter::LevelFilter;
+use tracing_subscriber::fmt::MakeWriter;
+use tracing_subscriber::prelude::*;
 
 use asperity::config::{Case, QuantitySpec};
 use asperity::mesh::msh;
+use asperity::model::{Model, ModelSpec};
+use asperity::output::summary::ModelReport;
 use asperity::pipeline;
 use asperity::study;
 
@@ -16,9 +24,17 @@ use asperity::study;
 #[derive(Parser)]
 #[command(version, about)]
 struct Cli {
-    /// More log output (-v info, -vv debug).
+    /// More log output on stderr: -v adds debug lines (Newton iterations, timings), -vv
+    /// trace lines. Without it: one INFO line per increment and warnings.
     #[arg(short, long, action = clap::ArgAction::Count, global = true)]
     verbose: u8,
+    /// Only warnings and errors on stderr (log.txt keeps the INFO lines).
+    #[arg(short, long, global = true, conflicts_with = "verbose")]
+    quiet: bool,
+    /// Worker threads of the assembly and the sparse solvers (rayon's pool, which faer uses
+    /// too; default: one per core).
+    #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    threads: Option<u16>,
     #[command(subcommand)]
     command: Command,
 }
@@ -83,6 +99,23 @@ enum Command {
         /// The mesh file.
         file: PathBuf,
     },
+    /// Check a case without solving: read and validate it, mesh its .geo (in a temporary
+    /// folder) or read its .msh, build the model and print what it contains.
+    Check {
+        /// The case file (TOML).
+        case: PathBuf,
+    },
+    /// Write a commented template case and its gmsh script (a block pressed onto a
+    /// foundation, with friction) into DIR; they run as they are. Existing files are never
+    /// overwritten.
+    Init {
+        /// Target folder (created if missing).
+        #[arg(default_value = ".")]
+        dir: PathBuf,
+    },
+    /// Print the JSON schema of the case file (for editors: completion and validation of
+    /// case files, e.g. with Taplo or Even Better TOML).
+    Schema,
 }
 
 #[derive(Subcommand)]
@@ -126,18 +159,101 @@ enum SweepAction {
 /// success, 1 any other failure, 2 a convergence study that cannot run.
 const COLLAPSE_EXIT_CODE: u8 = 3;
 
+/// The run's `log.txt`: a log sink that records nothing until [`LogFile::open`] is called with
+/// the output folder (known only once the case is read), then the same lines as stderr, at
+/// INFO level or more detailed, whatever `-q` says.
+#[derive(Clone, Default)]
+struct LogFile(Arc<Mutex<Option<File>>>);
+
+impl LogFile {
+    /// Starts writing `dir/log.txt` (created or truncated).
+    fn open(&self, dir: &Path) -> asperity::Result<()> {
+        let path = dir.join("log.txt");
+        std::fs::create_dir_all(dir).map_err(|e| asperity::Error::io(dir, e))?;
+        let file = File::create(&path).map_err(|e| asperity::Error::io(&path, e))?;
+        *self.lock() = Some(file);
+        Ok(())
+    }
+
+    fn lock(&self) -> MutexGuard<'_, Option<File>> {
+        // A panic while logging leaves the file usable: it only ever holds whole lines.
+        self.0.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+/// One event's write into [`LogFile`] (the fmt layer writes a whole line at once).
+struct LogFileWriter<'a>(MutexGuard<'a, Option<File>>);
+
+impl Write for LogFileWriter<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        match self.0.as_mut() {
+            Some(f) => f.write(buf),
+            None => Ok(buf.len()),
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.0.as_mut().map_or(Ok(()), Write::flush)
+    }
+}
+
+impl<'a> MakeWriter<'a> for LogFile {
+    type Writer = LogFileWriter<'a>;
+
+    fn make_writer(&'a self) -> Self::Writer {
+        LogFileWriter(self.lock())
+    }
+}
+
+/// Sets up logging: stderr at the level of `-q`/`-v` (ANSI colours only on a terminal, so
+/// piped and redirected logs stay plain text) and the returned `log.txt` sink at INFO or
+/// more. Both print the spans an event is in (e.g. `step{step=3}:`), so Newton iteration
+/// lines carry their step.
+fn init_logging(cli: &Cli) -> LogFile {
+    let level = match (cli.quiet, cli.verbose) {
+        (true, _) => LevelFilter::WARN,
+        (false, 0) => LevelFilter::INFO,
+        (false, 1) => LevelFilter::DEBUG,
+        (false, _) => LevelFilter::TRACE,
+    };
+    let log_file = LogFile::default();
+    let stderr = tracing_subscriber::fmt::layer()
+        .with_writer(std::io::stderr)
+        .with_ansi(std::io::stderr().is_terminal())
+        .with_target(false)
+        .with_filter(level);
+    let file = tracing_subscriber::fmt::layer()
+        .with_writer(log_file.clone())
+        .with_ansi(false)
+        .with_target(false)
+        .with_filter(level.max(LevelFilter::INFO));
+    tracing_subscriber::registry()
+        .with(stderr)
+        .with(file)
+        .init();
+    log_file
+}
+
+/// Sizes rayon's global pool, which the assembly, the study's levels and faer's solvers
+/// (`Par::rayon(0)`: as many threads as the pool has) all run on.
+fn init_threads(threads: Option<u16>) -> asperity::Result<()> {
+    let Some(n) = threads else { return Ok(()) };
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n.into())
+        .build_global()
+        .map_err(|e| asperity::Error::Case {
+            path: PathBuf::from("--threads"),
+            message: format!("cannot start {n} threads: {e}"),
+        })
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let level = match cli.verbose {
-        0 => tracing::Level::WARN,
-        1 => tracing::Level::INFO,
-        _ => tracing::Level::DEBUG,
-    };
-    tracing_subscriber::fmt()
-        .with_max_level(level)
-        .with_writer(std::io::stderr)
-        .with_target(false)
-        .init();
+    let log_file = init_logging(&cli);
+    if let Err(e) = init_threads(cli.threads) {
+        eprintln!("error: {e}");
+        return ExitCode::FAILURE;
+    }
     if let Command::Converge { .. } = cli.command {
         return match converge_command(cli.command) {
             Ok(code) => code,
@@ -157,7 +273,7 @@ fn main() -> ExitCode {
             }
         };
     }
-    match execute(cli.command) {
+    match execute(cli.command, &log_file) {
         Ok(()) => ExitCode::SUCCESS,
         // Plastic collapse (the load exceeds what the structure carries): its own code, so
         // scripts can tell it from other failures; the converged steps are on disk.
@@ -297,13 +413,30 @@ fn sweep_command(action: SweepAction) -> asperity::Result<bool> {
     }
 }
 
-fn execute(command: Command) -> asperity::Result<()> {
+/// `asperity check`: everything a run does before its first step (the case, the mesh, the
+/// model), and the model's description. A `.geo` script is meshed into a temporary folder.
+fn check(case: &Path) -> asperity::Result<String> {
+    let parsed = Case::from_file(case)?;
+    let spec = ModelSpec::new(&parsed)?;
+    let scratch = tempfile::tempdir().map_err(|e| asperity::Error::io(std::env::temp_dir(), e))?;
+    let mesh = pipeline::load_mesh(&parsed, scratch.path())?;
+    let model = Model::build(mesh, spec)?;
+    Ok(format!(
+        "{}\ncase {}: ok",
+        ModelReport(&model),
+        case.display()
+    ))
+}
+
+fn execute(command: Command, log_file: &LogFile) -> asperity::Result<()> {
     match command {
         Command::Run { case, out } => {
             let parsed = Case::from_file(&case)?;
             let out_dir = out
                 .or_else(|| parsed.output.dir.as_ref().map(|d| parsed.resolve(d)))
                 .unwrap_or_else(|| PathBuf::from("out").join(case.file_stem().unwrap_or_default()));
+            // Opened once the folder exists and is the run's: log.txt belongs to this run.
+            log_file.open(&out_dir)?;
             let progress = std::io::IsTerminal::is_terminal(&std::io::stderr());
             let summary = pipeline::run(&parsed, &out_dir, progress)?;
             println!("{summary}");
@@ -313,6 +446,21 @@ fn execute(command: Command) -> asperity::Result<()> {
         Command::MeshInfo { file } => {
             let mesh = msh::read_msh(&file)?;
             println!("{}", msh::describe(&mesh));
+        }
+        Command::Check { case } => println!("{}", check(&case)?),
+        Command::Init { dir } => {
+            for path in asperity::init::write_templates(&dir)? {
+                println!("wrote {}", path.display());
+            }
+            println!(
+                "run it with: asperity run {}",
+                dir.join(asperity::init::TEMPLATES[0].0).display()
+            );
+        }
+        Command::Schema => {
+            let schema = schemars::schema_for!(Case);
+            let text = serde_json::to_string_pretty(&schema).expect("a schema is valid JSON");
+            println!("{text}");
         }
     }
     Ok(())

@@ -11,6 +11,8 @@ use asperity::output::pvd::{PvdEntry, write_pvd};
 use asperity::output::vtu::{read_vtu, write_vtu};
 use asperity::output::{Field, FieldValues, Grid};
 
+mod common;
+
 /// One 8-node quad (VTK 23) on [0,2]×[0,1], a 6-node triangle (22) on top of it sharing the
 /// edge y = 1, and a quadratic edge (21) along y = 0: the three cell kinds asperity writes.
 fn mixed_grid() -> Grid {
@@ -47,16 +49,19 @@ fn mixed_grid() -> Grid {
         Field {
             name: "displacement".into(),
             components: 3,
+            component_names: Vec::new(),
             values: FieldValues::F64(displacement),
         },
         Field {
             name: "stress".into(),
             components: 6,
+            component_names: Vec::new(),
             values: FieldValues::F64(stress),
         },
         Field {
             name: "von_mises".into(),
             components: 1,
+            component_names: Vec::new(),
             values: FieldValues::F64(von_mises),
         },
     ];
@@ -64,11 +69,13 @@ fn mixed_grid() -> Grid {
         Field {
             name: "body".into(),
             components: 1,
+            component_names: Vec::new(),
             values: FieldValues::I32(vec![1, 2, -1]),
         },
         Field {
             name: "area".into(),
             components: 1,
+            component_names: Vec::new(),
             values: FieldValues::F64(vec![2.0, 0.5, 0.0]),
         },
     ];
@@ -139,11 +146,13 @@ fn block_multiple_grid() -> Grid {
     grid.point_data.push(Field {
         name: "s".into(),
         components: 1,
+        component_names: Vec::new(),
         values: FieldValues::F64((0..n).map(|i| i as f64 * 0.1).collect()),
     });
     grid.cell_data.push(Field {
         name: "id".into(),
         components: 4,
+        component_names: Vec::new(),
         values: FieldValues::I32((0..2 * n).collect()),
     });
     grid
@@ -167,6 +176,7 @@ fn vtu_empty_grid_round_trips() {
         point_data: vec![Field {
             name: "u".into(),
             components: 3,
+            component_names: Vec::new(),
             values: FieldValues::F64(vec![]),
         }],
         ..Grid::default()
@@ -565,6 +575,7 @@ fn vtu_timing_500k_points() {
     let field = |name: &str, comps: usize, zero: &dyn Fn(usize, usize) -> bool| Field {
         name: name.into(),
         components: comps,
+        component_names: Vec::new(),
         values: FieldValues::F64(
             (0..np * comps)
                 .map(|k| {
@@ -586,6 +597,7 @@ fn vtu_timing_500k_points() {
     grid.cell_data = vec![Field {
         name: "body".into(),
         components: 1,
+        component_names: Vec::new(),
         values: FieldValues::I32(vec![1; nc]),
     }];
 
@@ -634,6 +646,7 @@ fn write_samples() {
         edge.cell_data.push(Field {
             name: "p_N".into(),
             components: 1,
+            component_names: Vec::new(),
             values: FieldValues::F64(vec![-(step as f64)]),
         });
         let interface = format!("vtu/interface_{step}.vtu");
@@ -658,4 +671,243 @@ fn write_samples() {
     let mut table = CsvTable::new(["time", "load, N", "u_y"]);
     table.rows = vec![vec![0.5, 1e-300, -1.0 / 3.0], vec![1.0, 6.02e23, 0.1]];
     write_csv(&dir.join("history.csv"), &table).unwrap();
+}
+
+/// The step grids of ParaView output on a block pressed and pushed on a base (plane strain)
+/// and on the same model in axisymmetry: every new field checked against an independent
+/// relation (equilibrium, Hooke's law, the displacement of the bodies), and the grid's field
+/// data and component names through a write/read round trip.
+mod step_grids {
+    use super::common::*;
+    use super::*;
+    use asperity::post::interface::{InterfaceOutput, contact_extent, resultants};
+    use asperity::post::{BodyPoints, StepInfo, reactions, step_grids};
+    use asperity::solver::stepping::run_steps;
+
+    const E: f64 = 200_000.0;
+    const NU: f64 = 0.3;
+
+    /// A block [1, 3] × [1, 2] on a base [0, 4] × [0, 1], coincident nodes on the contact; the
+    /// curve groups are the parts of the bodies' horizontal edges under the block: `ground`
+    /// (y = 0), `base_top`, `block_bottom` (y = 1) and `block_top` (y = 2).
+    fn mesh() -> asperity::mesh::Mesh {
+        let body = |name: &str, [x0, x1]: [f64; 2], y0: f64, curves: [(&str, f64); 2]| {
+            let nx = (2.0 * (x1 - x0)) as usize;
+            let mut m = tensor(&uniform(x0, x1, nx), &uniform(y0, y0 + 1.0, 2), name);
+            for (group, y) in curves {
+                add_curve_group(&mut m, group, |x| x[1] == y && (1.0..=3.0).contains(&x[0]));
+            }
+            m
+        };
+        let base = body(
+            "base",
+            [0.0, 4.0],
+            0.0,
+            [("ground", 0.0), ("base_top", 1.0)],
+        );
+        let block = body(
+            "block",
+            [1.0, 3.0],
+            1.0,
+            [("block_bottom", 1.0), ("block_top", 2.0)],
+        );
+        merge(base, block, false)
+    }
+
+    fn field<'g>(fields: &'g [Field], name: &str) -> &'g Field {
+        fields
+            .iter()
+            .find(|f| f.name == name)
+            .unwrap_or_else(|| panic!("no field `{name}`"))
+    }
+
+    fn f64s(f: &Field) -> &[f64] {
+        match &f.values {
+            FieldValues::F64(v) => v,
+            other => panic!("`{}` is not Float64: {other:?}", f.name),
+        }
+    }
+
+    /// Σ over the tuples of a 3-component field: (x, y).
+    fn sum_xy(f: &Field) -> [f64; 2] {
+        let v = f64s(f);
+        [0, 1].map(|c| v.iter().skip(c).step_by(3).sum())
+    }
+
+    fn close(a: f64, b: f64, scale: f64) -> bool {
+        (a - b).abs() <= 1e-10 * scale
+    }
+
+    /// Runs the pressed-and-pushed block (p = 10 MPa on the 2 mm top, pushed until it slides)
+    /// and checks every step's grids.
+    fn check(case: CaseBuilder) {
+        let case = case.pressed_and_pushed(10.0, 0.01, &[0.0, 1.0, 2.0]).case();
+        let model = model(mesh(), &case).unwrap();
+        let points = BodyPoints::new(&model);
+        let interface = InterfaceOutput::new(&model);
+        let dir = tempfile::tempdir().unwrap();
+        let mut slid = false;
+        run_steps(&model, &settings(&case), |step| {
+            let info = StepInfo {
+                step: step.step,
+                time: 0.25 * step.step as f64,
+                load_factor: step.load_factor,
+            };
+            let (bodies, contact) = step_grids(&model, &points, &interface, step, info);
+            let contact = contact.expect("the model has a contact pair");
+            let states = &step.solution.interface_committed;
+
+            // Reaction forces: summed over the grid they are the supports' reactions.
+            let total: [f64; 2] = reactions(&model, step.internal_force, step.external_force)
+                .iter()
+                .fold([0.0; 2], |a, r| [a[0] + r[0], a[1] + r[1]]);
+            let rf = sum_xy(field(&bodies.point_data, "reaction_force"));
+            let scale = total[1].abs().max(1.0);
+            assert!(close(rf[0], total[0], scale) && close(rf[1], total[1], scale));
+
+            // Contact force vectors add up to the pair's resultant on body B, whose normal
+            // part carries the pressure on the block (10 MPa × 2 mm × 1 mm, the top is the
+            // only other load on the block and is vertical).
+            let r = resultants(&model, states)[0];
+            let normal = sum_xy(field(&contact.point_data, "contact_normal_force"));
+            let shear = sum_xy(field(&contact.point_data, "contact_shear_force"));
+            for c in 0..2 {
+                assert!(close(normal[c] + shear[c], r[2 + c], 20.0), "{c}");
+            }
+            assert!(close(normal[1], 20.0, 20.0), "{normal:?}");
+            assert!(
+                normal[0].abs() < 1e-10 * 20.0,
+                "a flat contact has no normal x force"
+            );
+            // Sliding as a whole: the shear force is μ N (Coulomb, μ = 0.3).
+            let extent = contact_extent(&model, states)[0];
+            if extent.stick_length == 0.0 && extent.slip_length > 0.0 {
+                slid = true;
+                assert!(close(shear[0].abs(), 0.3 * 20.0, 20.0), "{shear:?}");
+            }
+            let length = extent.stick_length + extent.slip_length + extent.open_length;
+            assert!(close(length, 2.0, 1.0), "the pair is 2 mm long: {extent:?}");
+            // Pressed flat: all of it is closed; 2 mm × the unit thickness.
+            assert!(close(extent.area, 2.0, 1.0), "{extent:?}");
+
+            // Interface displacement = the body displacement at the same nodes (side B).
+            let u = f64s(field(&contact.point_data, "displacement"));
+            for (k, &n) in interface.nodes().iter().enumerate() {
+                let n = n as usize;
+                assert_eq!(
+                    &u[3 * k..3 * k + 3],
+                    &[step.solution.u[2 * n], step.solution.u[2 * n + 1], 0.0]
+                );
+            }
+
+            // Hooke's law between the nodal stress and strain tensors (both recovered by the
+            // same linear map, so it holds at the nodes exactly): σ = λ tr ε I + 2G ε with the
+            // tensor shear ε_xy (plane strain and axisymmetry: all four components).
+            let (lambda, g) = (
+                E * NU / ((1.0 + NU) * (1.0 - 2.0 * NU)),
+                E / (2.0 * (1.0 + NU)),
+            );
+            let sigma = f64s(field(&bodies.point_data, "stress"));
+            let eps = f64s(field(&bodies.point_data, "strain"));
+            for (s, e) in sigma.chunks(6).zip(eps.chunks(6)) {
+                let tr = e[0] + e[1] + e[2];
+                for i in 0..3 {
+                    assert!(
+                        close(s[i], lambda * tr + 2.0 * g * e[i], 10.0),
+                        "{s:?} {e:?}"
+                    );
+                }
+                assert!(close(s[3], 2.0 * g * e[3], 10.0), "shear: {s:?} {e:?}");
+            }
+
+            // Field data and component names survive the file.
+            for (name, grid) in [("bodies", &bodies), ("interface", &contact)] {
+                let path = dir.path().join(format!("{name}_{}.vtu", step.step));
+                write_vtu(&path, grid).unwrap();
+                let back = read_vtu(&path).unwrap();
+                assert_eq!(&back, grid);
+                let time = f64s(field(&back.field_data, "TimeValue"));
+                assert_eq!(time, [0.25 * step.step as f64]);
+                let lf = f64s(field(&back.field_data, "load_factor"));
+                assert_eq!(lf, [step.load_factor]);
+                let k = &field(&back.field_data, "step").values;
+                assert_eq!(k, &FieldValues::I32(vec![step.step as i32]));
+            }
+            Ok(0.0)
+        })
+        .unwrap();
+        assert!(slid, "the last step slides");
+        // Names of the indices in the cell data.
+        let names = |grid: &Grid, key: &str| field(&grid.field_data, key).values.clone();
+        let state = asperity::solver::stepping::Solution::new(&model);
+        let bodies = asperity::post::body_grid(&model, &points, &state.u, &state.committed);
+        assert_eq!(
+            names(&bodies, "body_names"),
+            FieldValues::Str(vec!["base".into(), "block".into()])
+        );
+        let contact = interface.grid(&model, &state.interface_committed);
+        assert_eq!(
+            names(&contact, "pair_names"),
+            FieldValues::Str(vec!["joint".into()])
+        );
+        for tensor in ["stress", "strain"] {
+            let names = &field(&bodies.point_data, tensor).component_names;
+            assert_eq!(names, &["xx", "yy", "zz", "xy", "yz", "xz"]);
+        }
+    }
+
+    fn case(builder: CaseBuilder) -> CaseBuilder {
+        let faces = [
+            ("side_a", "base_top".into()),
+            ("side_b", "block_bottom".into()),
+            ("name", "joint".into()),
+        ];
+        builder
+            .body("base", elastic(E, NU))
+            .body("block", elastic(E, NU))
+            .support("ground", &[("ux", 0.0), ("uy", 0.0)])
+            .contact(&faces, linear_coulomb(1e4, 1e3, 0.3))
+    }
+
+    #[test]
+    fn plane_strain() {
+        check(case(CaseBuilder::plane_strain()));
+    }
+
+    /// The same bodies as rings about the y axis, pressed: the contact area is the annulus
+    /// π (3² − 1²), its normal force the pressure on the top annulus, and the tensors are
+    /// named in cylindrical components.
+    #[test]
+    fn axisymmetric() {
+        let case = case(CaseBuilder::axisymmetric())
+            .pressure("block_top", 10.0)
+            .steps(1)
+            .case();
+        let model = model(mesh(), &case).unwrap();
+        let points = BodyPoints::new(&model);
+        let interface = InterfaceOutput::new(&model);
+        let annulus = std::f64::consts::PI * (3.0f64.powi(2) - 1.0);
+        run_steps(&model, &settings(&case), |step| {
+            let info = StepInfo {
+                step: step.step,
+                time: 1.0,
+                load_factor: step.load_factor,
+            };
+            let (bodies, contact) = step_grids(&model, &points, &interface, step, info);
+            let extent = contact_extent(&model, &step.solution.interface_committed)[0];
+            assert!(close(extent.area, annulus, annulus), "{extent:?}");
+            assert!(close(extent.stick_length, 2.0, 1.0), "{extent:?}");
+            let normal = sum_xy(field(&contact.unwrap().point_data, "contact_normal_force"));
+            assert!(
+                close(normal[1], 10.0 * annulus, 10.0 * annulus),
+                "{normal:?}"
+            );
+            for tensor in ["stress", "strain"] {
+                let names = &field(&bodies.point_data, tensor).component_names;
+                assert_eq!(names, &["rr", "zz", "θθ", "rz", "zθ", "rθ"]);
+            }
+            Ok(0.0)
+        })
+        .unwrap();
+    }
 }

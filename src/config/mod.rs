@@ -12,6 +12,7 @@ use std::collections::BTreeMap;
 use std::fmt::Display;
 use std::path::{Path, PathBuf};
 
+use schemars::JsonSchema;
 use serde::Deserialize;
 
 use crate::{Error, Result};
@@ -21,7 +22,7 @@ mod quantity;
 pub use quantity::{Component, QuantityKind, QuantitySpec, Statistic, parse_quantity};
 
 /// A parsed case file.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Case {
     pub mesh: MeshSource,
@@ -54,7 +55,7 @@ pub struct Case {
 }
 
 /// Where the mesh comes from: an existing `.msh` file, or a `.geo` script meshed by gmsh.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MeshSource {
     /// An MSH 4.1 file.
@@ -74,7 +75,7 @@ fn one() -> f64 {
 }
 
 /// The 2D idealisation (`[analysis]`).
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum AnalysisSpec {
     /// σ_zz = 0. `thickness` in mm.
@@ -96,7 +97,7 @@ impl AnalysisSpec {
 }
 
 /// A body: a physical surface and its material.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct BodySpec {
     /// Name of the physical surface.
@@ -109,7 +110,7 @@ pub struct BodySpec {
 }
 
 /// The element formulation of a body (`[[body]] formulation`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum FormulationKind {
     /// Standard displacement element, full integration.
@@ -119,7 +120,7 @@ pub enum FormulationKind {
 }
 
 /// Material parameters of a body.
-#[derive(Clone, Copy, Debug, Deserialize)]
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
     /// Young's modulus in MPa.
@@ -139,8 +140,12 @@ pub struct MaterialSpec {
 
 /// Prescribed displacement components on the nodes of a physical curve or point. Values are
 /// in mm at load factor 1 and scale with the load factor. An omitted component is free.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
+#[schemars(extend("patternProperties" = {
+    "^ur$": {"description": "alias of ux: r displacement", "type": ["number", "null"]},
+    "^uz$": {"description": "alias of uy: z displacement", "type": ["number", "null"]}
+}))]
 pub struct SupportSpec {
     /// Name of a physical curve or physical point.
     pub group: String,
@@ -155,7 +160,7 @@ pub struct SupportSpec {
 }
 
 /// A load at load factor 1 (it scales with the load factor).
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LoadSpec {
     /// Name of a physical curve (pressure, traction) or physical point (force).
@@ -177,7 +182,7 @@ pub struct LoadSpec {
 /// Give either `side_a` and `side_b` (two physical curves: coincident but distinct nodes, or,
 /// with `pairing = "ordered"`, non-coincident curves with equal node counts), or `curve`,
 /// `body_a` and `body_b` (one curve of a conforming mesh, split here).
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSpec {
     /// Name used in output files and messages (default: "<side_a>-<side_b>" or the curve).
@@ -201,7 +206,7 @@ pub struct ContactSpec {
 }
 
 /// How the nodes of `side_a` and `side_b` are paired.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum PairingKind {
     Coincident,
@@ -209,7 +214,7 @@ pub enum PairingKind {
 }
 
 /// The integration rule of a pair's interface elements.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum IntegrationKind {
     /// 3-point Newton-Cotes (Lobatto) at the nodes: lumped.
@@ -237,7 +242,7 @@ pub enum Faces<'c> {
 }
 
 /// The interface law of a contact pair and its parameters.
-#[derive(Clone, Copy, Debug, Deserialize)]
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum LawSpec {
     /// Linear normal stiffness (compression only), linear tangential stiffness and ideal
@@ -329,7 +334,7 @@ impl ContactSpec {
 }
 
 /// The load schedule: load factors of the steps, in order.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Steps {
     /// `count` equal steps from 1/count to 1.
@@ -354,7 +359,7 @@ pub struct Steps {
 }
 
 /// How the load factor is driven (`[steps] control`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ControlKind {
     /// The load factors of `count` or `factors`.
@@ -396,7 +401,7 @@ impl Steps {
 }
 
 /// Newton-Raphson settings.
-#[derive(Clone, Copy, Debug, Deserialize)]
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SolverSpec {
     /// Iteration limit per step.
@@ -448,7 +453,7 @@ fn default_collapse_stiffness_ratio() -> f64 {
 }
 
 /// The linear solver of models with contact pairs (`[solver] linear_solver`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum LinearSolverKind {
     /// Exact solves by condensation onto the interface unknowns.
@@ -459,7 +464,7 @@ pub enum LinearSolverKind {
 }
 
 /// The global algorithm for contact (`[solver] contact_algorithm`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ContactAlgorithmKind {
     /// Full Newton with the consistent tangent.
@@ -500,7 +505,7 @@ impl Default for SolverSpec {
 }
 
 /// What to write.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct OutputSpec {
     /// Output folder (relative to the case file); the CLI's `--out` overrides it. Default:

@@ -1,6 +1,7 @@
 //! Quantities of interest (`[[quantity]]` in a case file, `--quantity` on the command line):
 //! what a study measures at the end of the last step, and how it is checked.
 
+use schemars::JsonSchema;
 use serde::Deserialize;
 
 use super::{Case, ContactSpec};
@@ -8,7 +9,7 @@ use super::{Case, ContactSpec};
 /// A quantity of interest of a mesh-convergence study (`[[quantity]]`, or `--quantity` on the
 /// command line of `asperity converge`), evaluated at the end of the last step. Which of the
 /// optional keys a kind needs is checked by [`QuantitySpec::check`].
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct QuantitySpec {
     /// Name in tables and files: letters, digits, `_`, `-`, `.`.
@@ -43,7 +44,7 @@ fn default_quantity_tolerance() -> f64 {
 }
 
 /// What a [`QuantitySpec`] measures.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum QuantityKind {
     /// Reaction force of a support (N; axisymmetry: total over the circle).
@@ -76,7 +77,8 @@ impl QuantityKind {
 }
 
 /// A global displacement or force component.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, JsonSchema)]
+#[schemars(extend("enum" = ["x", "y", "r", "z"]))]
 pub enum Component {
     #[serde(rename = "x", alias = "r")]
     X,
@@ -92,7 +94,7 @@ impl Component {
 }
 
 /// Which value of the contact pressure along a pair.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Statistic {
     /// The largest nodal value.

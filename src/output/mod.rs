@@ -14,7 +14,7 @@ pub mod vtu;
 
 use crate::mesh::CellKind;
 
-/// An array attached to the points or cells of a [`Grid`].
+/// An array attached to the points or cells of a [`Grid`], or to the grid as a whole.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Field {
     /// Array name as ParaView shows it (e.g. `displacement`).
@@ -22,7 +22,55 @@ pub struct Field {
     /// Components per tuple (1 scalar, 3 vector, 6 symmetric tensor in VTK's order
     /// xx, yy, zz, xy, yz, xz).
     pub components: usize,
+    /// Names of the components as ParaView lists them (VTK's `ComponentName` attributes,
+    /// e.g. `rr`, `zz`, `θθ`, `rz` for an axisymmetric tensor); empty: VTK's defaults
+    /// (`X`, `Y`, `Z`; `XX`, ... for 6 components).
+    pub component_names: Vec<String>,
     pub values: FieldValues,
+}
+
+impl Field {
+    /// A field with `components` values per tuple and VTK's default component names.
+    pub fn new(name: &str, components: usize, values: FieldValues) -> Self {
+        Self {
+            name: name.into(),
+            components,
+            component_names: Vec::new(),
+            values,
+        }
+    }
+
+    /// A one-component `Float64` field.
+    pub fn scalar(name: &str, values: Vec<f64>) -> Self {
+        Self::new(name, 1, FieldValues::F64(values))
+    }
+
+    /// A symmetric tensor in VTK's component order with the given component names.
+    pub fn tensor(name: &str, values: Vec<f64>, component_names: [&str; 6]) -> Self {
+        Self {
+            component_names: component_names.map(String::from).to_vec(),
+            ..Self::new(name, 6, FieldValues::F64(values))
+        }
+    }
+
+    /// A one-component string array (only in a grid's [`Grid::field_data`]).
+    pub fn strings(name: &str, values: Vec<String>) -> Self {
+        Self::new(name, 1, FieldValues::Str(values))
+    }
+
+    /// Number of values (not tuples).
+    pub fn len(&self) -> usize {
+        match &self.values {
+            FieldValues::F64(v) => v.len(),
+            FieldValues::I32(v) => v.len(),
+            FieldValues::Str(v) => v.len(),
+        }
+    }
+
+    /// Whether the field has no values.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
 }
 
 /// The values of a [`Field`], `components` per point or cell, tuple after tuple.
@@ -30,6 +78,8 @@ pub struct Field {
 pub enum FieldValues {
     F64(Vec<f64>),
     I32(Vec<i32>),
+    /// Strings (VTK `String` arrays): names in a grid's [`Grid::field_data`].
+    Str(Vec<String>),
 }
 
 /// An unstructured grid ready to be written: points in the x-y plane (z = 0), cells given
@@ -47,6 +97,10 @@ pub struct Grid {
     pub cell_types: Vec<u8>,
     pub point_data: Vec<Field>,
     pub cell_data: Vec<Field>,
+    /// Arrays of the grid as a whole (VTK FieldData, any number of tuples): the step's
+    /// `TimeValue`, which ParaView shows as the time, and what the indices of the cell data
+    /// name (e.g. `body_names[k]` is body k).
+    pub field_data: Vec<Field>,
 }
 
 impl Grid {
@@ -60,6 +114,16 @@ impl Grid {
     /// Number of cells.
     pub fn cell_count(&self) -> usize {
         self.cell_types.len()
+    }
+}
+
+/// Component names of a symmetric tensor in VTK's order (xx, yy, zz, xy, yz, xz): in
+/// axisymmetry x is r, y is z and the out-of-plane direction is the hoop direction θ.
+pub fn tensor_component_names(axisymmetric: bool) -> [&'static str; 6] {
+    if axisymmetric {
+        ["rr", "zz", "θθ", "rz", "zθ", "rθ"]
+    } else {
+        ["xx", "yy", "zz", "xy", "yz", "xz"]
     }
 }
 

@@ -13,6 +13,7 @@ use serde::{Serialize, Serializer};
 
 use super::atomic::write_atomically;
 use crate::Result;
+use crate::model::Model;
 
 /// The contents of `summary.json`.
 #[derive(Clone, Debug, Serialize)]
@@ -199,6 +200,56 @@ impl Summary {
             w.write_all(&json)?;
             w.write_all(b"\n")
         })
+    }
+}
+
+/// The model as `asperity check` prints it: analysis, size, and per body, contact pair and
+/// support what the case made of it (material, formulation, law, elements, prescribed dofs),
+/// so a case can be checked before anything is solved.
+pub struct ModelReport<'m>(pub &'m Model);
+
+impl std::fmt::Display for ModelReport<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let m = self.0;
+        writeln!(
+            f,
+            "model: {}, {} nodes, {} elements, {} interface elements, {} unknowns, size {:.6e} mm",
+            m.analysis.name(),
+            m.mesh.nodes.len(),
+            m.continuum.cells.len(),
+            m.interface.elements.len(),
+            m.dofs.free_count(),
+            m.size
+        )?;
+        for (b, name) in m.bodies.iter().enumerate() {
+            let elements = m.continuum.cells.iter().filter(|c| c.body as usize == b);
+            writeln!(
+                f,
+                "body '{name}': {} elements, {}, {} formulation",
+                elements.count(),
+                m.continuum.materials[b].describe(),
+                m.continuum.formulations[b].name()
+            )?;
+        }
+        for p in &m.interface.pairs {
+            writeln!(
+                f,
+                "contact '{}': {} interface elements, {}, interference {} mm",
+                p.name,
+                p.elements.len(),
+                p.law.describe(),
+                p.interference
+            )?;
+        }
+        for s in &m.supports {
+            writeln!(f, "support '{}': {} prescribed dofs", s.name, s.dofs.len())?;
+        }
+        write!(
+            f,
+            "loads: {} nodal force entries; steps: {}",
+            m.nodal_loads.len(),
+            m.schedule.steps()
+        )
     }
 }
 

@@ -70,10 +70,11 @@ enum Array<'a> {
     Types,
 }
 
-/// The arrays of `grid` in file order: point data, cell data, points, cells.
+/// The arrays of `grid` in file order: field data, point data, cell data, points, cells.
 fn arrays(grid: &Grid) -> impl Iterator<Item = Array<'_>> {
-    grid.point_data
+    grid.field_data
         .iter()
+        .chain(&grid.point_data)
         .chain(&grid.cell_data)
         .map(Array::Field)
         .chain([
@@ -91,6 +92,7 @@ impl Array<'_> {
             Array::Field(f) => match &f.values {
                 FieldValues::F64(v) => (&f.name, "Float64", f.components, v.len()),
                 FieldValues::I32(v) => (&f.name, "Int32", f.components, v.len()),
+                FieldValues::Str(v) => (&f.name, "String", f.components, v.len()),
             },
             Array::Points => ("Points", "Float64", 3, 3 * grid.points.len()),
             Array::Connectivity => ("connectivity", "UInt64", 1, grid.connectivity.len()),
@@ -99,18 +101,35 @@ impl Array<'_> {
         }
     }
 
-    /// Bytes of the values (without the size header).
+    /// Bytes of the values (without the size header). Strings are written as VTK does,
+    /// each followed by a NUL byte.
     fn data_bytes(&self, grid: &Grid) -> usize {
+        if let Array::Field(Field {
+            values: FieldValues::Str(v),
+            ..
+        }) = self
+        {
+            return v.iter().map(|s| s.len() + 1).sum();
+        }
         let (_, ty, _, n) = self.describe(grid);
         n * scalar_size(ty)
     }
 
-    /// The `<DataArray .../>` tag pointing at `offset` in the appended data.
-    fn tag(&self, grid: &Grid, offset: usize) -> String {
-        let (name, ty, components, _) = self.describe(grid);
+    /// The `<DataArray .../>` tag pointing at `offset` in the appended data. Field data
+    /// arrays state their `NumberOfTuples` (VTK cannot infer it from a point or cell count).
+    fn tag(&self, grid: &Grid, offset: usize, field_data: bool) -> String {
+        let (name, ty, components, n) = self.describe(grid);
         let mut tag = format!("<DataArray type=\"{ty}\" Name=\"{}\"", escape_attr(name));
         if components != 1 {
             let _ = write!(tag, " NumberOfComponents=\"{components}\"");
+        }
+        if field_data {
+            let _ = write!(tag, " NumberOfTuples=\"{}\"", n / components);
+        }
+        if let Array::Field(f) = self {
+            for (i, c) in f.component_names.iter().enumerate() {
+                let _ = write!(tag, " ComponentName{i}=\"{}\"", escape_attr(c));
+            }
         }
         let _ = writeln!(tag, " format=\"appended\" offset=\"{offset}\"/>");
         tag
@@ -123,6 +142,10 @@ impl Array<'_> {
             Array::Field(f) => match &f.values {
                 FieldValues::F64(v) => write_le(w, v, |x| x.to_le_bytes()),
                 FieldValues::I32(v) => write_le(w, v, |x| x.to_le_bytes()),
+                FieldValues::Str(v) => v.iter().try_for_each(|s| {
+                    w.write_all(s.as_bytes())?;
+                    w.write_all(&[0])
+                }),
             },
             Array::Points => write_le(w, &grid.points, |&[x, y]| {
                 let mut b = [0u8; 24];
@@ -170,18 +193,27 @@ fn scalar_size(ty: &str) -> usize {
 fn head(grid: &Grid) -> String {
     let mut offset = 0;
     let mut tags = Vec::new();
-    for a in arrays(grid) {
-        tags.push(a.tag(grid, offset));
+    for (i, a) in arrays(grid).enumerate() {
+        tags.push(a.tag(grid, offset, i < grid.field_data.len()));
         offset += HEADER_BYTES + a.data_bytes(grid);
     }
-    let (point_tags, rest) = tags.split_at(grid.point_data.len());
+    let (field_tags, rest) = tags.split_at(grid.field_data.len());
+    let (point_tags, rest) = rest.split_at(grid.point_data.len());
     let (cell_tags, rest) = rest.split_at(grid.cell_data.len());
     let mut head = String::from("<?xml version=\"1.0\"?>\n");
     let _ = write!(
         head,
         "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" \
-         header_type=\"UInt64\">\n<UnstructuredGrid>\n\
-         <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n",
+         header_type=\"UInt64\">\n<UnstructuredGrid>\n",
+    );
+    if !field_tags.is_empty() {
+        head.push_str("<FieldData>\n");
+        field_tags.iter().for_each(|t| head.push_str(t));
+        head.push_str("</FieldData>\n");
+    }
+    let _ = writeln!(
+        head,
+        "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
         grid.points.len(),
         grid.cell_count(),
     );
@@ -217,8 +249,9 @@ fn active_attributes(fields: &[Field]) -> String {
 /// `format="appended"` in raw appended data with `UInt64` headers, uncompressed,
 /// little-endian. 2D points (z is dropped).
 ///
-/// Point and cell arrays of type `Float64` become [`FieldValues::F64`], `Int32` ones
-/// [`FieldValues::I32`]. Every size header is checked against the array's declared length,
+/// Point, cell and field data arrays of type `Float64` become [`FieldValues::F64`], `Int32`
+/// ones [`FieldValues::I32`], `String` ones (field data only) [`FieldValues::Str`];
+/// component names are kept. Every size header is checked against the array's declared length,
 /// so a file whose layout differs from the head fails with an error naming the array.
 pub fn read_vtu(path: &Path) -> Result<Grid> {
     let bytes = std::fs::read(path).map_err(|e| crate::Error::io(path, e))?;
@@ -331,7 +364,7 @@ fn parse_vtu(bytes: &[u8]) -> std::result::Result<Grid, String> {
     for tag in &tags {
         if tag.name != "DataArray" {
             section = match tag.name.as_str() {
-                s @ ("PointData" | "CellData" | "Points" | "Cells") => s,
+                s @ ("FieldData" | "PointData" | "CellData" | "Points" | "Cells") => s,
                 _ => section,
             };
             continue;
@@ -351,12 +384,35 @@ fn parse_vtu(bytes: &[u8]) -> std::result::Result<Grid, String> {
             .get("offset")?
             .parse()
             .map_err(|e| format!("array `{name}` offset: {e}"))?;
+        let component_names: Vec<String> = (0..components)
+            .map_while(|i| tag.get(&format!("ComponentName{i}")).ok().map(String::from))
+            .collect();
         let tuples = match section {
             "PointData" | "Points" => n_points,
+            "FieldData" => tag
+                .get("NumberOfTuples")?
+                .parse()
+                .map_err(|e| format!("array `{name}` NumberOfTuples: {e}"))?,
             _ if name == "connectivity" => usize::MAX, // checked against the header below
             _ => n_cells,
         };
         let raw = array_bytes(data, offset, &name)?;
+        if (section, ty) == ("FieldData", "String") {
+            let strings = string_values(raw, &name)?;
+            if strings.len() != tuples * components {
+                return Err(format!(
+                    "array `{name}`: {} strings for {tuples} × {components}",
+                    strings.len()
+                ));
+            }
+            grid.field_data.push(Field {
+                name,
+                components,
+                component_names,
+                values: FieldValues::Str(strings),
+            });
+            continue;
+        }
         let size = scalar_size(ty);
         if raw.len() % size != 0
             || (tuples != usize::MAX && raw.len() != tuples * components * size)
@@ -383,7 +439,7 @@ fn parse_vtu(bytes: &[u8]) -> std::result::Result<Grid, String> {
             ("Cells", "UInt64") if name == "connectivity" => grid.connectivity = u64s(),
             ("Cells", "UInt64") if name == "offsets" => grid.offsets = u64s(),
             ("Cells", "UInt8") if name == "types" => grid.cell_types = raw.to_vec(),
-            ("PointData" | "CellData", "Float64" | "Int32") => {
+            ("FieldData" | "PointData" | "CellData", "Float64" | "Int32") => {
                 let values = if ty == "Float64" {
                     FieldValues::F64(f64s())
                 } else {
@@ -396,12 +452,13 @@ fn parse_vtu(bytes: &[u8]) -> std::result::Result<Grid, String> {
                 let field = Field {
                     name,
                     components,
+                    component_names,
                     values,
                 };
-                if section == "PointData" {
-                    grid.point_data.push(field);
-                } else {
-                    grid.cell_data.push(field);
+                match section {
+                    "FieldData" => grid.field_data.push(field),
+                    "PointData" => grid.point_data.push(field),
+                    _ => grid.cell_data.push(field),
                 }
             }
             _ => return Err(format!("unexpected {ty} array `{name}` in <{section}>")),
@@ -411,6 +468,19 @@ fn parse_vtu(bytes: &[u8]) -> std::result::Result<Grid, String> {
         return Err("points or cell types missing or of the wrong length".into());
     }
     Ok(grid)
+}
+
+/// The NUL-terminated strings of a `String` array's bytes.
+fn string_values(raw: &[u8], name: &str) -> std::result::Result<Vec<String>, String> {
+    let Some(body) = raw.strip_suffix(&[0]) else {
+        return Err(format!("string array `{name}` does not end with NUL"));
+    };
+    if body.is_empty() && raw.len() == 1 {
+        return Ok(vec![String::new()]);
+    }
+    body.split(|&b| b == 0)
+        .map(|s| String::from_utf8(s.to_vec()).map_err(|e| format!("string array `{name}`: {e}")))
+        .collect()
 }
 
 /// The values of the appended array at `offset`: after its 8-byte size header.
@@ -511,12 +581,19 @@ fn validate(grid: &Grid) -> std::result::Result<(), String> {
             grid.connectivity.len()
         ));
     }
-    check_fields("point", &grid.point_data, n_points)?;
-    check_fields("cell", &grid.cell_data, n_cells)
+    check_fields("point", &grid.point_data, Some(n_points))?;
+    check_fields("cell", &grid.cell_data, Some(n_cells))?;
+    check_fields("field-data", &grid.field_data, None)
 }
 
-/// Checks names, lengths and finiteness of the `kind` ("point" or "cell") arrays.
-fn check_fields(kind: &str, fields: &[Field], count: usize) -> std::result::Result<(), String> {
+/// Checks names, lengths, component names and values of the `kind` arrays ("point", "cell"
+/// with `count` tuples each, or "field-data" with any whole number of tuples). Strings are
+/// allowed in field data only and must not contain NUL (VTK's separator).
+fn check_fields(
+    kind: &str,
+    fields: &[Field],
+    count: Option<usize>,
+) -> std::result::Result<(), String> {
     let mut names = HashSet::new();
     for f in fields {
         let name = &f.name;
@@ -529,16 +606,29 @@ fn check_fields(kind: &str, fields: &[Field], count: usize) -> std::result::Resu
         if f.components == 0 {
             return Err(format!("{kind} field `{name}` has 0 components"));
         }
-        let len = match &f.values {
-            FieldValues::F64(v) => v.len(),
-            FieldValues::I32(v) => v.len(),
-        };
-        if len != f.components * count {
+        if !f.component_names.is_empty() && f.component_names.len() != f.components {
+            return Err(format!(
+                "{kind} field `{name}` has {} component names for {} components",
+                f.component_names.len(),
+                f.components
+            ));
+        }
+        let len = f.len();
+        let count = count.unwrap_or(len / f.components);
+        if len != f.components * count || (kind == "field-data" && len == 0) {
             return Err(format!(
                 "{kind} field `{name}` has {len} values, expected {} ({} components × {count} {kind}s)",
                 f.components * count,
                 f.components
             ));
+        }
+        if let FieldValues::Str(v) = &f.values {
+            if kind != "field-data" {
+                return Err(format!("{kind} field `{name}`: strings only in field data"));
+            }
+            if let Some(i) = v.iter().position(|s| s.contains('\0')) {
+                return Err(format!("field-data `{name}`: string {i} contains NUL"));
+            }
         }
         if let FieldValues::F64(v) = &f.values
             && let Some(i) = v.iter().position(|x| !x.is_finite())
@@ -568,11 +658,13 @@ mod tests {
         g.point_data.push(Field {
             name: "a&b".into(),
             components: 1,
+            component_names: Vec::new(),
             values: FieldValues::F64(vec![0.1, -2.5, 1e-300]),
         });
         g.cell_data.push(Field {
             name: "pair".into(),
             components: 1,
+            component_names: Vec::new(),
             values: FieldValues::I32(vec![-7]),
         });
         g

@@ -7,8 +7,9 @@
 
 use nalgebra::Matrix3;
 
-use crate::contact::InterfaceState;
-use crate::element::interface6::interface_point;
+use crate::contact::{ContactStatus, InterfaceState};
+use crate::element::Analysis;
+use crate::element::interface6::{InterfaceElement, interface_point};
 use crate::element::set::INTERFACE_POINTS;
 use crate::element::shape::line3;
 use crate::mesh::topology::directed_chains;
@@ -176,29 +177,75 @@ impl InterfaceOutput {
         out
     }
 
-    /// Interface grid: one quadratic edge (VTK 21) per element at the side-B positions, the
-    /// fields of [`FIELDS`] plus `contact_status` as point data, `pair` as cell data.
-    pub fn grid(&self, model: &Model, states: &[InterfaceState]) -> Grid {
-        let nodal = self.nodal(model, states);
-        let offsets: Vec<usize> = self
-            .pairs
+    /// The mesh nodes of the interface grid's points: side B of every pair in curve order,
+    /// pair after pair.
+    pub fn nodes(&self) -> Vec<u32> {
+        self.pairs
+            .iter()
+            .flat_map(|p| p.nodes.iter().copied())
+            .collect()
+    }
+
+    /// Index of the first grid point of each pair.
+    fn offsets(&self) -> Vec<usize> {
+        self.pairs
             .iter()
             .scan(0, |acc, p| {
                 let start = *acc;
                 *acc += p.nodes.len();
                 Some(start)
             })
-            .collect();
+            .collect()
+    }
+
+    /// The grid point of side-B node `k` (0, 1, 2: b0, b1, mid) of `element`.
+    fn grid_point(&self, offsets: &[usize], element: &InterfaceElement, k: usize) -> usize {
+        offsets[element.pair as usize] + self.slot[&element.nodes[3 + k]]
+    }
+
+    /// Contact force vectors at the side-B nodes, in grid order, like Abaqus' CNORMF and
+    /// CSHEARF: the consistent nodal forces that body A exerts on body B through the normal
+    /// and the shear stress, f_i = −∫ N_i p_N n dA and −∫ N_i p_T t dA (N) with the element's
+    /// own rule (in axisymmetry totals over the circle). Summed over a pair they are its
+    /// resultant `force_on_b` ([`resultants`]).
+    pub fn nodal_forces(&self, model: &Model, states: &[InterfaceState]) -> [Vec<f64>; 2] {
+        let offsets = self.offsets();
+        let n = offsets
+            .last()
+            .map_or(0, |&o| o + self.pairs.last().map_or(0, |p| p.nodes.len()));
+        let mut forces = [vec![0.0; 3 * n], vec![0.0; 3 * n]];
+        for (e, element) in model.interface.elements.iter().enumerate() {
+            for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
+                let p = interface_point(&model.analysis, &element.b_coords, xi, w);
+                let [pt, pn] = states[e * INTERFACE_POINTS + g].stress;
+                for k in 0..3 {
+                    let at = 3 * self.grid_point(&offsets, element, k);
+                    for c in 0..2 {
+                        forces[0][at + c] -= p.n[k] * pn * p.normal[c] * p.da;
+                        forces[1][at + c] -= p.n[k] * pt * p.tangent[c] * p.da;
+                    }
+                }
+            }
+        }
+        forces
+    }
+
+    /// Interface grid: one quadratic edge (VTK 21) per element at the side-B positions; point
+    /// data: the fields of [`FIELDS`], `contact_status`, and the contact force vectors
+    /// `contact_normal_force` and `contact_shear_force` ([`Self::nodal_forces`]); cell data
+    /// `pair`; field data `pair_names` (`pair` k is `pair_names[k]`).
+    pub fn grid(&self, model: &Model, states: &[InterfaceState]) -> Grid {
+        let nodal = self.nodal(model, states);
+        let offsets = self.offsets();
         let mut grid = Grid::default();
         for p in &self.pairs {
             grid.points
                 .extend(p.nodes.iter().map(|&n| model.mesh.nodes[n as usize]));
         }
         for element in &model.interface.elements {
-            let base = offsets[element.pair as usize];
             grid.push_cell(
                 21,
-                [3, 4, 5].map(|i| (base + self.slot[&element.nodes[i]]) as u64),
+                [0, 1, 2].map(|k| self.grid_point(&offsets, element, k) as u64),
             );
         }
         let all: Vec<&NodalContact> = nodal.iter().flatten().collect();
@@ -207,17 +254,28 @@ impl InterfaceOutput {
             grid.point_data.push(Field {
                 name: (*name).into(),
                 components: 1,
+                component_names: Vec::new(),
                 values: FieldValues::F64(values),
             });
         }
         grid.point_data.push(Field {
             name: "contact_status".into(),
             components: 1,
+            component_names: Vec::new(),
             values: FieldValues::I32(all.iter().map(|n| n.status).collect()),
         });
+        let [normal, shear] = self.nodal_forces(model, states);
+        grid.point_data.extend([
+            Field::new("contact_normal_force", 3, FieldValues::F64(normal)),
+            Field::new("contact_shear_force", 3, FieldValues::F64(shear)),
+        ]);
+        let names = model.interface.pairs.iter().map(|p| p.name.clone());
+        grid.field_data
+            .push(Field::strings("pair_names", names.collect()));
         grid.cell_data.push(Field {
             name: "pair".into(),
             components: 1,
+            component_names: Vec::new(),
             values: FieldValues::I32(
                 model
                     .interface
@@ -260,6 +318,45 @@ impl InterfaceOutput {
             })
             .collect()
     }
+}
+
+/// The extent of a pair's contact at a step, from its integration points (each stands for
+/// its weight of the curve): lengths along side B in mm, whatever the analysis.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ContactExtent {
+    /// Area in contact (stick or slip), mm²: length × thickness in a plane analysis, ∫ 2πr dl
+    /// in axisymmetry.
+    pub area: f64,
+    /// Length of side B that sticks, slips, or is open (they add up to the pair's length).
+    pub stick_length: f64,
+    pub slip_length: f64,
+    pub open_length: f64,
+    /// Largest accumulated slip ū over the pair's points (mm).
+    pub max_slip: f64,
+}
+
+/// The [`ContactExtent`] of each pair (for `history.csv` and the `stick_zone` quantity).
+pub fn contact_extent(model: &Model, states: &[InterfaceState]) -> Vec<ContactExtent> {
+    // A unit thickness turns the area weight into the length weight, also on the axis.
+    let unit = Analysis::PlaneStrain { thickness: 1.0 };
+    let mut out = vec![ContactExtent::default(); model.interface.pairs.len()];
+    for (e, element) in model.interface.elements.iter().enumerate() {
+        let x = &mut out[element.pair as usize];
+        for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
+            let state = &states[e * INTERFACE_POINTS + g];
+            let dl = interface_point(&unit, &element.b_coords, xi, w).da;
+            match state.status {
+                ContactStatus::Open => x.open_length += dl,
+                ContactStatus::Stick => x.stick_length += dl,
+                ContactStatus::Slip => x.slip_length += dl,
+            }
+            if state.status != ContactStatus::Open {
+                x.area += interface_point(&model.analysis, &element.b_coords, xi, w).da;
+            }
+            x.max_slip = x.max_slip.max(state.accumulated_slip);
+        }
+    }
+    out
 }
 
 /// Resultants of each pair: [Σ p_N dA, Σ p_T dA, F_x, F_y], where (F_x, F_y) is the force

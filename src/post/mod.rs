@@ -1,5 +1,6 @@
-//! Post-processing of a converged step: nodal stresses recovered from the integration
-//! points, the output grid of the bodies, and reaction forces.
+//! Post-processing of a converged step: nodal stresses and strains recovered from the
+//! integration points, the output grids of the bodies and the interface ([`step_grids`]),
+//! nodal and support reaction forces.
 //!
 //! Gauss-point values are extrapolated to the nodes of each cell by the least-squares fit
 //! of the cell's own shape functions to its integration-point values (exact for stress fields
@@ -11,12 +12,15 @@ use std::sync::OnceLock;
 
 use nalgebra::DMatrix;
 
+use crate::element::Analysis;
 use crate::element::quadrature::cell_rule;
 use crate::element::shape::cell_shape;
 use crate::material::{PointState, Voigt, ZZ, von_mises};
 use crate::mesh::CellKind;
 use crate::model::Model;
-use crate::output::{Field, FieldValues, Grid, vtk_cell_type};
+use crate::output::{Field, FieldValues, Grid, tensor_component_names, vtk_cell_type};
+use crate::solver::stepping::StepResult;
+use interface::InterfaceOutput;
 
 pub mod interface;
 pub mod quantities;
@@ -75,14 +79,25 @@ impl BodyPoints {
     }
 }
 
-/// Nodal stresses (Voigt, solver order) and equivalent plastic strains per output point.
-pub fn nodal_values(
-    model: &Model,
-    points: &BodyPoints,
-    states: &[PointState],
-) -> (Vec<Voigt>, Vec<f64>) {
-    let mut stress = vec![Voigt::zeros(); points.points.len()];
-    let mut eqp = vec![0.0; points.points.len()];
+/// Nodal values of one output point: Gauss-point values extrapolated and averaged.
+#[derive(Clone, Copy, Debug)]
+pub struct NodalValues {
+    /// Stress, Voigt in solver order (xx, yy, xy, zz).
+    pub stress: Voigt,
+    /// Total strain, Voigt in solver order, engineering shear γ_xy.
+    pub strain: Voigt,
+    /// Equivalent plastic strain ε̄ᵖ.
+    pub equivalent_plastic_strain: f64,
+}
+
+/// Nodal stresses, strains and equivalent plastic strains per output point.
+pub fn nodal_values(model: &Model, points: &BodyPoints, states: &[PointState]) -> Vec<NodalValues> {
+    let zero = NodalValues {
+        stress: Voigt::zeros(),
+        strain: Voigt::zeros(),
+        equivalent_plastic_strain: 0.0,
+    };
+    let mut out = vec![zero; points.points.len()];
     let mut count = vec![0u32; points.points.len()];
     let ppe = crate::element::quadrature::MAX_CELL_POINTS;
     for (e, c) in model.continuum.cells.iter().enumerate() {
@@ -90,27 +105,33 @@ pub fn nodal_values(
         let gp = &states[e * ppe..e * ppe + ex.ncols()];
         for (i, &n) in c.nodes[..c.kind.node_count()].iter().enumerate() {
             let p = points.point(c.body, n);
+            let v = &mut out[p];
             for (g, s) in gp.iter().enumerate() {
-                stress[p] += ex[(i, g)] * s.stress;
-                eqp[p] += ex[(i, g)] * s.equivalent_plastic_strain;
+                v.stress += ex[(i, g)] * s.stress;
+                v.strain += ex[(i, g)] * s.strain;
+                v.equivalent_plastic_strain += ex[(i, g)] * s.equivalent_plastic_strain;
             }
             count[p] += 1;
         }
     }
-    for ((s, e), &k) in stress.iter_mut().zip(&mut eqp).zip(&count) {
-        *s /= k as f64;
+    for (v, &k) in out.iter_mut().zip(&count) {
+        let k = k as f64;
+        v.stress /= k;
+        v.strain /= k;
         // ε̄ᵖ cannot be negative; extrapolation from the Gauss points can undershoot.
-        *e = (*e / k as f64).max(0.0);
+        v.equivalent_plastic_strain = (v.equivalent_plastic_strain / k).max(0.0);
     }
-    (stress, eqp)
+    out
 }
 
-/// The bodies' output grid of a step: quadratic cells, point data `displacement`, `stress`
-/// (xx, yy, zz, xy, yz, xz; axisymmetric rr, zz, θθ → xx, yy, zz), `von_mises` and
-/// `equivalent_plastic_strain`, cell data `body` (index into the case's bodies) and `plastic`
-/// (1 if any integration point yielded in the step).
+/// The bodies' output grid of a step: quadratic cells; point data `displacement`, `stress`
+/// and `strain` (symmetric tensors in VTK's order xx, yy, zz, xy, yz, xz with component names;
+/// axisymmetric rr, zz, θθ, rz; the strain with tensor shear ε_xy = γ_xy / 2, as ParaView's
+/// tensor filters expect), `von_mises` and `equivalent_plastic_strain`; cell data `body`
+/// (index into the case's bodies) and `plastic` (1 if any integration point yielded in the
+/// step); field data `body_names` (so `body` k is `body_names[k]`) and `analysis`.
 pub fn body_grid(model: &Model, points: &BodyPoints, u: &[f64], states: &[PointState]) -> Grid {
-    let (stress, equivalent_plastic_strain) = nodal_values(model, points, states);
+    let nodal = nodal_values(model, points, states);
     let mut grid = Grid {
         points: points
             .points
@@ -127,59 +148,135 @@ pub fn body_grid(model: &Model, points: &BodyPoints, u: &[f64], states: &[PointS
                 .map(|&n| points.point(c.body, n) as u64),
         );
     }
-    let displacement = points
-        .points
-        .iter()
-        .flat_map(|&(_, n)| [u[2 * n as usize], u[2 * n as usize + 1], 0.0])
-        .collect();
-    // Solver order (xx, yy, xy, zz) → VTK order (xx, yy, zz, xy, yz, xz).
-    let tensor = stress
-        .iter()
-        .flat_map(|s| [s[0], s[1], s[ZZ], s[2], 0.0, 0.0])
-        .collect();
-    let vm = stress.iter().map(von_mises).collect();
-    let body = model
-        .continuum
-        .cells
-        .iter()
-        .map(|c| c.body as i32)
-        .collect();
+    let nodes: Vec<u32> = points.points.iter().map(|&(_, n)| n).collect();
+    // Solver order (xx, yy, xy, zz) → VTK order (xx, yy, zz, xy, yz, xz); `shear` scales xy.
+    let tensor = |of: fn(&NodalValues) -> &Voigt, shear: f64| -> Vec<f64> {
+        nodal
+            .iter()
+            .map(of)
+            .flat_map(|s| [s[0], s[1], s[ZZ], shear * s[2], 0.0, 0.0])
+            .collect()
+    };
+    let names = tensor_component_names(matches!(model.analysis, Analysis::Axisymmetric));
     let ppe = crate::element::quadrature::MAX_CELL_POINTS;
     let plastic = (0..model.continuum.cells.len())
         .map(|e| states[e * ppe..(e + 1) * ppe].iter().any(|s| s.yielding) as i32)
         .collect();
-    let scalar = |name: &str, values: Vec<f64>| Field {
-        name: name.into(),
-        components: 1,
-        values: FieldValues::F64(values),
-    };
     grid.point_data = vec![
-        Field {
-            name: "displacement".into(),
-            components: 3,
-            values: FieldValues::F64(displacement),
-        },
-        Field {
-            name: "stress".into(),
-            components: 6,
-            values: FieldValues::F64(tensor),
-        },
-        scalar("von_mises", vm),
-        scalar("equivalent_plastic_strain", equivalent_plastic_strain),
+        nodal_vector("displacement", &nodes, u),
+        Field::tensor("stress", tensor(|v| &v.stress, 1.0), names),
+        Field::tensor("strain", tensor(|v| &v.strain, 0.5), names),
+        Field::scalar(
+            "von_mises",
+            nodal.iter().map(|v| von_mises(&v.stress)).collect(),
+        ),
+        Field::scalar(
+            "equivalent_plastic_strain",
+            nodal.iter().map(|v| v.equivalent_plastic_strain).collect(),
+        ),
     ];
+    let body = model.continuum.cells.iter().map(|c| c.body as i32);
     grid.cell_data = vec![
-        Field {
-            name: "body".into(),
-            components: 1,
-            values: FieldValues::I32(body),
-        },
-        Field {
-            name: "plastic".into(),
-            components: 1,
-            values: FieldValues::I32(plastic),
-        },
+        Field::new("body", 1, FieldValues::I32(body.collect())),
+        Field::new("plastic", 1, FieldValues::I32(plastic)),
+    ];
+    grid.field_data = vec![
+        Field::strings("body_names", model.bodies.clone()),
+        Field::strings("analysis", vec![model.analysis.name().into()]),
     ];
     grid
+}
+
+/// A 3-component point field (z = 0) of the nodal values of the dof vector `v` (2 per mesh
+/// node) at the mesh nodes `nodes`.
+pub fn nodal_vector(name: &str, nodes: &[u32], v: &[f64]) -> Field {
+    let values = nodes
+        .iter()
+        .flat_map(|&n| [v[2 * n as usize], v[2 * n as usize + 1], 0.0])
+        .collect();
+    Field::new(name, 3, FieldValues::F64(values))
+}
+
+/// Nodal reaction forces (Abaqus' RF) as a dof vector: internal minus external force at every
+/// prescribed dof, zero elsewhere; in axisymmetry totals over the full circle. Summed over a
+/// support's nodes they are its reaction in `history.csv`.
+pub fn nodal_reactions(model: &Model, internal: &[f64], external: &[f64]) -> Vec<f64> {
+    let mut rf = vec![0.0; internal.len()];
+    for &(d, _, _) in &model.prescribed {
+        rf[d] = internal[d] - external[d];
+    }
+    rf
+}
+
+/// What a step's VTU files record about the step, as VTK FieldData.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepInfo {
+    /// 1-based step number.
+    pub step: usize,
+    /// The time ParaView shows (`TimeValue`): the step's time where the case defines one,
+    /// otherwise the step number (load factors may go down again when unloading).
+    pub time: f64,
+    pub load_factor: f64,
+}
+
+impl StepInfo {
+    /// The field data arrays `TimeValue`, `step` and `load_factor`.
+    fn field_data(&self) -> [Field; 3] {
+        [
+            Field::scalar("TimeValue", vec![self.time]),
+            Field::new("step", 1, FieldValues::I32(vec![self.step as i32])),
+            Field::scalar("load_factor", vec![self.load_factor]),
+        ]
+    }
+}
+
+/// The VTU grids of a converged step: the bodies ([`body_grid`], plus the nodal reaction
+/// forces `reaction_force`, see [`nodal_reactions`]) and, when the model has contact pairs,
+/// the interface ([`InterfaceOutput::grid`], plus the side-B `displacement`, so that it warps
+/// with the bodies). Both carry the FieldData of `info` (time, step, load factor).
+///
+/// A node shared by two bodies of a conforming mesh is one output point per body; its
+/// reaction is put on the first body's point only, so that sums over the grid are the
+/// support reactions.
+pub fn step_grids(
+    model: &Model,
+    points: &BodyPoints,
+    interface: &InterfaceOutput,
+    step: &StepResult,
+    info: StepInfo,
+) -> (Grid, Option<Grid>) {
+    let solution = step.solution;
+    let mut bodies = body_grid(model, points, &solution.u, &solution.committed);
+    let rf = nodal_reactions(model, step.internal_force, step.external_force);
+    let mut written = vec![false; model.mesh.nodes.len()];
+    let values = points
+        .points
+        .iter()
+        .flat_map(|&(_, n)| {
+            let first = !std::mem::replace(&mut written[n as usize], true);
+            let d = 2 * n as usize;
+            if first {
+                [rf[d], rf[d + 1], 0.0]
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect();
+    bodies
+        .point_data
+        .push(Field::new("reaction_force", 3, FieldValues::F64(values)));
+    bodies.field_data.extend(info.field_data());
+    let interface = (!model.interface.elements.is_empty()).then(|| {
+        let mut grid = interface.grid(model, &solution.interface_committed);
+        grid.point_data.push(nodal_vector(
+            "displacement",
+            &interface.nodes(),
+            &solution.u,
+        ));
+        grid.field_data.extend(info.field_data());
+        grid
+    });
+    (bodies, interface)
 }
 
 /// Reaction force (sum over the support's prescribed dofs of internal minus external force)

@@ -5,13 +5,12 @@
 use crate::Error;
 use crate::Result;
 use crate::config::{Component, QuantityKind, QuantitySpec, Statistic};
-use crate::contact::ContactStatus;
 use crate::contact::InterfaceState;
 use crate::element::Analysis;
 use crate::element::interface6::interface_point;
 use crate::element::set::INTERFACE_POINTS;
 use crate::model::Model;
-use crate::post::interface::{FIELDS, InterfaceOutput, resultants};
+use crate::post::interface::{FIELDS, InterfaceOutput, contact_extent, resultants};
 use crate::post::reactions;
 use crate::solver::stepping::StepResult;
 
@@ -107,16 +106,7 @@ pub fn evaluate(quantities: &[QuantitySpec], model: &Model, step: &StepResult) -
                     }
                 }
             }
-            QuantityKind::StickZone => {
-                let p = pair_index(q)?;
-                let mut length = 0.0;
-                for_lengths(model, p, |e, g, dl| {
-                    if states[e * INTERFACE_POINTS + g].status == ContactStatus::Stick {
-                        length += dl;
-                    }
-                });
-                length
-            }
+            QuantityKind::StickZone => contact_extent(model, states)[pair_index(q)?].stick_length,
             QuantityKind::RelativeDisplacement | QuantityKind::Stiffness => {
                 let p = pair_index(q)?;
                 let c = comp(q);
