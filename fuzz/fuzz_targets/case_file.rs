@@ -24,8 +24,22 @@ struct Num(f64);
 impl<'a> Arbitrary<'a> for Num {
     fn arbitrary(u: &mut Unstructured<'a>) -> arbitrary::Result<Self> {
         const TYPICAL: [f64; 16] = [
-            0.0, 1.0, -1.0, 0.3, 0.5, 0.499, 1e-8, 1e-3, 2.0, 210000.0, 1e12, 1e300,
-            f64::NAN, f64::INFINITY, f64::NEG_INFINITY, -0.0,
+            0.0,
+            1.0,
+            -1.0,
+            0.3,
+            0.5,
+            0.499,
+            1e-8,
+            1e-3,
+            2.0,
+            210000.0,
+            1e12,
+            1e300,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            -0.0,
         ];
         Ok(Num(match u.int_in_range(0..=3u8)? {
             0 => f64::arbitrary(u)?,
@@ -43,7 +57,9 @@ struct Name(String);
 
 impl<'a> Arbitrary<'a> for Name {
     fn arbitrary(u: &mut Unstructured<'a>) -> arbitrary::Result<Self> {
-        const NAMES: [&str; 8] = ["plate", "lower", "upper", "cut", "top", "bottom", "../x", ""];
+        const NAMES: [&str; 8] = [
+            "plate", "lower", "upper", "cut", "top", "bottom", "../x", "",
+        ];
         Ok(Name(if bool::arbitrary(u)? {
             String::arbitrary(u)?
         } else {
@@ -84,9 +100,17 @@ struct Mesh {
 #[derive(Arbitrary, Debug, Serialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 enum Analysis {
-    PlaneStress { thickness: Num },
-    PlaneStrain { #[serde(skip_serializing_if = "Option::is_none")] thickness: Option<Num> },
-    Axisymmetric { #[serde(skip_serializing_if = "Option::is_none")] thickness: Option<Num> },
+    PlaneStress {
+        thickness: Num,
+    },
+    PlaneStrain {
+        #[serde(skip_serializing_if = "Option::is_none")]
+        thickness: Option<Num>,
+    },
+    Axisymmetric {
+        #[serde(skip_serializing_if = "Option::is_none")]
+        thickness: Option<Num>,
+    },
 }
 
 #[derive(Arbitrary, Debug, Serialize)]

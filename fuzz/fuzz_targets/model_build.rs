@@ -23,10 +23,16 @@ fn case_text(mode: u8, surfaces: &[&str], curves: &[&str]) -> String {
     let analysis = ["plane_strain", "axisymmetric"][usize::from(mode & 1)];
     let mut text = format!("[mesh]\nfile = \"fuzz.msh\"\n[analysis]\ntype = \"{analysis}\"\n");
     for s in surfaces {
-        text += &format!("[[body]]\ngroup = {}\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n", quoted(s));
+        text += &format!(
+            "[[body]]\ngroup = {}\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n",
+            quoted(s)
+        );
     }
     if let Some(first) = curves.first() {
-        text += &format!("[[support]]\ngroup = {}\nux = 0.0\nuy = 0.0\n", quoted(first));
+        text += &format!(
+            "[[support]]\ngroup = {}\nux = 0.0\nuy = 0.0\n",
+            quoted(first)
+        );
     }
     if let Some(last) = curves.last() {
         text += &format!("[[load]]\ngroup = {}\npressure = 1.0\n", quoted(last));
