@@ -13,6 +13,7 @@
 #   make bench                   timings at ~10k, ~100k, ~1M unknowns, appended to BENCHMARKS.md
 #   make bench-scale             the ~1M-unknown frictional tapered press fit (part of make bench) -> BENCHMARKS.md
 #   make bench-calculix          asperity against CalculiX 2.20 on the same meshes, increments and answers -> BENCHMARKS.md
+#   make fuzz FUZZ_SECONDS=600   fuzz the MSH reader, the case parser and model building (cargo fuzz, nightly)
 
 SHELL   := /bin/bash
 CARGO   ?= cargo
@@ -25,6 +26,7 @@ SIZE    ?= 1
 .PHONY: all deps gmsh venv build test mesh bench examples tapered_joint plane_punch indentation thick_cylinder shrink_fit prandtl clean
 .PHONY: convergence bench-calculix bench-scale
 .PHONY: fit-example sweep-test gnu-parallel
+.PHONY: fuzz
 
 all: build
 
@@ -177,6 +179,21 @@ bench-calculix: gmsh venv build
 	@command -v ccx >/dev/null || { echo "installing calculix-ccx (apt-get)"; \
 	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq calculix-ccx >/dev/null; }
 	$(PYTHON) benches/calculix/bench_calculix.py $(if $(QUICK),--quick,--write)
+
+## --- fuzzing ------------------------------------------------------------------
+# make fuzz FUZZ_SECONDS=1200: each cargo-fuzz target of fuzz/ (MSH reader, case file, mesh ->
+# model) for FUZZ_SECONDS, one after the other at the lowest priority, from seeds made by
+# fuzz/seed.sh; crashes, hangs (> 10 s) and out-of-memory inputs land in fuzz/artifacts/<target>/.
+FUZZ_SECONDS ?= 60
+FUZZ_TARGETS := msh_reader case_file model_build
+fuzz: gmsh
+	@command -v cargo-fuzz >/dev/null || $(CARGO) install cargo-fuzz
+	fuzz/seed.sh
+	@for t in $(FUZZ_TARGETS); do \
+	  echo "== fuzzing $$t for $(FUZZ_SECONDS) s"; \
+	  (cd fuzz && nice -n 19 $(CARGO) +nightly fuzz run -O $$t corpus/$$t -- \
+	    -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 -print_final_stats=1) || exit 1; \
+	done
 
 clean:
 	rm -rf target build out $(VENV)

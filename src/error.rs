@@ -237,6 +237,17 @@ pub enum MeshProblem {
     UnsupportedElement,
     /// The `$PhysicalNames` section is malformed.
     PhysicalNames,
+    /// A header count (entities, blocks, nodes, elements) or tag range disagrees with what
+    /// follows it.
+    CountMismatch,
+    /// An entity is declared twice in `$Entities`.
+    DuplicateEntity,
+    /// A node or element block belongs to an entity that `$Entities` does not declare.
+    UndeclaredEntity,
+    /// An element block's dimension differs from its element type's.
+    MixedDimension,
+    /// An element tag appears twice.
+    DuplicateElement,
 }
 
 /// Where in a mesh file an [`Error::Mesh`] (or [`Error::NotOnBody`]) is: a node or an

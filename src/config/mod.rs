@@ -17,8 +17,12 @@ use serde::Deserialize;
 
 use crate::{Error, Result};
 
+mod check;
+mod names;
 mod quantity;
 
+pub use check::{MAX_CUTBACKS, MAX_ITERATIONS, MAX_STEPS, MAX_TOLERANCE};
+pub use names::{MAX_NAME_LEN, check_name};
 pub use quantity::{Component, QuantityKind, QuantitySpec, Statistic, parse_quantity};
 
 /// A parsed case file.
@@ -168,9 +172,11 @@ pub struct LoadSpec {
     /// Normal pressure in MPa on a curve, positive pushing into the body.
     pub pressure: Option<f64>,
     /// Traction vector (t_x, t_y) in MPa on a curve.
+    #[serde(default, deserialize_with = "two_components")]
     pub traction: Option<[f64; 2]>,
     /// Force (F_x, F_y) in N applied at each node of a physical point group (in axisymmetry
     /// the total over the ring).
+    #[serde(default, deserialize_with = "two_components")]
     pub force: Option<[f64; 2]>,
     /// This load's own history: one factor per step (default: the `[steps]` factors).
     pub factors: Option<Vec<f64>>,
@@ -266,11 +272,12 @@ pub enum LawSpec {
         /// Optional unloading curve (c_N, m); default: the loading curve.
         unloading_c_n: Option<f64>,
         unloading_m: Option<f64>,
-        /// R such that p^S / R is in MPa/mm (values given per µm: × 1e-3), and S.
+        /// R such that p^S / R is in MPa/mm (values given per µm: × 1e-3), and S. Required
+        /// when `mu_m > 0`; unused (and optional) without friction.
         #[serde(rename = "R")]
-        r: f64,
+        r: Option<f64>,
         #[serde(rename = "S")]
-        s: f64,
+        s: Option<f64>,
         /// Macroscopic friction coefficient μ_m.
         mu_m: f64,
         /// Initial friction as a fraction of μ_m (default 1: no hardening).
@@ -283,6 +290,20 @@ pub enum LawSpec {
         #[serde(default = "default_starting_pressure")]
         starting_pressure: f64,
     },
+}
+
+/// A plane vector: exactly two components (a third one, say a z component, would otherwise be
+/// dropped without a word).
+fn two_components<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<Option<[f64; 2]>, D::Error> {
+    let v: Vec<f64> = Vec::deserialize(d)?;
+    <[f64; 2]>::try_from(v.as_slice()).map(Some).map_err(|_| {
+        serde::de::Error::custom(format!(
+            "a vector needs exactly two components (x, y), got {}",
+            v.len()
+        ))
+    })
 }
 
 fn default_beta() -> f64 {
@@ -545,6 +566,7 @@ impl Case {
         case.path = path.to_path_buf();
         case.base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         case.validate()?;
+        case.check_analysis_keys(text)?;
         Ok(case)
     }
 
@@ -742,6 +764,7 @@ impl Case {
                 return Err(self.invalid(key, value, "must be positive"));
             }
         }
+        self.check_ranges()?;
         let mut names = std::collections::BTreeSet::new();
         for q in &self.quantities {
             q.check(self).map_err(|m| self.error(m))?;

@@ -383,8 +383,11 @@ fn build_law(spec: &LawSpec) -> std::result::Result<Box<dyn InterfaceLaw>, Param
             c_n,
             m,
             unloading: unloading_c_n.zip(unloading_m),
-            r,
-            s,
+            // Only read when mu_m = 0 (the case check requires both otherwise), where the
+            // tangential traction is bounded by μ_F |p| = 0 and k_T never shows in a result;
+            // R = 1, S = 0 is a valid placeholder (k_T = 1 MPa/mm).
+            r: r.unwrap_or(1.0),
+            s: s.unwrap_or(0.0),
             mu_m,
             beta,
             n,

@@ -32,6 +32,7 @@ pub(crate) fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut dyn Write) -> io::Result<()>,
 ) -> Result<()> {
+    super::paths::check_output_path(path)?;
     let file_name = path.file_name().ok_or_else(|| {
         Error::io(
             path,

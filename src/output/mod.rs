@@ -8,6 +8,7 @@
 
 pub(crate) mod atomic;
 pub mod csv;
+pub mod paths;
 pub mod pvd;
 pub mod summary;
 pub mod vtu;

@@ -30,6 +30,7 @@ use mshio::{ElementType, MshFile, MshParserError};
 
 mod report;
 mod scan;
+mod structure;
 
 pub use report::describe;
 
@@ -37,10 +38,8 @@ use super::topology::model_size;
 use super::{Cell, CellKind, Line3, Mesh, PhysicalGroup, PointElement};
 use crate::error::{MeshEntity, MeshProblem};
 use crate::{Error, Result};
-use scan::{
-    NodeTags, TagIndex, check_section_counts, looks_truncated, read_header, read_node_tags,
-    read_physical_names,
-};
+use scan::{NodeTags, TagIndex, find_line, looks_truncated, read_header, read_physical_names};
+use structure::check_structure;
 
 /// Advice appended to every "wrong element order" error.
 const SECOND_ORDER_HINT: &str = "mesh with `gmsh -2 -order 2` and `-setnumber Mesh.SecondOrderIncomplete 1`, \
@@ -70,12 +69,12 @@ pub fn read_msh(path: &Path) -> Result<Mesh> {
         }
         Err(e) => return Err(Error::io(path, e)),
     };
-    parse(path, &bytes)
+    parse_msh(path, &bytes)
 }
 
 /// Parses the content of an MSH file; `path` is only used in error messages and stored in the
-/// mesh. Split from [`read_msh`] so that unit tests can feed byte strings.
-fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
+/// mesh. Split from [`read_msh`] so that tests and fuzz targets can feed byte strings.
+pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<Mesh> {
     let fail = |problem: MeshProblem, message: String| Error::mesh(path, problem, None, message);
     let at = |fault: Fault| fault.at(path);
     let section = |name: &'static str, problem: MeshProblem, message: &str| {
@@ -86,7 +85,9 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
         return Err(fail(MeshProblem::Empty, "the mesh file is empty".into()));
     }
     let header = read_header(bytes).map_err(at)?;
-    check_section_counts(bytes, &header).map_err(at)?;
+    let structure = check_structure(bytes, &header)
+        .map_err(|fault| fault.truncated_if(looks_truncated(bytes)))
+        .map_err(at)?;
 
     // Last resort only: the checks above avoid the panics of mshio 0.4.2 that we know of.
     let parsed = catch_unwind(AssertUnwindSafe(|| {
@@ -150,7 +151,7 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
         .ok_or_else(|| section("$Elements", missing, "the file has no $Elements section"))?;
 
     // --- nodes ---------------------------------------------------------------------------
-    let tags = read_node_tags(bytes, &header).map_err(at)?;
+    let tags = structure.node_tags;
     // Our reading of the tags must describe the same blocks as mshio's.
     if tags.len() != nodes.node_blocks.len()
         || tags.iter().zip(&nodes.node_blocks).any(|(t, b)| {
@@ -326,6 +327,14 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
             mesh.reoriented_cells += 1;
         }
     }
+    if mesh.reoriented_cells > 0 {
+        tracing::warn!(
+            "{}: {} of {} cells were clockwise and have been reoriented counter-clockwise",
+            path.display(),
+            mesh.reoriented_cells,
+            mesh.cells.len()
+        );
+    }
 
     // --- physical groups -----------------------------------------------------------------
     let names = read_physical_names(bytes, header.body_start).map_err(at)?;
@@ -370,7 +379,39 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
         })
         .collect();
 
+    let has_names = find_line(bytes, header.body_start, b"$PhysicalNames").is_some();
+    warn_about_names(path, has_names, &mesh.groups);
     Ok(mesh)
+}
+
+/// Physical-name problems that need not stop a run but may surprise, one warning each with a
+/// count: no `$PhysicalNames` section (the groups are then called `dim:tag` and a case must
+/// use those), and one name given to several groups of one dimension (a case naming it gets
+/// only the first of them).
+fn warn_about_names(path: &Path, has_names: bool, groups: &[PhysicalGroup]) {
+    if !has_names && !groups.is_empty() {
+        tracing::warn!(
+            "{}: no $PhysicalNames section: the {} physical groups are called `dim:tag` (e.g. \
+             \"{}\")",
+            path.display(),
+            groups.len(),
+            groups[0].name
+        );
+    }
+    let mut seen = std::collections::HashSet::new();
+    let repeated: Vec<&str> = groups
+        .iter()
+        .filter(|g| !seen.insert((g.dim, g.name.as_str())))
+        .map(|g| g.name.as_str())
+        .collect();
+    if let Some(first) = repeated.first() {
+        tracing::warn!(
+            "{}: {} physical groups repeat the name of another group of the same dimension \
+             (e.g. \"{first}\"); a case naming it gets only the first group",
+            path.display(),
+            repeated.len()
+        );
+    }
 }
 
 /// Extra geometric helpers of [`Mesh`] used by the reader and by [`describe`].
@@ -426,6 +467,27 @@ impl Fault {
             problem,
             entity,
             message: message.into(),
+        }
+    }
+
+    /// A missing section or unreadable numbers in a file that does not end with a `$End...`
+    /// line are most likely due to a cut-short file: say so.
+    fn truncated_if(self, truncated: bool) -> Self {
+        let cut_short = matches!(
+            self.problem,
+            MeshProblem::MissingSection | MeshProblem::Corrupt | MeshProblem::CountMismatch
+        );
+        if !(truncated && cut_short) {
+            return self;
+        }
+        Self {
+            problem: MeshProblem::Truncated,
+            message: format!(
+                "the file is truncated (it does not end with a $End... line); re-export it from \
+                 gmsh ({})",
+                self.message
+            ),
+            ..self
         }
     }
 
@@ -515,7 +577,7 @@ mod tests {
     fn msh(nodes: &[(u64, [f64; 3])], blocks: &[Block]) -> String {
         let mut s = String::from("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
         s += "$PhysicalNames\n2\n1 2 \"edge\"\n2 1 \"my body\"\n$EndPhysicalNames\n";
-        s += "$Entities\n0 1 1 0\n1 0 0 0 1 1 0 1 2 0\n1 0 0 0 1 1 0 1 1 0\n$EndEntities\n";
+        s += "$Entities\n1 1 1 0\n1 0 0 0 0\n1 0 0 0 1 1 0 1 2 0\n1 0 0 0 1 1 0 1 1 0\n$EndEntities\n";
         let (min, max) = (
             nodes.iter().map(|n| n.0).min().unwrap_or(0),
             nodes.iter().map(|n| n.0).max().unwrap_or(0),
@@ -566,7 +628,7 @@ mod tests {
     }
 
     fn parse_str(text: &str) -> Result<Mesh> {
-        parse(Path::new("test.msh"), text.as_bytes())
+        parse_msh(Path::new("test.msh"), text.as_bytes())
     }
 
     /// The problem and entity of a mesh error in "test.msh".
@@ -720,7 +782,7 @@ mod tests {
 
         let e = error_of(&msh(
             &quad_nodes(),
-            &[(2, 16, vec![]), (3, 4, vec![(1, vec![1; 4])])],
+            &[(2, 16, vec![]), (2, 10, vec![(1, vec![101; 9])])],
         ));
         assert_eq!(
             e,
@@ -771,7 +833,7 @@ mod tests {
         let mut binary = b"$MeshFormat\n4.1 1 3\n".to_vec();
         binary.extend_from_slice(&1i32.to_le_bytes());
         binary.extend_from_slice(b"\n$EndMeshFormat\n");
-        let e = problem(parse(Path::new("b.msh"), &binary).unwrap_err(), "b.msh");
+        let e = problem(parse_msh(Path::new("b.msh"), &binary).unwrap_err(), "b.msh");
         let header = Some(MeshEntity::Section("$MeshFormat"));
         assert_eq!(e, (MeshProblem::Header, header));
 
@@ -801,7 +863,7 @@ mod tests {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
         let bytes = std::fs::read(dir.join(name)).unwrap();
         let check = |data: &[u8]| {
-            if let Err(e) = parse(Path::new(name), data) {
+            if let Err(e) = parse_msh(Path::new(name), data) {
                 let (problem, _) = problem(e, name);
                 assert_ne!(problem, MeshProblem::ParserPanic, "mshio panicked");
             }

@@ -87,22 +87,21 @@ pub(super) fn read_header(bytes: &[u8]) -> Result<Header, Fault> {
             ),
         ));
     }
-    let size_t: usize = fields[2].parse().map_err(|_| {
-        bad(format!(
-            "invalid data size `{}` in the $MeshFormat header",
-            fields[2]
-        ))
-    })?;
+    // gmsh writes sizeof(size_t), 8 (or 4 on 32-bit systems); mshio reads the value into
+    // an i32 and an unchecked one could overflow there.
+    let size_t = match fields[2] {
+        "4" => 4,
+        "8" => 8,
+        other => {
+            return Err(bad(format!(
+                "invalid data size `{other}` in the $MeshFormat header (gmsh writes 8, or 4)"
+            )));
+        }
+    };
     let mut pos = (second_end + 1).min(bytes.len());
     let binary = match fields[1] {
         "0" => None,
         "1" => {
-            if size_t != 4 && size_t != 8 {
-                return Err(bad(format!(
-                    "binary MSH files with {size_t}-byte size_t values are not supported \
-                     (gmsh writes 8)"
-                )));
-            }
             let one: [u8; 4] = bytes
                 .get(pos..pos + 4)
                 .and_then(|b| b.try_into().ok())
@@ -141,32 +140,6 @@ pub(super) fn read_header(bytes: &[u8]) -> Result<Header, Fault> {
     })
 }
 
-/// Checks the counts in the `$Nodes` and `$Elements` headers: mshio computes `count - 1` on
-/// them, which panics (debug builds) when a section declares zero entries.
-pub(super) fn check_section_counts(bytes: &[u8], header: &Header) -> Result<(), Fault> {
-    for (section, what) in [("$Nodes", "nodes"), ("$Elements", "elements")] {
-        let Some(at) = find_line(bytes, header.body_start, section.as_bytes()) else {
-            continue; // missing sections are reported after parsing
-        };
-        let mut cursor = Cursor {
-            bytes,
-            pos: at,
-            binary: header.binary,
-        };
-        let _blocks = cursor.size_t();
-        if cursor.size_t() == Some(0) {
-            return Err(Fault::new(
-                MeshProblem::EmptySection,
-                Some(MeshEntity::Section(section)),
-                format!(
-                    "the {section} section contains no {what}: the mesh is empty (was it meshed?)"
-                ),
-            ));
-        }
-    }
-    Ok(())
-}
-
 /// The node tags of one block of the `$Nodes` section, with the block's entity (to check
 /// that they describe the same block as mshio's).
 pub(super) struct NodeTags {
@@ -179,54 +152,6 @@ impl NodeTags {
     pub(super) fn len(&self) -> usize {
         self.tags.len()
     }
-}
-
-/// Reads the node tags of every block of the `$Nodes` section, in file order.
-///
-/// mshio keeps the tags only when they are sparse; dense tags may still be permuted with
-/// respect to the file order, so we always read them here. Only called after mshio parsed the
-/// file successfully, so the section structure is known to be sound.
-pub(super) fn read_node_tags(bytes: &[u8], header: &Header) -> Result<Vec<NodeTags>, Fault> {
-    let broken = || {
-        Fault::new(
-            MeshProblem::Corrupt,
-            Some(MeshEntity::Section("$Nodes")),
-            "cannot read the node tags of the $Nodes section (corrupt file?)",
-        )
-    };
-    let at = find_line(bytes, header.body_start, b"$Nodes").ok_or_else(broken)?;
-    let mut c = Cursor {
-        bytes,
-        pos: at,
-        binary: header.binary,
-    };
-    let blocks = c.size_t().ok_or_else(broken)?;
-    let _count = c.size_t().ok_or_else(broken)?;
-    let _min = c.size_t().ok_or_else(broken)?;
-    let _max = c.size_t().ok_or_else(broken)?;
-    // Each block takes several bytes: a larger count is corrupt (and must not drive an
-    // allocation).
-    if blocks > bytes.len() as u64 {
-        return Err(broken());
-    }
-    let mut all = Vec::with_capacity(blocks as usize);
-    for _ in 0..blocks {
-        let int = |c: &mut Cursor| c.int().and_then(|v| i32::try_from(v).ok());
-        let dim = int(&mut c).ok_or_else(broken)?;
-        let entity = int(&mut c).ok_or_else(broken)?;
-        let parametric = int(&mut c).ok_or_else(broken)?;
-        let n = c.size_t().ok_or_else(broken)?;
-        if parametric != 0 || n > bytes.len() as u64 {
-            return Err(broken());
-        }
-        let mut tags = Vec::with_capacity(n as usize);
-        for _ in 0..n {
-            tags.push(c.size_t().ok_or_else(broken)?);
-        }
-        c.skip_doubles(3 * n as usize).ok_or_else(broken)?;
-        all.push(NodeTags { dim, entity, tags });
-    }
-    Ok(all)
 }
 
 /// Reads `$PhysicalNames` (`count`, then lines `dim tag "name"`) into a map (dim, tag) → name.
@@ -333,7 +258,27 @@ pub(super) struct Cursor<'a> {
     binary: Option<Binary>,
 }
 
-impl Cursor<'_> {
+impl<'a> Cursor<'a> {
+    /// A cursor at offset `pos` of `bytes`, reading ascii numbers, or binary ones laid out as
+    /// `binary` says.
+    pub(super) fn new(bytes: &'a [u8], pos: usize, binary: Option<Binary>) -> Self {
+        Self { bytes, pos, binary }
+    }
+
+    pub(super) fn is_binary(&self) -> bool {
+        self.binary.is_some()
+    }
+
+    /// Bytes left after the cursor.
+    pub(super) fn remaining(&self) -> usize {
+        self.bytes.len().saturating_sub(self.pos)
+    }
+
+    /// Size of a binary `size_t` (8 for ascii files, where it does not matter).
+    pub(super) fn size_t_bytes(&self) -> usize {
+        self.binary.map_or(8, |b| b.size_t)
+    }
+
     /// Next whitespace-separated ascii token.
     fn token(&mut self) -> Option<&[u8]> {
         let rest = self.bytes.get(self.pos..)?;
@@ -353,7 +298,7 @@ impl Cursor<'_> {
         Some(slice)
     }
 
-    fn size_t(&mut self) -> Option<u64> {
+    pub(super) fn size_t(&mut self) -> Option<u64> {
         match self.binary {
             None => std::str::from_utf8(self.token()?).ok()?.parse().ok(),
             Some(b) => {
@@ -370,7 +315,7 @@ impl Cursor<'_> {
         }
     }
 
-    fn int(&mut self) -> Option<i64> {
+    pub(super) fn int(&mut self) -> Option<i64> {
         match self.binary {
             None => std::str::from_utf8(self.token()?).ok()?.parse().ok(),
             Some(b) => {
@@ -384,7 +329,7 @@ impl Cursor<'_> {
         }
     }
 
-    fn skip_doubles(&mut self, n: usize) -> Option<()> {
+    pub(super) fn skip_doubles(&mut self, n: usize) -> Option<()> {
         match self.binary {
             None => {
                 for _ in 0..n {

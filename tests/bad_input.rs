@@ -1,0 +1,871 @@
+//! The bad-input suite: malformed meshes, case files with values out of range, and names and
+//! paths that would write outside the output folder. Every case is run as `asperity run`
+//! runs it (read the case, then [`pipeline::run`]) on a small valid mesh with one thing
+//! broken, and must give the expected [`Error`] variant (and for mesh errors the expected
+//! [`MeshProblem`], for parameters the case-file key), and leave no result file behind: the
+//! output folder may hold only the `summary.json` of the failed run, and nothing may be
+//! written anywhere else.
+//!
+//! The base case is checked to run, so that every error below is due to its one defect.
+
+use std::path::{Path, PathBuf};
+
+use asperity::config::Case;
+use asperity::error::MeshProblem;
+use asperity::{Error, pipeline};
+
+/// One quad8 [0,2]×[0,1] (surface "plate"), its bottom edge "bottom" and top edge "top".
+const MESH: &str = "$MeshFormat
+4.1 0 8
+$EndMeshFormat
+$PhysicalNames
+3
+1 2 \"bottom\"
+1 3 \"top\"
+2 1 \"plate\"
+$EndPhysicalNames
+$Entities
+0 2 1 0
+1 0 0 0 2 0 0 1 2 0
+2 0 1 0 2 1 0 1 3 0
+1 0 0 0 2 1 0 1 1 0
+$EndEntities
+$Nodes
+1 8 1 8
+2 1 0 8
+1
+2
+3
+4
+5
+6
+7
+8
+0 0 0
+2 0 0
+2 1 0
+0 1 0
+1 0 0
+2 0.5 0
+1 1 0
+0 0.5 0
+$EndNodes
+$Elements
+3 3 1 3
+1 1 8 1
+1 1 2 5
+1 2 8 1
+2 3 4 7
+2 1 16 1
+3 1 2 3 4 5 6 7 8
+$EndElements
+";
+
+/// A plane-stress plate pressed on its top edge and held at its bottom edge.
+const CASE: &str = "[mesh]
+file = \"m.msh\"
+[analysis]
+type = \"plane_stress\"
+thickness = 1.0
+[[body]]
+group = \"plate\"
+material = { E = 1000.0, nu = 0.3 }
+[[support]]
+group = \"bottom\"
+ux = 0.0
+uy = 0.0
+[[load]]
+group = \"top\"
+pressure = 1.0
+";
+
+/// A contact pair appended to [`CASE`] (only read, never solved, by the cases using it).
+const PAIR: &str = "[[contact]]
+side_a = \"bottom\"
+side_b = \"top\"
+";
+
+/// The error a case must give.
+#[derive(Debug)]
+enum Expected {
+    /// [`Error::Case`] (syntax, unknown keys, keys that do not go together).
+    Case,
+    /// [`Error::InvalidParameter`] with this key.
+    Invalid(&'static str),
+    /// [`Error::Mesh`] with this problem.
+    Mesh(MeshProblem),
+    /// [`Error::Group`].
+    Group,
+    /// [`Error::Io`].
+    Io,
+}
+
+/// Runs `case` (with `mesh` as `m.msh`, if given) in a fresh folder and returns the error
+/// and the folder.
+fn run(case: &str, mesh: Option<&[u8]>) -> (Result<(), Error>, tempfile::TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    if let Some(mesh) = mesh {
+        std::fs::write(dir.path().join("m.msh"), mesh).unwrap();
+    }
+    let case_path = dir.path().join("case.toml");
+    std::fs::write(&case_path, case).unwrap();
+    let out = dir.path().join("out");
+    let result =
+        Case::from_file(&case_path).and_then(|case| pipeline::run(&case, &out, false).map(drop));
+    (result, dir)
+}
+
+/// Every file under `dir`, relative to it.
+fn files(dir: &Path) -> Vec<PathBuf> {
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            found.extend(files(&path));
+        } else {
+            found.push(path);
+        }
+    }
+    found
+}
+
+/// Runs one bad case and checks its error and that it left no result file.
+fn check(label: &str, case: &str, mesh: Option<&[u8]>, expected: Expected) {
+    let (result, dir) = run(case, mesh);
+    let error = match result {
+        Ok(()) => panic!("{label}: accepted"),
+        Err(e) => e,
+    };
+    let ok = match (&error, &expected) {
+        (Error::Case { .. }, Expected::Case) | (Error::Group { .. }, Expected::Group) => true,
+        (Error::Io { .. }, Expected::Io) => true,
+        (Error::InvalidParameter { key, .. }, Expected::Invalid(k)) => key == k,
+        (Error::Mesh { problem, .. }, Expected::Mesh(p)) => problem == p,
+        _ => false,
+    };
+    assert!(ok, "{label}: expected {expected:?}, got {error:?}");
+    let message = error.to_string();
+    assert!(
+        !message.is_empty() && message.len() < 1000,
+        "{label}: {message}"
+    );
+    for file in files(dir.path()) {
+        let name = file.strip_prefix(dir.path()).unwrap();
+        let allowed = ["case.toml", "m.msh", "out/summary.json"];
+        assert!(
+            allowed.iter().any(|a| Path::new(a) == name),
+            "{label}: wrote {}",
+            name.display()
+        );
+        if name == Path::new("out/summary.json") {
+            let summary = std::fs::read_to_string(&file).unwrap();
+            assert!(summary.contains("\"failed\""), "{label}: {summary}");
+        }
+    }
+}
+
+fn bad_mesh(label: &str, mesh: &[u8], problem: MeshProblem) {
+    check(label, CASE, Some(mesh), Expected::Mesh(problem));
+}
+
+/// [`MESH`] with `from` replaced by `to` (which must occur).
+fn edit(from: &str, to: &str) -> String {
+    assert!(MESH.contains(from), "{from}");
+    MESH.replacen(from, to, 1)
+}
+
+fn bad_case(label: &str, case: &str, expected: Expected) {
+    check(label, case, Some(MESH.as_bytes()), expected);
+}
+
+/// [`CASE`] with `from` replaced by `to` (which must occur).
+fn case_edit(from: &str, to: &str) -> String {
+    assert!(CASE.contains(from), "{from}");
+    CASE.replacen(from, to, 1)
+}
+
+/// [`CASE`] plus `extra` (a table or key at the end).
+fn case_plus(extra: &str) -> String {
+    format!("{CASE}{extra}\n")
+}
+
+#[test]
+fn the_base_case_runs() {
+    let (result, dir) = run(CASE, Some(MESH.as_bytes()));
+    result.unwrap();
+    assert!(dir.path().join("out/bodies_0001.vtu").is_file());
+    assert!(dir.path().join("out/history.csv").is_file());
+}
+
+#[test]
+fn malformed_meshes_are_mesh_errors() {
+    use MeshProblem::*;
+    let cases: Vec<(&str, String, MeshProblem)> = vec![
+        ("empty file", String::new(), Empty),
+        ("blank file", " \n\t\n".into(), Empty),
+        ("not an MSH file", "hello\nworld\n".into(), Header),
+        ("MSH 2.2", edit("4.1 0 8", "2.2 0 8"), Version),
+        ("MSH 4.0", edit("4.1 0 8", "4.0 0 8"), Version),
+        (
+            "data size overflowing i32",
+            edit("4.1 0 8", "4.1 0 2147483648"),
+            Header,
+        ),
+        ("data size 3", edit("4.1 0 8", "4.1 0 3"), Header),
+        ("file type 7", edit("4.1 0 8", "4.1 7 8"), Header),
+        (
+            "no $EndMeshFormat",
+            edit("$EndMeshFormat", "$End"),
+            Truncated,
+        ),
+        (
+            "cut in the coordinates",
+            MESH[..MESH.find("2 0.5 0").unwrap()].into(),
+            Truncated,
+        ),
+        (
+            "cut in the elements",
+            MESH[..MESH.len() - 30].into(),
+            Truncated,
+        ),
+        (
+            "node total 10^12",
+            edit("1 8 1 8", "1 1000000000000 1 8"),
+            CountMismatch,
+        ),
+        (
+            "node total u64::MAX",
+            edit("1 8 1 8", "1 18446744073709551615 1 8"),
+            CountMismatch,
+        ),
+        (
+            "node total too small",
+            edit("1 8 1 8", "1 7 1 8"),
+            CountMismatch,
+        ),
+        (
+            "node blocks 10^12",
+            edit("1 8 1 8", "1000000000000 8 1 8"),
+            CountMismatch,
+        ),
+        (
+            "node block size 10^12",
+            edit("2 1 0 8", "2 1 0 1000000000000"),
+            CountMismatch,
+        ),
+        (
+            "node tag range lies",
+            edit("1 8 1 8", "1 8 1 9"),
+            CountMismatch,
+        ),
+        (
+            "element total 10^12",
+            edit("3 3 1 3", "3 1000000000000 1 3"),
+            CountMismatch,
+        ),
+        (
+            "element total too large",
+            edit("3 3 1 3", "3 4 1 3"),
+            CountMismatch,
+        ),
+        (
+            "element block size u64::MAX",
+            edit("2 1 16 1", "2 1 16 18446744073709551615"),
+            CountMismatch,
+        ),
+        (
+            "entity count 10^12",
+            edit("0 2 1 0", "0 2 1000000000000 0"),
+            CountMismatch,
+        ),
+        (
+            "physical tag count 10^12",
+            edit("1 0 0 0 2 0 0 1 2 0", "1 0 0 0 2 0 0 1000000000000 2 0"),
+            CountMismatch,
+        ),
+        (
+            "entity declared twice",
+            edit("2 0 1 0 2 1 0 1 3 0", "1 0 1 0 2 1 0 1 3 0"),
+            DuplicateEntity,
+        ),
+        (
+            "duplicate element tag",
+            edit("2 3 4 7\n", "1 3 4 7\n"),
+            DuplicateElement,
+        ),
+        (
+            "duplicate node tag",
+            edit("1\n2\n3\n", "1\n1\n3\n"),
+            DuplicateNode,
+        ),
+        (
+            "elements of an undeclared entity",
+            edit("2 1 16 1", "2 5 16 1"),
+            UndeclaredEntity,
+        ),
+        (
+            "nodes of an undeclared entity",
+            edit("2 1 0 8", "2 9 0 8"),
+            UndeclaredEntity,
+        ),
+        ("block dimension 7", edit("2 1 0 8", "7 1 0 8"), Corrupt),
+        (
+            "line block holding a quad",
+            edit("2 1 16 1", "1 1 16 1"),
+            MixedDimension,
+        ),
+        (
+            "unknown element type",
+            edit("2 1 16 1", "2 1 99 1"),
+            UnsupportedElement,
+        ),
+        (
+            "element of a missing node",
+            edit("3 1 2 3 4 5 6 7 8", "3 1 2 3 4 5 6 7 88"),
+            UnknownNode,
+        ),
+        ("NaN coordinate", edit("2 0.5 0", "nan 0.5 0"), NonFinite),
+        ("infinite coordinate", edit("2 0.5 0", "2 inf 0"), NonFinite),
+        (
+            "node off the plane",
+            edit("2 0.5 0", "2 0.5 0.25"),
+            NotPlanar,
+        ),
+        (
+            "degenerate cell",
+            edit("2 1 0\n0 1 0\n", "0 0 0\n2 0 0\n"),
+            Degenerate,
+        ),
+        ("parametric nodes", edit("2 1 0 8", "2 1 1 8"), Parametric),
+        (
+            "no $Entities",
+            edit("$Entities", "$Entitie"),
+            MissingSection,
+        ),
+        (
+            "no $Elements",
+            edit("$Elements\n", "$Elementz\n"),
+            MissingSection,
+        ),
+        (
+            "first-order quad",
+            edit("2 1 16 1\n3 1 2 3 4 5 6 7 8", "2 1 3 1\n3 1 2 3 4"),
+            FirstOrder,
+        ),
+        (
+            "only lines",
+            edit("3 3 1 3", "2 2 1 2").replace("2 1 16 1\n3 1 2 3 4 5 6 7 8\n", ""),
+            NoCells,
+        ),
+        (
+            "malformed physical name",
+            edit("\"top\"", "top"),
+            PhysicalNames,
+        ),
+        (
+            "physical name count wrong",
+            edit("$PhysicalNames\n3", "$PhysicalNames\n4"),
+            PhysicalNames,
+        ),
+    ];
+    let count = cases.len();
+    for (label, mesh, problem) in cases {
+        bad_mesh(label, mesh.as_bytes(), problem);
+    }
+    assert!(count >= 40);
+}
+
+#[test]
+fn missing_or_unreadable_mesh_files() {
+    check(
+        "mesh file missing",
+        CASE,
+        None,
+        Expected::Mesh(MeshProblem::NotFound),
+    );
+    let geo = case_edit("file = \"m.msh\"", "geo = \"missing.geo\"");
+    check(
+        "geo script missing",
+        &geo,
+        None,
+        Expected::Mesh(MeshProblem::NotFound),
+    );
+    let dir_as_mesh = case_edit("file = \"m.msh\"", "file = \".\"");
+    check("mesh is a folder", &dir_as_mesh, None, Expected::Io);
+    let nul = case_edit("file = \"m.msh\"", "file = \"m\\u0000.msh\"");
+    check("NUL in the mesh path", &nul, None, Expected::Io);
+}
+
+#[test]
+fn binary_meshes_with_lying_headers_are_mesh_errors() {
+    // Binary header and the $Nodes header of a binary file claiming 2^60 blocks.
+    let mut bytes = b"$MeshFormat\n4.1 1 8\n".to_vec();
+    bytes.extend_from_slice(&1i32.to_le_bytes());
+    bytes.extend_from_slice(b"\n$EndMeshFormat\n$Entities\n");
+    for count in [0u64, 0, 1, 0] {
+        bytes.extend_from_slice(&count.to_le_bytes());
+    }
+    bytes.extend_from_slice(&1i32.to_le_bytes());
+    bytes.extend_from_slice(&[0u8; 48]);
+    bytes.extend_from_slice(&0u64.to_le_bytes());
+    bytes.extend_from_slice(&0u64.to_le_bytes());
+    bytes.extend_from_slice(b"\n$EndEntities\n$Nodes\n");
+    for value in [1u64 << 60, 1, 1, 1] {
+        bytes.extend_from_slice(&value.to_le_bytes());
+    }
+    bytes.extend_from_slice(b"\n$EndNodes\n$Elements\n$EndElements\n");
+    bad_mesh(
+        "binary node blocks 2^60",
+        &bytes,
+        MeshProblem::CountMismatch,
+    );
+    let mut bad_size = b"$MeshFormat\n4.1 1 2147483648\n".to_vec();
+    bad_size.extend_from_slice(&1i32.to_le_bytes());
+    bad_size.extend_from_slice(b"\n$EndMeshFormat\n");
+    bad_mesh(
+        "binary data size overflowing i32",
+        &bad_size,
+        MeshProblem::Header,
+    );
+}
+
+#[test]
+fn case_values_out_of_range_are_named() {
+    use Expected::*;
+    let cases: Vec<(&str, String, Expected)> = vec![
+        ("TOML syntax", case_plus("[steps"), Case),
+        (
+            "unknown key",
+            case_plus("[solver]\nmax_iteration = 3"),
+            Case,
+        ),
+        (
+            "unknown section",
+            case_plus("[solvers]\nmax_iterations = 3"),
+            Case,
+        ),
+        (
+            "thickness negative",
+            case_edit("thickness = 1.0", "thickness = -5.0"),
+            Invalid("analysis.thickness"),
+        ),
+        (
+            "thickness infinite",
+            case_edit("thickness = 1.0", "thickness = inf"),
+            Invalid("analysis.thickness"),
+        ),
+        (
+            "thickness NaN",
+            case_edit("thickness = 1.0", "thickness = nan"),
+            Invalid("analysis.thickness"),
+        ),
+        (
+            "axisymmetric with thickness",
+            case_edit(
+                "type = \"plane_stress\"\nthickness = 1.0",
+                "type = \"axisymmetric\"\nthickness = -5.0",
+            ),
+            Case,
+        ),
+        (
+            "axisymmetric with an unknown key",
+            case_edit(
+                "type = \"plane_stress\"\nthickness = 1.0",
+                "type = \"axisymmetric\"\nthicknes = 1.0",
+            ),
+            Case,
+        ),
+        (
+            "E negative",
+            case_edit("E = 1000.0", "E = -1000.0"),
+            Invalid("body[0].material.E"),
+        ),
+        (
+            "E infinite",
+            case_edit("E = 1000.0", "E = inf"),
+            Invalid("body[0].material.E"),
+        ),
+        (
+            "nu = 0.5",
+            case_edit("nu = 0.3", "nu = 0.5"),
+            Invalid("body[0].material.nu"),
+        ),
+        (
+            "hardening without yield stress",
+            case_edit("nu = 0.3", "nu = 0.3, hardening = 10.0"),
+            Invalid("body[0].material.hardening"),
+        ),
+        (
+            "steps.count = 0",
+            case_plus("[steps]\ncount = 0"),
+            Invalid("steps.count"),
+        ),
+        (
+            "steps.count = 10^12",
+            case_plus("[steps]\ncount = 1000000000000"),
+            Invalid("steps.count"),
+        ),
+        (
+            "steps.count = i64::MAX",
+            case_plus("[steps]\ncount = 9223372036854775807"),
+            Invalid("steps.count"),
+        ),
+        (
+            "steps.count negative",
+            case_plus("[steps]\ncount = -3"),
+            Case,
+        ),
+        (
+            "steps.count a float",
+            case_plus("[steps]\ncount = 1e12"),
+            Case,
+        ),
+        (
+            "NaN load factor",
+            case_plus("[steps]\nfactors = [0.5, nan]"),
+            Invalid("steps.factors"),
+        ),
+        (
+            "count and factors",
+            case_plus("[steps]\ncount = 2\nfactors = [1.0]"),
+            Case,
+        ),
+        (
+            "arc-length max_increments 10^9",
+            case_plus("[steps]\ncontrol = \"arc_length\"\nmax_increments = 1000000000"),
+            Invalid("steps.max_increments"),
+        ),
+        (
+            "force_tolerance = inf",
+            case_plus("[solver]\nforce_tolerance = inf"),
+            Invalid("solver.force_tolerance"),
+        ),
+        (
+            "force_tolerance = 1",
+            case_plus("[solver]\nforce_tolerance = 1.0"),
+            Invalid("solver.force_tolerance"),
+        ),
+        (
+            "force_tolerance = 0",
+            case_plus("[solver]\nforce_tolerance = 0.0"),
+            Invalid("solver.force_tolerance"),
+        ),
+        (
+            "displacement_tolerance = 0.5",
+            case_plus("[solver]\ndisplacement_tolerance = 0.5"),
+            Invalid("solver.displacement_tolerance"),
+        ),
+        (
+            "displacement_tolerance NaN",
+            case_plus("[solver]\ndisplacement_tolerance = nan"),
+            Invalid("solver.displacement_tolerance"),
+        ),
+        (
+            "max_cutbacks = 1000",
+            case_plus("[solver]\nmax_cutbacks = 1000"),
+            Invalid("solver.max_cutbacks"),
+        ),
+        (
+            "max_iterations = 0",
+            case_plus("[solver]\nmax_iterations = 0"),
+            Invalid("solver.max_iterations"),
+        ),
+        (
+            "max_iterations = 10^9",
+            case_plus("[solver]\nmax_iterations = 1000000000"),
+            Invalid("solver.max_iterations"),
+        ),
+        (
+            "collapse_stiffness_ratio = 2",
+            case_plus("[solver]\ncollapse_stiffness_ratio = 2.0"),
+            Invalid("solver.collapse_stiffness_ratio"),
+        ),
+        (
+            "traction with three components",
+            case_edit("pressure = 1.0", "traction = [0.0, 1.0, 5.0]"),
+            Case,
+        ),
+        (
+            "traction with one component",
+            case_edit("pressure = 1.0", "traction = [1.0]"),
+            Case,
+        ),
+        (
+            "force with three components",
+            case_edit("pressure = 1.0", "force = [0.0, 1.0, 2.0]"),
+            Case,
+        ),
+        (
+            "pressure NaN",
+            case_edit("pressure = 1.0", "pressure = nan"),
+            Invalid("load[0].pressure"),
+        ),
+        (
+            "traction infinite",
+            case_edit("pressure = 1.0", "traction = [inf, 0.0]"),
+            Invalid("load[0].traction"),
+        ),
+        (
+            "two kinds of load",
+            case_edit("pressure = 1.0", "pressure = 1.0\nforce = [1.0, 0.0]"),
+            Case,
+        ),
+        (
+            "support ux infinite",
+            case_edit("ux = 0.0", "ux = -inf"),
+            Invalid("support[0].ux"),
+        ),
+        (
+            "support with no component",
+            case_edit("ux = 0.0\nuy = 0.0\n", ""),
+            Case,
+        ),
+        (
+            "support factors of the wrong length",
+            case_edit("uy = 0.0\n", "uy = 0.0\nfactors = [1.0, 2.0]\n"),
+            Invalid("support[0].factors"),
+        ),
+        (
+            "mesh size 0",
+            case_edit("file = \"m.msh\"", "file = \"m.msh\"\nsize = 0.0"),
+            Invalid("mesh.size"),
+        ),
+        (
+            "file and geo",
+            case_edit("file = \"m.msh\"", "file = \"m.msh\"\ngeo = \"m.geo\""),
+            Case,
+        ),
+        (
+            "geo with a NaN parameter",
+            case_edit(
+                "file = \"m.msh\"",
+                "geo = \"m.geo\"\nparameters = { h = nan }",
+            ),
+            Invalid("mesh.parameters.h"),
+        ),
+        (
+            "geo with an infinite parameter",
+            case_edit(
+                "file = \"m.msh\"",
+                "geo = \"m.geo\"\nparameters = { h = inf }",
+            ),
+            Invalid("mesh.parameters.h"),
+        ),
+        (
+            "geo parameter that is no identifier",
+            case_edit(
+                "file = \"m.msh\"",
+                "geo = \"m.geo\"\nparameters = { \"-v 99\" = 1.0 }",
+            ),
+            Invalid("mesh.parameters.-v 99"),
+        ),
+        (
+            "no body",
+            CASE.replace(
+                "[[body]]\ngroup = \"plate\"\nmaterial = { E = 1000.0, nu = 0.3 }\n",
+                "",
+            ),
+            Case,
+        ),
+        (
+            "body missing in the mesh",
+            case_edit("group = \"plate\"", "group = \"plates\""),
+            Group,
+        ),
+        (
+            "support curve missing in the mesh",
+            case_edit("group = \"bottom\"", "group = \"bottm\""),
+            Group,
+        ),
+        (
+            "rough joint with friction but no R",
+            case_plus(&format!(
+                "{PAIR}law = {{ type = \"rough_joint\", c_n = 1e-3, m = 0.5, S = 0.5, mu_m = 0.2 }}"
+            )),
+            Invalid("contact[0].law.R"),
+        ),
+        (
+            "linear law with negative stiffness",
+            case_plus(&format!(
+                "{PAIR}law = {{ type = \"linear_coulomb\", normal_stiffness = -1.0, tangential_stiffness = 1.0 }}"
+            )),
+            Invalid("contact[0].law.normal_stiffness"),
+        ),
+        (
+            "two contact pairs of one name",
+            case_plus(&format!(
+                "{PAIR}law = {{ type = \"linear_coulomb\", normal_stiffness = 1.0, tangential_stiffness = 1.0 }}\n\
+                 {PAIR}law = {{ type = \"linear_coulomb\", normal_stiffness = 1.0, tangential_stiffness = 1.0 }}"
+            )),
+            Invalid("contact[1].name"),
+        ),
+        (
+            "contact with curve and sides",
+            case_plus(&format!(
+                "{PAIR}curve = \"top\"\nlaw = {{ type = \"linear_coulomb\", normal_stiffness = 1.0, tangential_stiffness = 1.0 }}"
+            )),
+            Case,
+        ),
+        (
+            "contact interference NaN",
+            case_plus(&format!(
+                "{PAIR}interference = nan\nlaw = {{ type = \"linear_coulomb\", normal_stiffness = 1.0, tangential_stiffness = 1.0 }}"
+            )),
+            Invalid("contact[0].interference"),
+        ),
+    ];
+    let count = cases.len();
+    for (label, case, expected) in cases {
+        bad_case(label, &case, expected);
+    }
+    assert!(count >= 40);
+}
+
+/// A case whose contact pair is called `name` (a TOML string literal's content).
+fn named_pair(name: &str) -> String {
+    case_plus(&format!(
+        "{PAIR}name = \"{name}\"\nlaw = {{ type = \"linear_coulomb\", normal_stiffness = 1.0, tangential_stiffness = 1.0 }}"
+    ))
+}
+
+/// Whether a file whose name starts with `prefix` exists in `dir` or one of its ancestors.
+fn escaped(dir: &Path, prefix: &str) -> bool {
+    dir.ancestors().any(|d| {
+        std::fs::read_dir(d).is_ok_and(|mut entries| {
+            entries.any(|e| e.is_ok_and(|e| e.file_name().to_string_lossy().starts_with(prefix)))
+        })
+    })
+}
+
+#[test]
+fn unsafe_names_and_paths_are_refused() {
+    let long = "n".repeat(100);
+    let cases: Vec<(&str, String, &str)> = vec![
+        (
+            "traversal in a pair name",
+            named_pair("x/../../../../ESCAPED"),
+            "contact[0].name",
+        ),
+        (
+            "absolute pair name",
+            named_pair("/tmp/ESCAPED_ABS"),
+            "contact[0].name",
+        ),
+        (
+            "backslash in a pair name",
+            named_pair("x\\\\..\\\\ESCAPED"),
+            "contact[0].name",
+        ),
+        (
+            "NUL in a pair name",
+            named_pair("a\\u0000b"),
+            "contact[0].name",
+        ),
+        (
+            "line break in a pair name",
+            named_pair("a\\nb"),
+            "contact[0].name",
+        ),
+        (
+            "control character in a pair name",
+            named_pair("a\\u0007b"),
+            "contact[0].name",
+        ),
+        ("reserved name CON", named_pair("CON"), "contact[0].name"),
+        (
+            "reserved name nul.txt",
+            named_pair("nul.txt"),
+            "contact[0].name",
+        ),
+        ("pair name ..", named_pair(".."), "contact[0].name"),
+        ("pair name .", named_pair("."), "contact[0].name"),
+        ("empty pair name", named_pair(""), "contact[0].name"),
+        ("over-long pair name", named_pair(&long), "contact[0].name"),
+        ("comma in a pair name", named_pair("a,b"), "contact[0].name"),
+        (
+            "traversal in a body group",
+            case_edit("group = \"plate\"", "group = \"../ESCAPED\""),
+            "body[0].group",
+        ),
+        (
+            "slash in a support group",
+            case_edit("group = \"bottom\"", "group = \"a/b\""),
+            "support[0].group",
+        ),
+        (
+            "quote in a load group",
+            case_edit("group = \"top\"", "group = \"t\\\"op\""),
+            "load[0].group",
+        ),
+    ];
+    let count = cases.len();
+    for (label, case, key) in cases {
+        let (result, dir) = run(&case, Some(MESH.as_bytes()));
+        match result {
+            Err(Error::InvalidParameter { key: k, .. }) if k == key => {}
+            other => panic!("{label}: expected an invalid {key}, got {other:?}"),
+        }
+        assert!(!dir.path().join("out").exists(), "{label}: wrote output");
+        assert!(!escaped(dir.path(), "ESCAPED"), "{label}: escaped");
+    }
+    assert!(count >= 12);
+    // A derived pair name ("<side_a>-<side_b>") is checked too.
+    let derived = case_plus(
+        "[[contact]]\nside_a = \"bottom\"\nside_b = \"top\"\nlaw = { type = \"linear_coulomb\", normal_stiffness = 1.0, tangential_stiffness = 1.0 }\n\
+         [[contact]]\nside_a = \"bottom\"\nside_b = \"top\"\nlaw = { type = \"linear_coulomb\", normal_stiffness = 1.0, tangential_stiffness = 1.0 }",
+    );
+    bad_case(
+        "same sides twice",
+        &derived,
+        Expected::Invalid("contact[1].name"),
+    );
+}
+
+/// The writers themselves refuse a path that leaves the output folder, whatever its origin.
+#[test]
+fn writers_refuse_paths_that_leave_the_output_folder() {
+    use asperity::output::csv::{CsvTable, write_csv};
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("a/b/out");
+    let mut table: CsvTable = CsvTable::new(["x"]);
+    table.rows.push(vec![1.0]);
+    for name in [
+        "contact_x/../../../../ESCAPED_0001.csv",
+        "contact_\u{1}_0001.csv",
+        &format!("{}.csv", "n".repeat(300)),
+    ] {
+        let path = out.join(name);
+        assert!(
+            matches!(write_csv(&path, &table), Err(Error::Io { .. })),
+            "{name}"
+        );
+    }
+    assert!(files(dir.path()).is_empty(), "{:?}", files(dir.path()));
+    write_csv(&out.join("history.csv"), &table).unwrap();
+}
+
+/// The checks reject nothing that the shipped examples use (valid input behaves as before).
+#[test]
+fn shipped_case_files_pass_the_checks() {
+    fn cases(dir: &Path, found: &mut Vec<PathBuf>) {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                cases(&path, found);
+            } else if path.extension().is_some_and(|e| e == "toml") {
+                found.push(path);
+            }
+        }
+    }
+    let mut found = Vec::new();
+    cases(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines"),
+        &mut found,
+    );
+    assert!(found.len() >= 10, "{found:?}");
+    for path in found {
+        if let Err(e) = Case::from_file(&path) {
+            panic!("{}: {e}", path.display());
+        }
+    }
+}

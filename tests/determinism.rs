@@ -1,0 +1,149 @@
+//! Determinism: the same case gives bitwise-identical result files run after run and with 1, 2
+//! or 4 worker threads. Parallel assembly must therefore never let the thread count change
+//! the order of a floating-point sum.
+//!
+//! Each case is run by the built binary in a child process with `RAYON_NUM_THREADS` set (the
+//! pool size is fixed at start-up), on a mesh of `tests/fixtures/contact_pair.geo` fine
+//! enough (a few hundred cells) that assembly is split into several parallel chunks. Every
+//! file of the output folder is compared byte for byte, except `summary.json`, whose
+//! wall-clock `seconds` (and the case path) differ from run to run; the rest of it is compared
+//! as JSON.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// A frictional pair that slips: two bodies pressed together (lid moved down) and sheared
+/// (lid moved sideways) until the tangential force reaches μ times the normal force.
+const FRICTIONAL: &str = "[analysis]
+type = \"plane_strain\"
+[[body]]
+group = \"lower\"
+material = { E = 1000.0, nu = 0.3 }
+[[body]]
+group = \"upper\"
+material = { E = 1000.0, nu = 0.3 }
+[[support]]
+group = \"base\"
+ux = 0.0
+uy = 0.0
+[[support]]
+group = \"lid\"
+ux = 0.03
+uy = -0.01
+[[contact]]
+name = \"joint\"
+side_a = \"lower_top\"
+side_b = \"upper_bottom\"
+law = { type = \"linear_coulomb\", normal_stiffness = 1e4, tangential_stiffness = 1e4, friction = 0.2 }
+[steps]
+count = 3
+";
+
+/// An axisymmetric elasto-plastic body compressed past yield and partly unloaded.
+const PLASTIC: &str = "[analysis]
+type = \"axisymmetric\"
+[[body]]
+group = \"lower\"
+material = { E = 1000.0, nu = 0.3, yield_stress = 1.0, hardening = 10.0 }
+[[support]]
+group = \"base\"
+uy = 0.0
+[[support]]
+group = \"lower_top\"
+uy = -0.03
+[steps]
+factors = [0.5, 1.0, 0.5]
+";
+
+/// Runs `case` (without its `[mesh]`) with `threads` worker threads into `dir/out_<threads>`.
+fn run(dir: &Path, case: &str, threads: usize) -> PathBuf {
+    let geo = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/contact_pair.geo");
+    let case_path = dir.join("case.toml");
+    let mesh = format!(
+        "[mesh]\ngeo = {:?}\nsize = 0.3\n",
+        geo.display().to_string()
+    );
+    std::fs::write(&case_path, mesh + case).unwrap();
+    let out = dir.join(format!("out_{threads}"));
+    let status = Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args(["run", case_path.to_str().unwrap(), "--out"])
+        .arg(&out)
+        .env("RAYON_NUM_THREADS", threads.to_string())
+        .output()
+        .expect("runs");
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    out
+}
+
+/// The file names of `dir`, sorted.
+fn names(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// `summary.json` without its timings and the path of the case file (each run has its own).
+fn summary(dir: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+    let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let object = value.as_object_mut().unwrap();
+    object.remove("seconds").unwrap();
+    object.remove("case").unwrap();
+    value
+}
+
+/// Newton iterations of every step (column `iterations` of `history.csv`).
+fn iterations(dir: &Path) -> Vec<u32> {
+    let history = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+    let mut lines = history.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = header.iter().position(|&c| c == "iterations").unwrap();
+    lines
+        .map(|l| l.split(',').nth(column).unwrap().parse().unwrap())
+        .collect()
+}
+
+fn check_identical(case: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = run(dir.path(), case, 1);
+    // The case must be nonlinear (several iterations per step), or it would test little.
+    assert!(
+        iterations(&reference).iter().all(|&n| n > 1),
+        "{:?}",
+        iterations(&reference)
+    );
+    let files = names(&reference);
+    assert!(files.iter().any(|f| f.ends_with(".vtu")), "{files:?}");
+    // Threads 1 again (run after run), then 2 and 4.
+    for (k, threads) in [1, 2, 4].into_iter().enumerate() {
+        let other_dir = dir.path().join(format!("run_{k}"));
+        std::fs::create_dir(&other_dir).unwrap();
+        let other = run(&other_dir, case, threads);
+        assert_eq!(names(&other), files, "{threads} threads");
+        for f in files.iter().filter(|f| *f != "summary.json") {
+            let (a, b) = (
+                std::fs::read(reference.join(f)).unwrap(),
+                std::fs::read(other.join(f)).unwrap(),
+            );
+            assert!(a == b, "{f} differs with {threads} threads");
+        }
+        assert_eq!(summary(&other), summary(&reference), "{threads} threads");
+    }
+}
+
+#[test]
+fn a_frictional_case_is_bitwise_identical_with_1_2_and_4_threads() {
+    check_identical(FRICTIONAL);
+}
+
+#[test]
+fn a_plastic_case_is_bitwise_identical_with_1_2_and_4_threads() {
+    check_identical(PLASTIC);
+}
