@@ -438,7 +438,7 @@ pub struct SolverSpec {
     /// BiCGSTAB preconditioned with the elastic contact matrix for unsymmetric tangents).
     pub linear_solver: LinearSolverKind,
     /// Start an increment proportional to the last converged one from the displacements
-    /// extrapolated from it (default true).
+    /// extrapolated from it (default false).
     pub extrapolate: bool,
     // --- plausibility of a converged increment and collapse detection ----------
     /// Largest nodal displacement increment of a converged increment, as a fraction of the
@@ -484,7 +484,7 @@ impl Default for RawSolverSpec {
     fn default() -> Self {
         Self {
             max_iterations: 25,
-            residual_tolerance: 5e-3,
+            residual_tolerance: 5e-4,
             correction_tolerance: 1e-3,
             late_residual_tolerance: 2e-2,
             late_iteration: 9,
@@ -497,7 +497,7 @@ impl Default for RawSolverSpec {
             max_cutbacks: 8,
             contact_algorithm: ContactAlgorithmKind::default(),
             linear_solver: LinearSolverKind::default(),
-            extrapolate: true,
+            extrapolate: false,
             max_displacement_increment: 0.1,
             max_strain_increment: 0.05,
             collapse_stiffness_ratio: 1e-2,
