@@ -478,9 +478,10 @@ struct RawSolverSpec {
 }
 
 impl Default for RawSolverSpec {
-    /// CalculiX's field defaults (*CONTROLS, PARAMETERS=FIELD) and Abaqus' R_n = 5e-3, but
-    /// C_n = 1e-3 rather than 1e-2: with 1e-2 frictional answers drifted by up to 4e-4 from a
-    /// tight run (docs/convergence_criteria.md), with 1e-3 by < 1e-5 at no extra iterations.
+    /// CalculiX's field defaults (*CONTROLS, PARAMETERS=FIELD), but R_n = 5e-4 and C_n = 1e-3
+    /// rather than 5e-3 and 1e-2: with theirs frictional answers drifted by up to 4e-4 from a
+    /// tight run, with these by < 1e-5 at a few % more iterations
+    /// (docs/convergence_criteria.md).
     fn default() -> Self {
         Self {
             max_iterations: 25,

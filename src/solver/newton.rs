@@ -89,8 +89,9 @@ pub struct NewtonSettings {
 }
 
 /// Engineering convergence criteria (see the module docs): the field parameters of CalculiX's
-/// *CONTROLS, PARAMETERS=FIELD. The defaults are CalculiX's, except C_n = 1e-3 (CalculiX and
-/// Abaqus: 1e-2), which keeps path-dependent frictional answers within 1e-4 of a tight run.
+/// *CONTROLS, PARAMETERS=FIELD. The defaults are CalculiX's, except R_n = 5e-4 and C_n = 1e-3
+/// (CalculiX and Abaqus: 5e-3, 1e-2), which keep path-dependent frictional answers within
+/// 1e-4 of a tight run.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Criteria {
     /// R_n: the largest residual force relative to the time-averaged force q̃.
