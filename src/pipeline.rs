@@ -249,6 +249,17 @@ fn solve(
 pub fn newton_settings(spec: &SolverSpec) -> NewtonSettings {
     NewtonSettings {
         max_iterations: spec.max_iterations,
+        criteria: crate::solver::newton::Criteria {
+            residual: spec.residual_tolerance,
+            late_residual: spec.late_residual_tolerance,
+            late_iteration: spec.late_iteration,
+            correction: spec.correction_tolerance,
+            zero_flux: spec.zero_flux,
+            zero_flux_correction: spec.zero_flux_correction_tolerance,
+            linear_residual: spec.linear_residual_tolerance,
+            average_force: spec.average_force,
+            relative_norms: spec.relative_norms,
+        },
         force_tolerance: spec.force_tolerance,
         displacement_tolerance: spec.displacement_tolerance,
         max_cutbacks: spec.max_cutbacks,
@@ -257,6 +268,7 @@ pub fn newton_settings(spec: &SolverSpec) -> NewtonSettings {
             LinearSolverKind::Condensed => LinearSolver::Condensed,
             LinearSolverKind::Krylov => LinearSolver::Krylov,
         },
+        extrapolate: spec.extrapolate,
     }
 }
 

@@ -22,6 +22,8 @@ pub const MAX_CUTBACKS: usize = 20;
 /// than 1 % is not equilibrium. A tolerance ≥ 1 would accept the unloaded start of an
 /// increment (relative residual 1) after zero iterations.
 pub const MAX_TOLERANCE: f64 = 1e-2;
+/// Upper bound of the late residual tolerance R_p (ten times CalculiX's default 2e-2).
+pub const MAX_LATE_TOLERANCE: f64 = 0.2;
 
 impl Case {
     /// The checks of this module, in key order; the first failure is returned.
@@ -220,6 +222,17 @@ impl Case {
         for (key, value) in [
             ("solver.force_tolerance", s.force_tolerance),
             ("solver.displacement_tolerance", s.displacement_tolerance),
+            ("solver.residual_tolerance", s.residual_tolerance),
+            ("solver.correction_tolerance", s.correction_tolerance),
+            ("solver.zero_flux", s.zero_flux),
+            (
+                "solver.zero_flux_correction_tolerance",
+                s.zero_flux_correction_tolerance,
+            ),
+            (
+                "solver.linear_residual_tolerance",
+                s.linear_residual_tolerance,
+            ),
         ] {
             if !(value > 0.0 && value <= MAX_TOLERANCE) {
                 return Err(self.invalid(
@@ -231,6 +244,17 @@ impl Case {
                     ),
                 ));
             }
+        }
+        // R_p is the looser residual bound of slowly converging increments (CalculiX: 2e-2).
+        if !(s.late_residual_tolerance > 0.0 && s.late_residual_tolerance <= MAX_LATE_TOLERANCE) {
+            return Err(self.invalid(
+                "solver.late_residual_tolerance",
+                s.late_residual_tolerance,
+                format!(
+                    "must lie in (0, {MAX_LATE_TOLERANCE}]: a larger residual would accept a \
+                     state out of equilibrium"
+                ),
+            ));
         }
         let ratio = s.collapse_stiffness_ratio;
         if !(ratio > 0.0 && ratio < 1.0) {

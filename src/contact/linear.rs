@@ -3,7 +3,9 @@
 //! (paper Box 1, corrected as in docs/theory.md, "Known misprints in the paper", 1–2: the trial stress starts from the converged
 //! p_T,n, and the returned stress is p_T = μ|p_N| sign(p_T^tr)).
 
-use super::{ContactStatus, InterfaceLaw, InterfaceState, InterfaceTangent, OPEN_TANGENT_FRACTION};
+use super::{
+    ContactStatus, InterfaceLaw, InterfaceState, InterfaceTangent, OPEN_TANGENT_FRACTION, sticks,
+};
 use crate::error::ParameterError;
 
 /// Linear penalty-type interface with Coulomb friction.
@@ -86,7 +88,7 @@ impl InterfaceLaw for LinearCoulomb {
         let p_n = kn * u_n;
         let trial = kt * (u_t - committed.plastic_slip);
         let f = trial.abs() + mu * p_n;
-        if f <= 0.0 {
+        if sticks(f, mu * p_n.abs(), committed) {
             s.stress = [trial, p_n];
             s.plastic_slip = committed.plastic_slip;
             s.status = ContactStatus::Stick;
@@ -94,7 +96,8 @@ impl InterfaceLaw for LinearCoulomb {
         }
         // Return map: Δλ = F / k_T brings the trial stress back onto |p_T| = μ|p_N|.
         let sign = trial.signum();
-        let dlambda = f / kt;
+        // f may be a round-off below 0 on the cone (see `sticks`): no backward slip.
+        let dlambda = f.max(0.0) / kt;
         s.stress = [mu * p_n.abs() * sign, p_n];
         s.plastic_slip = committed.plastic_slip + dlambda * sign;
         s.accumulated_slip += dlambda;

@@ -90,6 +90,24 @@ pub trait InterfaceLaw: Send + Sync + std::fmt::Debug {
     fn describe(&self) -> String;
 }
 
+/// Whether a closed point sticks, given F = |p_T^trial| − μ|p_N| (paper Eq. 11) and the
+/// friction limit μ|p_N|. Status stabilisation: a point that slipped in the last converged
+/// increment and whose trial stress lies on the cone (within [`ON_CONE`] of the limit, as
+/// every such point does at the start of the next increment, since the converged stress is
+/// the trial stress of an unchanged displacement) stays on the slip branch. Its stress is
+/// the same on either branch, but continued loading moves it along the slip branch, and the
+/// slip tangent spares the iteration in which a stiff k_T would push it far outside the cone.
+pub fn sticks(f: f64, limit: f64, committed: &InterfaceState) -> bool {
+    if committed.status == ContactStatus::Slip {
+        f < -ON_CONE * limit
+    } else {
+        f <= 0.0
+    }
+}
+
+/// Relative tolerance of "on the friction cone" for [`sticks`]: round-off of the trial stress.
+pub const ON_CONE: f64 = 1e-10;
+
 /// Relative size of the stiffness an open point keeps in the tangent (never in the stress),
 /// so that a body touching others only through open contact still has a regular matrix in
 /// the first iteration; the residual uses the true zero stress, so the converged answer is

@@ -37,7 +37,9 @@
 //!
 //! Stresses of the normal law always come from the exact total law.
 
-use super::{ContactStatus, InterfaceLaw, InterfaceState, InterfaceTangent, OPEN_TANGENT_FRACTION};
+use super::{
+    ContactStatus, InterfaceLaw, InterfaceState, InterfaceTangent, OPEN_TANGENT_FRACTION, sticks,
+};
 use crate::error::ParameterError;
 
 /// The paper's rough-joint law (units mm, MPa: c_N in mm/MPa^m, R in mm·MPa^(S−1)... such
@@ -211,14 +213,19 @@ impl InterfaceLaw for RoughJoint {
         let du = u_t - committed.relative[0];
         let trial = committed.stress[0] + kt * du;
         let f = trial.abs() - mu_n * p;
-        if f <= 0.0 {
+        if sticks(f, mu_n * p, committed) {
             s.stress = [trial, -p];
             s.status = ContactStatus::Stick;
             // ∂p_T/∂u_N through k_T(p): dk_T/du_N = k_T'(p) · dp/du_N = −k_T' k_N.
             return (s, InterfaceTangent::new(kt, -dkt * kn * du, 0.0, kn));
         }
         let sign = trial.signum();
-        let dl = self.slip_increment(trial.abs(), kt, p, committed.accumulated_slip);
+        // On the cone (see `sticks`) the slip increment is zero.
+        let dl = if f > 0.0 {
+            self.slip_increment(trial.abs(), kt, p, committed.accumulated_slip)
+        } else {
+            0.0
+        };
         let (mu, dmu) = self.friction(committed.accumulated_slip + dl);
         s.stress = [sign * mu * p, -p];
         s.plastic_slip = committed.plastic_slip + sign * dl;

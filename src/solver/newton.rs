@@ -2,13 +2,31 @@
 //! K_T(u_i) δu = Q − F(u_i), u_{i+1} = u_i + δu, until both the out-of-balance force and the
 //! correction are small.
 //!
-//! Convergence is declared when ‖r‖ ≤ tol_f · max(‖f_ext‖, ‖f_int‖, ‖r₀‖, f_floor) over the
-//! free dofs (‖f_int‖ over all dofs includes the reactions, so displacement-driven problems
-//! have a meaningful reference; ‖r₀‖, the out-of-balance force at the start of the
-//! increment, gives one when the solution is stress-free, e.g. a body lifted off a contact)
-//! and the last correction satisfied ‖δu‖ ≤ tol_u · ‖u‖. As in Abaqus' "linear increment"
-//! rule, a residual a thousand times below the force tolerance is accepted without the
-//! correction check: a linear problem then needs one solve, not two.
+//! # Convergence criteria
+//! Engineering criteria as in CalculiX (*CONTROLS, PARAMETERS=FIELD) and Abaqus ([`Criteria`],
+//! `docs/convergence_criteria.md`). With r_max = ‖r‖∞ the largest out-of-balance force over the
+//! free dofs, q̃ the time-averaged force flux, c_max = ‖α δu‖∞ the largest component of the last
+//! (line-searched) correction and Δu_max = ‖u − u_start‖∞ the largest displacement change of the
+//! increment, an iteration has converged when
+//!
+//! * r_max ≤ R_n q̃ (R_p q̃ after `late_iteration` iterations) and c_max ≤ C_n Δu_max, or
+//! * r_max ≤ R_l q̃ (a linear increment: one solve, no correction check);
+//! * with zero flux (the current flux q̄ ≤ ε q̃, e.g. a body unloaded to a stress-free state)
+//!   r_max ≤ ε q̃ and c_max ≤ C_ε Δu_max.
+//!
+//! The flux q̄ of an iteration is the force-weighted mean magnitude Σf²/Σ|f| of the bodies'
+//! nodal forces: the continuum's internal force over all dofs (on the condensed path, before
+//! the interface's forces are added; so it holds the applied loads, the reactions and the
+//! contact forces the bodies carry), the total internal force otherwise. q̃ is the mean of q̄
+//! over the run's converged increments with non-zero flux and the present iteration (zero
+//! flux in the first increment is judged against the mean q̄ of its iterations so far;
+//! [`FluxHistory`]; a user's `average_force` replaces q̃). Before the first solve of an increment only r_max ≤ R_l q̃
+//! is accepted, so small load changes are never skipped.
+//!
+//! If the case sets the older relative-norm tolerances, they are required as well:
+//! ‖r‖ ≤ tol_f · max(‖f_ext‖, ‖f_int‖, ‖r₀‖, f_floor) and ‖δu‖ ≤ tol_u · ‖u‖, or the next
+//! correction estimated from the residual's last rate, ‖δu‖ · ‖r_i‖/‖r_{i−1}‖ ≤ tol_u (as in
+//! CalculiX); a residual 1000 × below tol_f is accepted without the correction check.
 //!
 //! # Linear solves
 //! Models with contact pairs are solved exactly by condensation onto the interface unknowns
@@ -51,6 +69,10 @@ pub enum LinearSolver {
 #[derive(Clone, Copy, Debug)]
 pub struct NewtonSettings {
     pub max_iterations: usize,
+    /// The engineering convergence criteria of load-controlled increments.
+    pub criteria: Criteria,
+    /// Relative-norm tolerances: ‖r‖ / max(‖f_ext‖, ‖f_int‖) and ‖δu‖ / ‖u‖. Arc-length
+    /// control always uses them; load-controlled increments only if `criteria.relative_norms`.
     pub force_tolerance: f64,
     pub displacement_tolerance: f64,
     /// How often a failed increment is halved and retried.
@@ -61,6 +83,283 @@ pub struct NewtonSettings {
     pub contact_algorithm: ContactAlgorithm,
     /// The linear solver of models with contact pairs (models without use Cholesky).
     pub linear_solver: LinearSolver,
+    /// Whether an increment proportional to the last converged one starts from the
+    /// extrapolated displacements ([`Predictor`]).
+    pub extrapolate: bool,
+}
+
+/// Engineering convergence criteria (see the module docs): the field parameters of CalculiX's
+/// *CONTROLS, PARAMETERS=FIELD. The defaults are CalculiX's, except R_n = 5e-4 and C_n = 1e-3
+/// (CalculiX and Abaqus: 5e-3, 1e-2), which keep path-dependent frictional answers within
+/// 1e-4 of a tight run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Criteria {
+    /// R_n: the largest residual force relative to the time-averaged force q̃.
+    pub residual: f64,
+    /// R_p: the same, used after `late_iteration` iterations (a slowly converging increment).
+    pub late_residual: f64,
+    /// I_P: the iteration after which R_p replaces R_n.
+    pub late_iteration: usize,
+    /// C_n: the largest correction relative to the largest displacement change of the
+    /// increment.
+    pub correction: f64,
+    /// ε: zero flux when the current flux q̄ ≤ ε q̃; then the residual must be ≤ ε q̃.
+    pub zero_flux: f64,
+    /// C_ε: the correction criterion under zero flux.
+    pub zero_flux_correction: f64,
+    /// R_l: a residual this small relative to q̃ is accepted without the correction check.
+    pub linear_residual: f64,
+    /// q_u: a user-given average force (N) that replaces q̃.
+    pub average_force: Option<f64>,
+    /// Whether the relative-norm tolerances of [`NewtonSettings`] are required as well.
+    pub relative_norms: bool,
+}
+
+impl Default for Criteria {
+    /// The `[solver]` defaults.
+    fn default() -> Self {
+        Self {
+            residual: 5e-4,
+            late_residual: 2e-2,
+            late_iteration: 9,
+            correction: 1e-3,
+            zero_flux: 1e-5,
+            zero_flux_correction: 1e-3,
+            linear_residual: 1e-8,
+            average_force: None,
+            relative_norms: false,
+        }
+    }
+}
+
+/// The force flux of one evaluation, Σf² and Σ|f| over the bodies' nodal forces: the
+/// force-weighted mean magnitude Σf²/Σ|f| is the typical nodal force, whatever the number of
+/// unloaded nodes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Flux {
+    squares: f64,
+    magnitudes: f64,
+}
+
+impl Flux {
+    fn of(forces: &[f64]) -> Self {
+        forces.iter().fold(Self::default(), |f, &x| Self {
+            squares: f.squares + x * x,
+            magnitudes: f.magnitudes + x.abs(),
+        })
+    }
+
+    /// The typical nodal force q̄ (0 when no force acts).
+    fn typical(self) -> f64 {
+        if self.magnitudes > 0.0 {
+            self.squares / self.magnitudes
+        } else {
+            0.0
+        }
+    }
+}
+
+/// The time average q̃ of the flux: over the run's converged increments with non-zero flux
+/// (their converged q̄) and the present iteration's q̄. In the first increment, which has no
+/// history, zero flux is judged against the mean of q̄ over its iterations so far (CalculiX's
+/// iteration average), which then is q̃: that gives a scale to a first increment that ends
+/// stress-free (a body pulled off a contact). Otherwise that mean is not used: the large
+/// flux of iterations far from equilibrium would loosen the residual test (measured: a
+/// frictional punch's first increment accepted at 7e-4 relative residual).
+#[derive(Clone, Copy, Debug, Default)]
+struct FluxHistory {
+    sum: f64,
+    count: usize,
+    /// Σ q̄ and the number of iterations of the present increment.
+    present: f64,
+    iterations: usize,
+}
+
+impl FluxHistory {
+    /// Starts an increment.
+    fn start(&mut self) {
+        self.present = 0.0;
+        self.iterations = 0;
+    }
+
+    /// q̃ for an iteration of flux `current`, and whether the flux is zero (q̄ ≤ ε × the
+    /// average of the earlier increments, or of the present one's iterations in the first):
+    /// a zero flux does not enter the average.
+    fn with(&mut self, current: f64, zero_flux: f64) -> (f64, bool) {
+        self.present += current;
+        self.iterations += 1;
+        let present = self.present / self.iterations as f64;
+        if self.count == 0 {
+            return if current <= zero_flux * present {
+                (present, true)
+            } else {
+                (current, false)
+            };
+        }
+        let past = self.sum / self.count as f64;
+        if current <= zero_flux * past {
+            (past, true)
+        } else {
+            ((self.sum + current) / (self.count + 1) as f64, false)
+        }
+    }
+
+    /// Records the flux `current` of a converged increment that had `zero` flux or not.
+    fn record(&mut self, current: f64, zero: bool) {
+        if current > 0.0 && !zero {
+            self.sum += current;
+            self.count += 1;
+        }
+    }
+}
+
+/// The state of one iteration that the criteria judge.
+#[derive(Clone, Copy, Debug)]
+struct Measures {
+    /// ‖r‖∞ over the free dofs.
+    residual_max: f64,
+    /// q̃.
+    average: f64,
+    /// Whether zero-flux conditions hold.
+    zero_flux: bool,
+    /// ‖α δu‖∞ of the last correction (∞ before the first) and ‖u − u_start‖∞.
+    correction_max: f64,
+    increment_max: f64,
+}
+
+impl Criteria {
+    /// Whether the iteration `iteration` (0: before the first solve) with `m` has converged.
+    fn converged(&self, iteration: usize, m: &Measures) -> bool {
+        let q = m.average;
+        if m.residual_max <= self.linear_residual * q {
+            return true;
+        }
+        if iteration == 0 {
+            return false;
+        }
+        let (residual, correction) = if m.zero_flux {
+            (self.zero_flux, self.zero_flux_correction)
+        } else if iteration > self.late_iteration {
+            (self.late_residual, self.correction)
+        } else {
+            (self.residual, self.correction)
+        };
+        m.residual_max <= residual * q && m.correction_max <= correction * m.increment_max
+    }
+
+    /// The ratio r_max / q̃ that the log records (∞ if q̃ = 0 with a residual).
+    fn ratio(m: &Measures) -> f64 {
+        if m.residual_max == 0.0 {
+            0.0
+        } else {
+            m.residual_max / m.average
+        }
+    }
+}
+
+/// The last converged increment, from which the next one is predicted: when the loads and
+/// prescribed displacements of an increment change in proportion to those of the last
+/// converged one (Δg = s Δg_last, s > 0, as in every proportional load schedule), its free
+/// displacements start from u + s Δu_last rather than from u (Abaqus' default extrapolation).
+/// With friction this starts the points that slipped in the last increment slipping, instead
+/// of all points sticking in the first iteration (a converged state is in stick), which spares
+/// the stick–slip switching of the first iterations.
+#[derive(Debug)]
+struct Predictor {
+    /// Whether `du` and `df` hold a converged increment that ended in `u`, `f_ext`.
+    ready: bool,
+    /// Whether `u`, `f_ext` are the state the current increment started from.
+    anchored: bool,
+    /// Displacements and external forces (all dofs) at the end of the last converged increment.
+    u: Vec<f64>,
+    f_ext: Vec<f64>,
+    /// Their changes over that increment.
+    du: Vec<f64>,
+    df: Vec<f64>,
+}
+
+/// Relative tolerance of the proportionality of two load changes (they come from the same
+/// load factors, so they agree to round-off when proportional).
+const PROPORTIONAL: f64 = 1e-9;
+
+impl Predictor {
+    /// A record of the unloaded state u = 0 with `n` dofs.
+    fn new(n: usize) -> Self {
+        Self {
+            ready: false,
+            anchored: true,
+            u: vec![0.0; n],
+            f_ext: vec![0.0; n],
+            du: vec![0.0; n],
+            df: vec![0.0; n],
+        }
+    }
+
+    /// Starts an increment from `u` (prescribed dofs already at their new values) with the
+    /// external forces `f_ext`: adds s Δu_last to the free dofs if the increment is
+    /// proportional to the last converged one. Returns s (0: no prediction).
+    fn predict(&mut self, dofs: &DofMap, u: &mut [f64], f_ext: &[f64]) -> f64 {
+        let free = |d: usize| dofs.equation(d).is_some();
+        self.anchored = (0..u.len()).all(|d| !free(d) || u[d] == self.u[d]);
+        if !(self.ready && self.anchored) {
+            return 0.0;
+        }
+        let prescribed = (0..u.len()).filter(|&d| !free(d));
+        let s_u = proportion(prescribed.map(|d| (u[d] - self.u[d], self.du[d])));
+        let s_f = proportion((0..u.len()).map(|d| (f_ext[d] - self.f_ext[d], self.df[d])));
+        let s = match (s_u, s_f) {
+            (Some(Some(a)), Some(Some(b))) if (a - b).abs() <= PROPORTIONAL * a.abs() => a,
+            (Some(Some(a)), None) | (None, Some(Some(a))) => a,
+            _ => return 0.0,
+        };
+        if s <= 0.0 {
+            // A reversal: the last increment's slip says nothing about the next one's.
+            return 0.0;
+        }
+        for (d, x) in u.iter_mut().enumerate() {
+            if free(d) {
+                *x += s * self.du[d];
+            }
+        }
+        s
+    }
+
+    /// Records the converged increment that ended in `u` under `f_ext`.
+    fn record(&mut self, u: &[f64], f_ext: &[f64]) {
+        if self.anchored {
+            for (((du, df), (x, f)), (x0, f0)) in self
+                .du
+                .iter_mut()
+                .zip(self.df.iter_mut())
+                .zip(u.iter().zip(f_ext))
+                .zip(self.u.iter().zip(&self.f_ext))
+            {
+                *du = x - x0;
+                *df = f - f0;
+            }
+        }
+        self.ready = self.anchored;
+        self.anchored = true;
+        self.u.copy_from_slice(u);
+        self.f_ext.copy_from_slice(f_ext);
+    }
+}
+
+/// The factor s with new = s · old for pairs (new, old): None if both are zero throughout (no
+/// change of this kind), Some(None) if they are not proportional, Some(Some(s)) otherwise.
+fn proportion(pairs: impl Iterator<Item = (f64, f64)> + Clone) -> Option<Option<f64>> {
+    let (dot, old2, new2) = pairs.clone().fold((0.0, 0.0, 0.0), |(d, o, n), (a, b)| {
+        (d + a * b, o + b * b, n + a * a)
+    });
+    if old2 == 0.0 && new2 == 0.0 {
+        return None;
+    }
+    if old2 == 0.0 {
+        return Some(None);
+    }
+    let s = dot / old2;
+    let misfit = pairs.fold(0.0, |m, (a, b)| m + (a - s * b) * (a - s * b));
+    Some((misfit <= PROPORTIONAL * PROPORTIONAL * new2).then_some(s))
 }
 
 /// A problem the Newton loop can solve: it assembles internal forces and the tangent.
@@ -139,7 +438,8 @@ struct Condensed {
 pub struct NewtonLog {
     /// Number of linear solves.
     pub iterations: usize,
-    /// Relative force residual before each solve and after the last one.
+    /// Relative force residual ‖r‖ / max(‖f_ext‖, ‖f_int‖, ‖r₀‖, f_floor) before each solve
+    /// and after the last one (the criteria judge ‖r‖∞ / q̃, logged at debug level).
     pub residuals: Vec<f64>,
     /// Relative size ‖δu‖/‖u‖ of each correction.
     pub corrections: Vec<f64>,
@@ -147,6 +447,8 @@ pub struct NewtonLog {
     pub unsymmetric_solves: usize,
     pub krylov_iterations: usize,
     pub converged: bool,
+    /// The factor s of the predictor u + s Δu_last (0: the increment started from u).
+    pub predictor: f64,
     /// Seconds spent assembling, factorising and solving.
     pub assembly_seconds: f64,
     pub factorization_seconds: f64,
@@ -176,6 +478,12 @@ pub struct Newton<'a> {
     /// Line search: the displacements it starts from, and a trial step's out-of-balance force.
     start: Vec<f64>,
     trial_residual: Vec<f64>,
+    /// The displacements at the start of the increment (all dofs).
+    increment_start: Vec<f64>,
+    /// The force flux of the last evaluation, and its history over converged increments.
+    flux: Flux,
+    flux_history: FluxHistory,
+    predictor: Predictor,
     /// The condensed solver, once a problem with an interface asked for it.
     condensed: Option<Condensed>,
     /// Whether the problem was found to have no interface (then Cholesky is used).
@@ -201,6 +509,10 @@ impl<'a> Newton<'a> {
             external: vec![0.0; free],
             start: vec![0.0; dofs.dof_count()],
             trial_residual: vec![0.0; free],
+            increment_start: vec![0.0; dofs.dof_count()],
+            flux: Flux::default(),
+            flux_history: FluxHistory::default(),
+            predictor: Predictor::new(dofs.dof_count()),
             condensed: None,
             no_interface: false,
         })
@@ -286,7 +598,9 @@ impl<'a> Newton<'a> {
         };
         let Some(c) = self.condensed.as_mut() else {
             self.system.clear(tangent);
-            return problem.assemble(&mut self.system, &input);
+            let symmetric = problem.assemble(&mut self.system, &input);
+            self.flux = Flux::of(&self.system.internal_force);
+            return symmetric;
         };
         let system = &mut self.system;
         c.extrapolated = false;
@@ -327,6 +641,8 @@ impl<'a> Newton<'a> {
             }
             c.extrapolated = true;
         }
+        // The bodies' nodal forces, before the interface's are added (they balance them).
+        self.flux = Flux::of(&system.internal_force);
         if tangent {
             c.block.fill(0.0);
         }
@@ -353,8 +669,14 @@ impl<'a> Newton<'a> {
             ..NewtonLog::default()
         };
         dofs.gather_free(f_ext, &mut self.external);
+        self.increment_start.copy_from_slice(u);
+        self.flux_history.start();
+        if settings.extrapolate {
+            log.predictor = self.predictor.predict(dofs, u, f_ext);
+        }
         let f_ext_norm = norm(f_ext);
         let mut last_correction = f64::INFINITY;
+        let mut correction_max = f64::INFINITY;
         let mut initial_residual = None;
         log.factorization_seconds += self.prepare_condensed(problem)?;
         // The next evaluation runs the bulk's elements (start of the increment, or the check
@@ -374,26 +696,49 @@ impl<'a> Newton<'a> {
                 .max(force_floor)
                 .max(f64::MIN_POSITIVE);
             let residual = norm(r) / reference;
+            let flux = self.flux.typical();
+            let (average, zero_flux) = match settings.criteria.average_force {
+                Some(q) => (q, false),
+                None => self.flux_history.with(flux, settings.criteria.zero_flux),
+            };
+            let measures = Measures {
+                residual_max: max_abs(r),
+                average,
+                zero_flux,
+                correction_max,
+                increment_max: max_change(u, &self.increment_start),
+            };
             log.residuals.push(residual);
             tracing::debug!(
                 iteration = log.iterations,
-                residual,
-                correction = last_correction,
+                residual = Criteria::ratio(&measures),
+                correction = correction_max / measures.increment_max,
+                relative_residual = residual,
                 "newton"
             );
-            let balanced = residual <= settings.force_tolerance;
-            let linear_increment = residual <= 1e-3 * settings.force_tolerance;
-            if balanced
-                && (log.iterations == 0
-                    || linear_increment
-                    || last_correction <= settings.displacement_tolerance)
-            {
+            let criteria = &settings.criteria;
+            let engineering = criteria.converged(log.iterations, &measures);
+            // CalculiX's estimate of the next correction, assuming the residual keeps
+            // falling at its last rate: it spares an iteration that would only meet round-off.
+            let previous = log.residuals.iter().rev().nth(1).copied();
+            let next_correction =
+                previous.map_or(f64::INFINITY, |p| last_correction * residual / p);
+            let norms = !criteria.relative_norms
+                || residual <= settings.force_tolerance
+                    && (log.iterations == 0
+                        || residual <= 1e-3 * settings.force_tolerance
+                        || last_correction.min(next_correction) <= settings.displacement_tolerance);
+            if engineering && norms {
                 if self.condensed.as_ref().is_some_and(|c| c.extrapolated) {
                     // Confirm with the continuum's elements (its states and reactions too).
                     fresh = true;
                     log.residuals.pop();
                     continue;
                 }
+                if criteria.average_force.is_none() {
+                    self.flux_history.record(flux, zero_flux);
+                }
+                self.predictor.record(u, f_ext);
                 log.converged = true;
                 return Ok(log);
             }
@@ -444,6 +789,7 @@ impl<'a> Newton<'a> {
             };
             last_correction =
                 step * norm(&self.residual) / norm(u).max(before).max(f64::MIN_POSITIVE);
+            correction_max = step * max_abs(&self.residual);
             log.corrections.push(last_correction);
             log.iterations += 1;
         }
@@ -492,6 +838,16 @@ fn out_of_balance(dofs: &DofMap, internal: &[f64], external: &[f64], out: &mut [
     for (ri, ei) in out.iter_mut().zip(external) {
         *ri = ei - *ri;
     }
+}
+
+/// ‖v‖∞.
+fn max_abs(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |m, x| m.max(x.abs()))
+}
+
+/// ‖a − b‖∞.
+fn max_change(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).fold(0.0, |m, (x, y)| m.max((x - y).abs()))
 }
 
 /// y = A x for the matrix with values `values` over `pattern` (both triangles stored).
