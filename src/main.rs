@@ -29,9 +29,17 @@ enum Command {
     Run {
         /// The case file (TOML).
         case: PathBuf,
-        /// Output folder (default: the case's [output] dir, else out/<case name>).
+        /// Output folder (default: the case's [output] dir, else out/<case name> next to the
+        /// case file).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Replace the results of an earlier run in the output folder (only the files a run
+        /// writes are removed).
+        #[arg(long, conflicts_with = "resume")]
+        force: bool,
+        /// Continue the run in the output folder from its last converged increment.
+        #[arg(long)]
+        resume: bool,
     },
     /// Mesh-convergence study: mesh the case's .geo at several sizes, solve each, and check
     /// the convergence of quantities of interest. Exit status: 0 when every quantity passes,
@@ -67,10 +75,6 @@ enum Command {
     },
 }
 
-/// Exit status of `asperity run` when the structure collapses (README "Exit codes"): 0 is
-/// success, 1 any other failure, 2 a convergence study that cannot run.
-const COLLAPSE_EXIT_CODE: u8 = 3;
-
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let level = match cli.verbose {
@@ -86,6 +90,8 @@ fn main() -> ExitCode {
     if let Command::Converge { .. } = cli.command {
         return match converge_command(cli.command) {
             Ok(code) => code,
+            // A study that cannot run keeps its documented 2 (README "Exit codes") until its
+            // callers move to the shared codes of `Error::exit_code`.
             Err(e) => {
                 eprintln!("error: {e}");
                 ExitCode::from(2)
@@ -94,15 +100,10 @@ fn main() -> ExitCode {
     }
     match execute(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
-        // Plastic collapse (the load exceeds what the structure carries): its own code, so
-        // scripts can tell it from other failures; the converged steps are on disk.
-        Err(e @ asperity::Error::Collapse { .. }) => {
-            eprintln!("error: {e}");
-            ExitCode::from(COLLAPSE_EXIT_CODE)
-        }
+        // README "Exit codes": one mapping for every subcommand, in the library.
         Err(e) => {
             eprintln!("error: {e}");
-            ExitCode::FAILURE
+            ExitCode::from(e.exit_code())
         }
     }
 }
@@ -147,13 +148,20 @@ fn converge_command(command: Command) -> asperity::Result<ExitCode> {
 
 fn execute(command: Command) -> asperity::Result<()> {
     match command {
-        Command::Run { case, out } => {
+        Command::Run {
+            case,
+            out,
+            force,
+            resume,
+        } => {
             let parsed = Case::from_file(&case)?;
-            let out_dir = out
-                .or_else(|| parsed.output.dir.as_ref().map(|d| parsed.resolve(d)))
-                .unwrap_or_else(|| PathBuf::from("out").join(case.file_stem().unwrap_or_default()));
-            let progress = std::io::IsTerminal::is_terminal(&std::io::stderr());
-            let summary = pipeline::run(&parsed, &out_dir, progress)?;
+            let out_dir = out.unwrap_or_else(|| pipeline::default_out_dir(&parsed));
+            let options = pipeline::RunOptions {
+                progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
+                mode: pipeline::OutputMode::from_flags(force, resume),
+                command_line: std::env::args().collect(),
+            };
+            let summary = pipeline::run_with(&parsed, &out_dir, &options)?;
             println!("{summary}");
         }
         Command::Converge { .. } => unreachable!("handled by converge_command"),

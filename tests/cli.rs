@@ -205,7 +205,12 @@ fn a_successful_run_writes_the_series_and_history() {
         "{text}"
     );
     let history = std::fs::read_to_string(out.join("history.csv")).unwrap();
-    assert_eq!(history.lines().count(), 3, "{history}");
+    // Header, the unloaded state (step 0) and the two steps.
+    assert_eq!(history.lines().count(), 4, "{history}");
+    assert!(
+        history.lines().nth(1).unwrap().starts_with("0,0,0,"),
+        "{history}"
+    );
 }
 
 /// A block pressed (step 1, linear) then dragged into sliding (step 2, needs several Newton
@@ -287,10 +292,10 @@ max_cutbacks = 0
 
 /// A perfectly plastic block in plane strain, clamped at its base and pulled at its top by
 /// twice its plane-strain limit traction (2/√3) σ_Y: no equilibrium exists above a load factor
-/// of about one half. The run must stop with "plastic collapse", exit code 3 (README "Exit
+/// of about one half. The run must stop with "plastic collapse", exit code 5 (README "Exit
 /// codes"), the converged steps on disk and summary.json saying "failed".
 #[test]
-fn plastic_collapse_exits_with_code_3_and_keeps_the_converged_steps() {
+fn plastic_collapse_exits_with_code_5_and_keeps_the_converged_steps() {
     let dir = tempfile::tempdir().unwrap();
     let case = dir.path().join("case.toml");
     let traction = 2.0 * 2.0 / 3f64.sqrt() * 100.0;
@@ -325,7 +330,7 @@ count = 4
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert_eq!(code, Some(3), "{text}");
+    assert_eq!(code, Some(5), "{text}");
     assert!(
         text.contains("plastic collapse") && text.contains("last converged load factor"),
         "{text}"

@@ -16,6 +16,7 @@ use serde::Deserialize;
 
 use crate::{Error, Result};
 
+pub mod history;
 mod quantity;
 
 pub use quantity::{Component, QuantityKind, QuantitySpec, Statistic, parse_quantity};
@@ -45,6 +46,9 @@ pub struct Case {
     /// Quantities of interest for `asperity converge` (ignored by `asperity run`).
     #[serde(default, rename = "quantity")]
     pub quantities: Vec<QuantitySpec>,
+    /// Quantities written to `history.csv` at every step (`[[history]]`, [`history`]).
+    #[serde(default, rename = "history")]
+    pub history: Vec<QuantitySpec>,
     /// Folder of the case file; relative paths are resolved against it.
     #[serde(skip)]
     pub base_dir: PathBuf,

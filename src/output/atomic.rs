@@ -73,6 +73,11 @@ pub(crate) fn write_atomically(
     result.map_err(|e| Error::io(path, e))
 }
 
+/// Writes `text` to `path` atomically ([`write_atomically`]).
+pub(crate) fn write_text(path: &Path, text: &str) -> Result<()> {
+    write_atomically(path, |w| w.write_all(text.as_bytes()))
+}
+
 /// Renames `tmp` onto `path`; on failure `tmp` is dropped, which deletes it.
 fn persist(tmp: NamedTempFile, path: &Path) -> io::Result<()> {
     tmp.persist(path).map(drop).map_err(|e| e.error)

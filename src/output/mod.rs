@@ -9,6 +9,7 @@
 pub(crate) mod atomic;
 pub mod csv;
 pub mod pvd;
+pub mod restart;
 pub mod summary;
 pub mod vtu;
 
