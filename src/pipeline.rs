@@ -346,6 +346,12 @@ fn solve(
         Some(r) if r.resume => resume_record(&model, out_dir, &r.case_text)?,
         _ => None,
     };
+    if record.is_some() && model.control.arc_length.is_some() {
+        return Err(Error::Restart {
+            path: out_dir.join(RESTART_FILE),
+            reason: "arc-length runs cannot be resumed yet; run without --resume".into(),
+        });
+    }
     let settings = newton_settings(&case.solver);
     let mut writer = StepWriter::new(case, &model, session, summary, on_step);
     let resume = match record {
@@ -356,12 +362,6 @@ fn solve(
         }
     };
     let stats = if model.control.arc_length.is_some() {
-        if resume.is_some() {
-            return Err(Error::Restart {
-                path: out_dir.join(RESTART_FILE),
-                reason: "arc-length runs cannot be resumed yet; run without --resume".into(),
-            });
-        }
         run_steps(&model, &settings, |step| writer.step(step, None))?.1
     } else {
         run_steps_from(&model, &settings, resume, &mut writer)?.1
