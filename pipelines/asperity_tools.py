@@ -138,12 +138,13 @@ def read_csv(path: Path) -> dict[str, np.ndarray]:
 
 
 def read_history(out: Path, start: bool = False) -> dict[str, np.ndarray]:
-    """history.csv of a run: one row per converged step, and with `start` also the row of the
-    unloaded state (step 0) that asperity writes first, so that curves begin at the origin."""
+    """history.csv of a run: one row per converged step. With `start`, also the row of the
+    unloaded state (step 0) that asperity writes first, so that curves begin at the origin, and
+    the row of the last converged sub-increment of a step that failed (fractional `time`)."""
     history = read_csv(out / "history.csv")
     if start:
         return history
-    keep = history["step"] > 0
+    keep = (history["step"] > 0) & (history["time"] == np.round(history["time"]))
     return {name: values[keep] for name, values in history.items()}
 
 
