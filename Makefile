@@ -65,17 +65,17 @@ tapered_joint plane_punch indentation: deps build
 	@echo "results: out/$@ (REPORT.md, figures, one folder per run with results.pvd for ParaView)"
 
 thick_cylinder: deps build
-	$(BIN) run pipelines/thick_cylinder.toml --out out/thick_cylinder
+	$(BIN) run pipelines/thick_cylinder.toml --out out/thick_cylinder --force
 	$(PYTHON) pipelines/plot_fields.py out/thick_cylinder --case pipelines/thick_cylinder.toml
 	@echo "results: out/thick_cylinder (results.pvd for ParaView, *.png, history.csv)"
 
 prandtl: deps build
-	$(BIN) run pipelines/prandtl.toml --out out/prandtl
+	$(BIN) run pipelines/prandtl.toml --out out/prandtl --force
 	$(PYTHON) pipelines/plot_fields.py out/prandtl --case pipelines/prandtl.toml
 	@echo "results: out/prandtl (results.pvd for ParaView, *.png, history.csv: mean pressure = -reaction_top_y / 10 mm)"
 
 shrink_fit: deps build
-	$(BIN) run pipelines/shrink_fit.toml --out out/shrink_fit
+	$(BIN) run pipelines/shrink_fit.toml --out out/shrink_fit --force
 	$(PYTHON) pipelines/plot_fields.py out/shrink_fit --case pipelines/shrink_fit.toml
 	@echo "results: out/shrink_fit (results.pvd for ParaView, *.png, contact_fit_*.csv, history.csv)"
 
@@ -92,7 +92,7 @@ test: deps
 	  done; \
 	done
 	@for c in thick_cylinder shrink_fit shrink_fit_split; do \
-	  $(BIN) run pipelines/$$c.toml --out build/test/$$c >/dev/null && \
+	  $(BIN) run pipelines/$$c.toml --out build/test/$$c --force >/dev/null && \
 	  $(PYTHON) pipelines/check_output.py build/test/$$c || exit 1; \
 	  $(PYTHON) pipelines/plot_fields.py build/test/$$c >/dev/null 2>&1 || { echo "plot_fields.py failed on $$c"; exit 1; }; \
 	done

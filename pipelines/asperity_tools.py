@@ -99,7 +99,9 @@ def run_cases(runs: list[tuple[Path, Path]], jobs: int | None = None, fail_fast:
     def one(run: tuple[Path, Path]) -> dict:
         case, out = run
         (out / "summary.json").unlink(missing_ok=True)  # never read a previous run's
-        done = subprocess.run([str(BINARY), "run", str(case), "--out", str(out)], capture_output=True, text=True)
+        # --force: replace a previous run's files (asperity refuses to overwrite them otherwise).
+        done = subprocess.run([str(BINARY), "run", str(case), "--out", str(out), "--force"], capture_output=True,
+                              text=True)
         try:
             summary = read_summary(out)
         except FileNotFoundError:
@@ -135,9 +137,15 @@ def read_csv(path: Path) -> dict[str, np.ndarray]:
     return {name: data[:, i] for i, name in enumerate(header)}
 
 
-def read_history(out: Path) -> dict[str, np.ndarray]:
-    """history.csv of a run."""
-    return read_csv(out / "history.csv")
+def read_history(out: Path, start: bool = False) -> dict[str, np.ndarray]:
+    """history.csv of a run: one row per converged step. With `start`, also the row of the
+    unloaded state (step 0) that asperity writes first, so that curves begin at the origin, and
+    the row of the last converged sub-increment of a step that failed (fractional `time`)."""
+    history = read_csv(out / "history.csv")
+    if start:
+        return history
+    keep = (history["step"] > 0) & (history["time"] == np.round(history["time"]))
+    return {name: values[keep] for name, values in history.items()}
 
 
 def read_contact(out: Path, pair: str, step: int | None = None) -> dict[str, np.ndarray]:

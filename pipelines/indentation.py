@@ -20,7 +20,7 @@ into OUT:
                                                        solver statistics
 and exits non-zero with a message if a check fails: expected arrays and columns present;
 vertical equilibrium (interface normal resultant and foundation reaction against the applied
-load) within 1e-6 relative at every step; for mu_m = 0.2 at r = 2 an inner stick zone and an
+load) within 5e-4 relative (the solver's residual tolerance R_n) at every step; for mu_m = 0.2 at r = 2 an inner stick zone and an
 outer slip annulus (the paper's hardening model, mu_m = beta = 0.2). A run of the hardening
 sweep may stop before Q = 4.6 pi a^2 p0 (without hardening that load is at the collapse load):
 it is reported with the last load it carried; any other failed run stops the pipeline.
@@ -65,7 +65,9 @@ SIGMA_Y = 90.0
 HARDENING = [0.0, 100.0, 500.0, 1000.0, 2000.0, 5000.0, 10000.0]
 HARDENING_QUICK = [0.0, 1000.0, 10000.0]
 SWEEP_FACTOR = 4.6 / 1.6        # Q = 4.6 pi a² p0 in units of r
-EQUILIBRIUM_TOL = 1e-6
+# Every residual component is at most R_n times the average nodal force (the default criterion,
+# [solver] residual_tolerance = 5e-4), so a resultant is out of balance by about R_n at most.
+EQUILIBRIUM_TOL = 5e-4
 HISTORY_COLUMNS = ["step", "load_factor", "iterations", "reaction_foundation_bottom_y",
                    f"{PAIR}_normal_force", f"{PAIR}_tangential_force", f"{PAIR}_force_on_b_y"]
 CONTACT_COLUMNS = ["x", "y", "contact_normal_stress", "contact_pressure", "contact_shear_stress",

@@ -19,7 +19,7 @@ reactions.png, contact_contact.png).
 
 Exits non-zero (CI check) when an expected array or column is missing, the vertical
 equilibrium of the interface (normal resultant against p0 * a * thickness of the half model)
-is violated by more than 1e-6 relative at any step, the friction coefficient of the
+is violated by more than 5e-4 relative (the solver's residual tolerance R_n) at any step, the friction coefficient of the
 slip-hardening run leaves Eq. (4), or the slip-hardening model does not slip more than ideal
 Coulomb (the paper's statement).
 """
@@ -52,7 +52,9 @@ PAIR = "contact"
 PAPER_SLIP_UM = 10.8        # paper, Fig. 3 caption: u_T,max^p = 10.8 um
 FREDRIKSSON_SLIP_UM = 10.4  # paper §4.1: "u_T,max^p as given by Fredriksson ... 10.4 um"
 FIG4_SETS = [(0.1, 0.1), (0.2, 0.2), (0.3, 0.3)]  # (mu_m, beta) of Fig. 4
-EQUILIBRIUM_TOLERANCE = 1e-6
+# Every residual component is at most R_n times the average nodal force (the default criterion,
+# [solver] residual_tolerance = 5e-4), so a resultant is out of balance by about R_n at most.
+EQUILIBRIUM_TOLERANCE = 5e-4
 EQ4_TOLERANCE = 1e-9
 CONTACT_COLUMNS = ["x", "contact_pressure", "contact_shear_stress", "normal_gap", "tangential_slip",
                    "plastic_slip", "signed_plastic_slip", "friction_coefficient", "contact_status"]

@@ -10,8 +10,8 @@ Runs pipelines/tapered_joint/{coulomb,compliant_1,compliant_2}.toml, and the Cou
 with mu = 0.1 < tan gamma (not self-locking) for contrast, in parallel, and writes into the
 output folder: one run folder per case (VTU/PVD, CSV), force_displacement.png,
 contact_stress.png, the contour pictures of each run, and REPORT.md. Exits non-zero when a
-check fails: axial equilibrium of the interface force against the applied load (1e-6
-relative), linearity of F(u_a) for Coulomb friction (1 %), its slope against the slice
+check fails: axial equilibrium of the interface force against the applied load (5e-4
+relative, the solver's residual tolerance R_n), linearity of F(u_a) for Coulomb friction (1 %), its slope against the slice
 model (10 %), self-locking on unloading (tan gamma <= mu: u_a returns by less than 5 %,
 what local back-slip at the sleeve edge allows) against the joint with mu = 0.1, which must
 slide back by more than half.
@@ -31,6 +31,7 @@ import numpy as np  # noqa: E402
 
 from asperity_tools import ROOT, read_contact, read_history, run_cases, rust_exp, table, variant, write_report  # noqa: E402
 
+RESIDUAL_TOLERANCE = 5e-4  # [solver] residual_tolerance default (README): equilibrium accuracy
 HERE = Path(__file__).resolve().parent
 CASES = {
     "coulomb": "Coulomb friction, no interface compliance",
@@ -117,10 +118,13 @@ def main() -> None:
     for name, (factors, force, u_a, history) in results.items():
         loading = np.arange(len(factors)) <= int(np.argmax(factors))
         ax.plot(1e3 * np.r_[0.0, u_a], np.r_[0.0, force] / 1e3, "o-", ms=3, label=CASES[name])
-        # Axial equilibrium: the shaft pushes the sleeve down with the applied force.
+        # Axial equilibrium: the shaft pushes the sleeve down with the applied force. Every
+        # residual component is at most R_n times the average nodal force (the default
+        # convergence criterion, [solver] residual_tolerance = 5e-4), so a resultant over the
+        # loaded nodes is out of balance by at most about R_n of the load.
         eq = np.max(np.abs(history["cone_force_on_b_y"] + force)) / force.max()
         checks.append(f"{name}: axial equilibrium of the interface force, max relative error {eq:.1e}: "
-                      + check(eq < 1e-6, f"{name}: axial equilibrium error {eq:.1e}", failures))
+                      + check(eq < RESIDUAL_TOLERANCE, f"{name}: axial equilibrium error {eq:.1e}", failures))
         slope = np.polyfit(u_a[loading], force[loading], 1)[0]
         i_max = int(np.argmax(factors))
         back = (u_a[i_max] - u_a[-1]) / u_a[i_max]

@@ -432,6 +432,18 @@ impl GlobalSystem {
         );
     }
 
+    /// Empties the kept sum of [`Self::assemble_reusing`]: the next tangent assembly
+    /// evaluates every element and rebuilds the sum from the present states. Called at the
+    /// start of each load increment, so that the sum's rounding depends on that increment's
+    /// start state only (a run resumed from a restart record repeats the uninterrupted run
+    /// bit for bit). Allocates nothing.
+    pub fn forget_reference(&mut self) {
+        if let Some(r) = &mut self.reference {
+            r.values.fill(0.0);
+            r.frozen.fill(false);
+        }
+    }
+
     /// Number of elements whose reference matrix [`Self::assemble_reusing`] keeps in its sum
     /// (frozen: not re-evaluated for the tangent).
     pub fn frozen_elements(&self) -> usize {

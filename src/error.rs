@@ -157,6 +157,22 @@ pub enum Error {
     /// Arc-length control cannot start (no load to scale) or its first increment failed.
     #[error("arc-length control: {0}")]
     ArcLength(String),
+    /// The output folder holds the files of an earlier run (`files` of them, e.g.
+    /// `example`): a run does not overwrite results unless told to (`--force`, `--resume`).
+    #[error(
+        "{}: the folder holds the results of an earlier run ({files} files, e.g. {example}); pass \
+         --force to replace them, --resume to continue that run, or choose another --out",
+        dir.display()
+    )]
+    OutputExists {
+        dir: PathBuf,
+        files: usize,
+        example: String,
+    },
+    /// A restart record cannot be used to continue a run: `reason` says why (corrupt, made
+    /// by another case or program version, arc-length control).
+    #[error("{}: cannot resume: {reason}", path.display())]
+    Restart { path: PathBuf, reason: String },
     /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]
     Io {
@@ -182,6 +198,37 @@ impl Error {
             problem,
             entity,
             message: message.into(),
+        }
+    }
+
+    /// The process exit status for this error, shared by every subcommand (README "Exit
+    /// codes"): 1 a computation that did not converge (a step, arc-length control, a
+    /// singular system), 3 bad input (case file, mesh, model, a quantity, gmsh on the `.geo`),
+    /// 4 reading or writing a file, 5 plastic collapse (the load exceeds what the structure
+    /// carries: a result, not a failure of the solver). 2 is a usage error: clap's own for
+    /// bad arguments, and an output folder that would be overwritten.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Error::NoConvergence(_) | Error::ArcLength(_) | Error::Linear(_) => 1,
+            Error::OutputExists { .. } => 2,
+            Error::Mesh { .. }
+            | Error::Case { .. }
+            | Error::InvalidParameter { .. }
+            | Error::Group { .. }
+            | Error::Topology { .. }
+            | Error::ConflictingSupports { .. }
+            | Error::NegativeRadius { .. }
+            | Error::AxisDisplacement { .. }
+            | Error::NotOnBody { .. }
+            | Error::OverlappingBodies { .. }
+            | Error::DistortedElement { .. }
+            | Error::NothingToSolve
+            | Error::Quantity { .. }
+            | Error::External(_)
+            | Error::Restart { .. } => 3,
+            Error::Io { .. } => 4,
+            Error::Collapse { .. } => 5,
+            Error::StudyLevel { source, .. } => source.exit_code(),
         }
     }
 
@@ -409,8 +456,9 @@ impl fmt::Display for ParameterError {
 
 impl std::error::Error for ParameterError {}
 
-/// A load step that could not be made to converge: where it stopped and every attempt.
-#[derive(Clone, Debug)]
+/// A load step that could not be made to converge: where it stopped, every attempt, and
+/// what the last attempt shows about why.
+#[derive(Clone, Debug, Default)]
 pub struct NoConvergence {
     /// 1-based step number.
     pub step: usize,
@@ -424,6 +472,26 @@ pub struct NoConvergence {
     pub cutbacks: usize,
     /// Every attempt of the step, in order.
     pub attempts: Vec<Attempt>,
+    /// The free node carrying the largest out-of-balance force in the last attempt.
+    pub largest_residual: Option<ResidualAt>,
+    /// Interface integration points whose contact status (open, stick, slip) in the last
+    /// attempt differs from the last converged state.
+    pub status_changes: usize,
+    /// A physical reading of the failure where one is recognisable (friction capacity
+    /// exceeded, a body without support).
+    pub hint: Option<String>,
+}
+
+/// Where the out-of-balance force of a failed attempt is largest.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResidualAt {
+    /// Gmsh node tag.
+    pub node: u64,
+    pub position: [f64; 2],
+    /// The body (physical surface) the node belongs to.
+    pub body: Option<String>,
+    /// Out-of-balance force (f_ext − f_int) over the node's free components, in N.
+    pub force: [f64; 2],
 }
 
 /// One attempted (sub-)increment of a step that failed.
@@ -441,19 +509,60 @@ pub struct Attempt {
     pub reason: Option<String>,
 }
 
+/// Attempts listed in full at each end of a [`NoConvergence`] message; the ones between are
+/// summarised in one line.
+const SHOWN_ATTEMPTS: usize = 3;
+/// Residuals listed at each end of an attempt's residual history.
+const SHOWN_RESIDUALS: usize = 4;
+
 impl fmt::Display for NoConvergence {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
             "step {} (load factor {}) did not converge after {} cut-backs; the last converged state is at time \
-             {:.6} (load factor {:.6}). Attempts:",
+             {:.6} (load factor {:.6})",
             self.step,
             self.load_factor,
             self.cutbacks,
             self.converged_time,
             self.converged_load_factor
         )?;
-        for a in &self.attempts {
+        if let Some(hint) = &self.hint {
+            write!(f, ".\n  Likely cause: {hint}")?;
+        }
+        if let Some(r) = &self.largest_residual {
+            write!(
+                f,
+                ".\n  Largest out-of-balance force: ({:.3e}, {:.3e}) N at node {} ({:?}) of body '{}'",
+                r.force[0],
+                r.force[1],
+                r.node,
+                r.position,
+                r.body.as_deref().unwrap_or("?")
+            )?;
+        }
+        if self.status_changes > 0 {
+            write!(
+                f,
+                ".\n  {} interface points changed contact status against the last converged state",
+                self.status_changes
+            )?;
+        }
+        write!(f, ".\n  Attempts ({}):", self.attempts.len())?;
+        let n = self.attempts.len();
+        for (i, a) in self.attempts.iter().enumerate() {
+            if n > 2 * SHOWN_ATTEMPTS && i == SHOWN_ATTEMPTS {
+                let hidden = &self.attempts[SHOWN_ATTEMPTS..n - SHOWN_ATTEMPTS];
+                let smallest = hidden.iter().map(|a| a.time).fold(f64::INFINITY, f64::min);
+                write!(
+                    f,
+                    "\n  … {} more attempts, down to time {smallest:.6} …",
+                    hidden.len()
+                )?;
+            }
+            if n > 2 * SHOWN_ATTEMPTS && (SHOWN_ATTEMPTS..n - SHOWN_ATTEMPTS).contains(&i) {
+                continue;
+            }
             write!(
                 f,
                 "\n  at time {:.6} (load factor {:.6}): ",
@@ -461,13 +570,30 @@ impl fmt::Display for NoConvergence {
             )?;
             match &a.reason {
                 Some(reason) => write!(f, "{reason}")?,
-                None => {
-                    let residuals: Vec<String> =
-                        a.residuals.iter().map(|r| format!("{r:.2e}")).collect();
-                    write!(f, "relative residuals {}", residuals.join(", "))?;
-                }
+                None => write!(f, "relative residuals {}", residual_history(&a.residuals))?,
             }
         }
         Ok(())
+    }
+}
+
+/// The residual history of an attempt, its middle elided when it is long.
+fn residual_history(residuals: &[f64]) -> String {
+    let text = |r: &[f64]| {
+        r.iter()
+            .map(|r| format!("{r:.2e}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let n = residuals.len();
+    if n <= 2 * SHOWN_RESIDUALS {
+        text(residuals)
+    } else {
+        format!(
+            "{}, … ({} more), {}",
+            text(&residuals[..SHOWN_RESIDUALS]),
+            n - 2 * SHOWN_RESIDUALS,
+            text(&residuals[n - SHOWN_RESIDUALS..])
+        )
     }
 }

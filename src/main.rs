@@ -45,9 +45,17 @@ enum Command {
     Run {
         /// The case file (TOML).
         case: PathBuf,
-        /// Output folder (default: the case's [output] dir, else out/<case name>).
+        /// Output folder (default: the case's [output] dir, else out/<case name> next to the
+        /// case file).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Replace the results of an earlier run in the output folder (only the files a run
+        /// writes are removed).
+        #[arg(long, conflicts_with = "resume")]
+        force: bool,
+        /// Continue the run in the output folder from its last converged increment.
+        #[arg(long)]
+        resume: bool,
     },
     /// Mesh-convergence study: mesh the case's .geo at several sizes, solve each, and check
     /// the convergence of quantities of interest. Exit status: 0 when every quantity passes,
@@ -155,10 +163,6 @@ enum SweepAction {
     },
 }
 
-/// Exit status of `asperity run` when the structure collapses (README "Exit codes"): 0 is
-/// success, 1 any other failure, 2 a convergence study that cannot run.
-const COLLAPSE_EXIT_CODE: u8 = 3;
-
 /// The run's `log.txt`: a log sink that records nothing until [`LogFile::open`] is called with
 /// the output folder (known only once the case is read), then the same lines as stderr, at
 /// INFO level or more detailed, whatever `-q` says.
@@ -166,11 +170,18 @@ const COLLAPSE_EXIT_CODE: u8 = 3;
 struct LogFile(Arc<Mutex<Option<File>>>);
 
 impl LogFile {
-    /// Starts writing `dir/log.txt` (created or truncated).
-    fn open(&self, dir: &Path) -> asperity::Result<()> {
+    /// Starts writing `dir/log.txt` (created, or truncated unless `append`).
+    /// A resumed run appends to the log of the run it continues.
+    fn open(&self, dir: &Path, append: bool) -> asperity::Result<()> {
         let path = dir.join("log.txt");
         std::fs::create_dir_all(dir).map_err(|e| asperity::Error::io(dir, e))?;
-        let file = File::create(&path).map_err(|e| asperity::Error::io(&path, e))?;
+        let file = File::options()
+            .write(true)
+            .create(true)
+            .append(append)
+            .truncate(!append)
+            .open(&path)
+            .map_err(|e| asperity::Error::io(&path, e))?;
         *self.lock() = Some(file);
         Ok(())
     }
@@ -252,11 +263,13 @@ fn main() -> ExitCode {
     let log_file = init_logging(&cli);
     if let Err(e) = init_threads(cli.threads) {
         eprintln!("error: {e}");
-        return ExitCode::FAILURE;
+        return ExitCode::from(e.exit_code());
     }
     if let Command::Converge { .. } = cli.command {
         return match converge_command(cli.command) {
             Ok(code) => code,
+            // A study that cannot run keeps its documented 2 (README "Exit codes") until its
+            // callers move to the shared codes of `Error::exit_code`.
             Err(e) => {
                 eprintln!("error: {e}");
                 ExitCode::from(2)
@@ -269,21 +282,16 @@ fn main() -> ExitCode {
             Ok(false) => ExitCode::FAILURE,
             Err(e) => {
                 eprintln!("error: {e}");
-                ExitCode::FAILURE
+                ExitCode::from(e.exit_code())
             }
         };
     }
     match execute(cli.command, &log_file) {
         Ok(()) => ExitCode::SUCCESS,
-        // Plastic collapse (the load exceeds what the structure carries): its own code, so
-        // scripts can tell it from other failures; the converged steps are on disk.
-        Err(e @ asperity::Error::Collapse { .. }) => {
-            eprintln!("error: {e}");
-            ExitCode::from(COLLAPSE_EXIT_CODE)
-        }
+        // README "Exit codes": one mapping for every subcommand, in the library.
         Err(e) => {
             eprintln!("error: {e}");
-            ExitCode::FAILURE
+            ExitCode::from(e.exit_code())
         }
     }
 }
@@ -430,15 +438,24 @@ fn check(case: &Path) -> asperity::Result<String> {
 
 fn execute(command: Command, log_file: &LogFile) -> asperity::Result<()> {
     match command {
-        Command::Run { case, out } => {
+        Command::Run {
+            case,
+            out,
+            force,
+            resume,
+        } => {
             let parsed = Case::from_file(&case)?;
-            let out_dir = out
-                .or_else(|| parsed.output.dir.as_ref().map(|d| parsed.resolve(d)))
-                .unwrap_or_else(|| PathBuf::from("out").join(case.file_stem().unwrap_or_default()));
-            // Opened once the folder exists and is the run's: log.txt belongs to this run.
-            log_file.open(&out_dir)?;
-            let progress = std::io::IsTerminal::is_terminal(&std::io::stderr());
-            let summary = pipeline::run(&parsed, &out_dir, progress)?;
+            let out_dir = out.unwrap_or_else(|| pipeline::default_out_dir(&parsed));
+            let options = pipeline::RunOptions {
+                progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
+                mode: pipeline::OutputMode::from_flags(force, resume),
+                command_line: std::env::args().collect(),
+            };
+            // log.txt belongs to the run: opened once the folder is the run's (after the
+            // refusal of an earlier run's results, or their removal by --force).
+            let summary = pipeline::run_with(&parsed, &out_dir, &options, |dir| {
+                log_file.open(dir, resume)
+            })?;
             println!("{summary}");
         }
         Command::Converge { .. } => unreachable!("handled by converge_command"),

@@ -1,21 +1,29 @@
 //! The whole run of a case: mesh (gmsh or an .msh file) → model → load steps → output files.
 //! Each phase is timed under its name; the numbers end up in the [`RunSummary`].
 //!
-//! Files written to the output folder:
+//! Files written to the output folder (README "Output"):
+//! - `run.json` ([`RunInfo`]): what made the results — the case file's text, program version,
+//!   command line, start and end, host, threads;
 //! - `mesh.msh` when the case meshes a `.geo` script;
 //! - `bodies_NNNN.vtu` per converged step and `results.pvd` listing them (time = step
 //!   number, since load factors may go down again when unloading);
 //! - `interface_NNNN.vtu` (when the case has contact pairs): the contact fields on the
 //!   interface, listed in `results.pvd` as a second part;
 //! - `contact_<pair>_NNNN.csv`: the contact fields along each pair's curve;
-//! - `history.csv`: per step the load factor, increments, Newton iterations, final residual,
-//!   the reaction force of every support and the resultant forces of every contact pair;
+//! - `history.csv`: a step-0 row, then per step the pseudo-time, the global and per-load
+//!   factors, increments, cut-backs, Newton iterations, final residual, the reaction force
+//!   of every support, the resultant forces of every contact pair and the case's
+//!   `[[history]]` quantities;
+//! - `restart.bin` ([`crate::output::restart`]): the state of the last converged increment,
+//!   from which `--resume` continues;
 //! - `summary.json` ([`Summary`]): the model size, every converged step, totals and timings,
 //!   and whether the run converged or failed (with the error), for scripts.
 //!
-//! Every file but `summary.json` is rewritten after each converged step, so a run that stops
-//! early leaves the results of all converged steps on disk; `summary.json` is written at the
-//! end, also when a run fails.
+//! A step's files are committed together: its VTU and CSV files first, then the restart
+//! record, then `history.csv`, and last `results.pvd`, each replaced atomically; a run killed
+//! at any moment leaves complete files, and the indexes list only steps whose files exist.
+//! When a step fails after some of its sub-increments converged, the last of them is written
+//! as that step (its fractional pseudo-time in `history.csv` and `results.pvd` tells it apart).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -23,17 +31,22 @@ use std::time::Instant;
 use crate::config::{Case, LinearSolverKind, SolverSpec};
 use crate::element::Analysis;
 use crate::mesh::{Mesh, gmsh, msh};
-use crate::model::{Model, ModelSpec};
+use crate::model::{Model, ModelSpec, Schedule};
+use crate::output::atomic::write_text;
 use crate::output::csv::{CsvTable, write_csv};
 use crate::output::pvd::{PvdEntry, write_pvd};
+use crate::output::restart::{OutputState, RESTART_FILE, Record, read_record, write_record};
 use crate::output::summary::{
     ContactResultant, Force, ModelSize, Named, Status, StepSummary, Summary,
 };
 use crate::output::vtu::write_vtu;
 use crate::post::interface::{InterfaceOutput, resultants};
+use crate::post::quantities::evaluate;
 use crate::post::{BodyPoints, body_grid, reactions};
-use crate::solver::newton::{LinearSolver, NewtonSettings};
-use crate::solver::stepping::{RunStatistics, StepResult, run_steps};
+use crate::solver::newton::{LinearSolver, NewtonLog, NewtonSettings};
+use crate::solver::stepping::{
+    Observer, Progress, Resume, RunStatistics, Solution, StepResult, run_steps, run_steps_from,
+};
 use crate::{Error, Result};
 
 /// What a run did, for the closing summary.
@@ -122,13 +135,99 @@ pub fn load_mesh(case: &Case, out_dir: &Path) -> Result<Mesh> {
     msh::read_msh(&path)
 }
 
-/// Runs `case`, writing results to `out_dir`. `progress` shows a progress bar over the steps.
+/// How a run treats an output folder that holds the files of an earlier run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum OutputMode {
+    /// Refuse ([`Error::OutputExists`]): results are never overwritten by accident.
+    #[default]
+    Fresh,
+    /// Remove the earlier run's files (and only those, [`is_run_file`]) first.
+    Force,
+    /// Continue the earlier run from its restart record; start over when it has none (it
+    /// was stopped before its first increment converged).
+    Resume,
+}
+
+impl OutputMode {
+    /// The mode of the command line's `--force` and `--resume` (exclusive).
+    pub fn from_flags(force: bool, resume: bool) -> Self {
+        match (force, resume) {
+            (true, _) => OutputMode::Force,
+            (false, true) => OutputMode::Resume,
+            (false, false) => OutputMode::Fresh,
+        }
+    }
+}
+
+/// The output folder of `case` when the command line names none: its `[output] dir`
+/// (relative to the case file), else `out/<case file stem>` next to the case file, so that
+/// two case files of the same name in different folders never share results.
+pub fn default_out_dir(case: &Case) -> PathBuf {
+    match &case.output.dir {
+        Some(dir) => case.resolve(dir),
+        None => case
+            .base_dir
+            .join("out")
+            .join(case.path.file_stem().unwrap_or_default()),
+    }
+}
+
+/// How [`run_with`] runs a case.
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// Show a progress bar over the steps.
+    pub progress: bool,
+    pub mode: OutputMode,
+    /// The command line, for `run.json`.
+    pub command_line: Vec<String>,
+}
+
+/// Runs `case`, writing results to `out_dir`, which must not hold an earlier run's results
+/// ([`OutputMode::Fresh`]). `progress` shows a progress bar over the steps.
 pub fn run(case: &Case, out_dir: &Path, progress: bool) -> Result<RunSummary> {
+    let options = RunOptions {
+        progress,
+        mode: OutputMode::Fresh,
+        command_line: std::env::args().collect(),
+    };
+    run_with(case, out_dir, &options, |_| Ok(()))
+}
+
+/// Runs `case` into `out_dir` as `options` say: checks the case, prepares the folder
+/// ([`OutputMode`]), writes `run.json`, meshes, solves and writes every converged increment's
+/// files and restart record.
+/// `folder_ready` is called once `out_dir` is the run's (an earlier run's results refused or
+/// removed), before anything else is written: the CLI opens its `log.txt` there.
+pub fn run_with(
+    case: &Case,
+    out_dir: &Path,
+    options: &RunOptions,
+    folder_ready: impl FnOnce(&Path) -> Result<()>,
+) -> Result<RunSummary> {
     let spec = ModelSpec::new(case)?; // bad parameters fail before gmsh runs
-    let (mesh, mesh_seconds) = mesh_case(case, out_dir)?;
-    run_model(case, spec, mesh, mesh_seconds, out_dir, progress, |_, _| {
-        Ok(())
-    })
+    check_history(case)?;
+    let case_text = std::fs::read_to_string(&case.path).map_err(|e| Error::io(&case.path, e))?;
+    prepare_output(out_dir, options.mode)?;
+    folder_ready(out_dir)?;
+    let mut info = RunInfo::new(case, &case_text, options);
+    info.write(out_dir)?;
+    let restart = Restart {
+        case_text,
+        resume: options.mode == OutputMode::Resume,
+    };
+    let result = mesh_case(case, out_dir).and_then(|(mesh, mesh_seconds)| {
+        let session = Session {
+            out_dir,
+            progress: options.progress,
+            restart: Some(&restart),
+        };
+        run_session(case, spec, mesh, mesh_seconds, &session, |_, _| Ok(()))
+    });
+    info.finish(&result);
+    if let Err(e) = info.write(out_dir) {
+        tracing::warn!("{e}");
+    }
+    result
 }
 
 /// Obtains the case's mesh into `out_dir` ([`load_mesh`]) and the seconds it took. If that
@@ -152,7 +251,8 @@ pub fn mesh_case(case: &Case, out_dir: &Path) -> Result<(Mesh, f64)> {
 /// Runs `case` on an already loaded `mesh` (from [`load_mesh`], which took `mesh_seconds`),
 /// writing results to `out_dir`, and calls `on_step` with the model and every converged step
 /// after its files are written (e.g. to evaluate quantities in memory; an error stops the run).
-/// `summary.json` is written whether the run converges or fails.
+/// `summary.json` is written whether the run converges or fails. No restart record is kept
+/// (a convergence study's levels are not resumed).
 pub fn run_mesh(
     case: &Case,
     mesh: Mesh,
@@ -175,10 +275,44 @@ pub fn run_model(
     progress: bool,
     on_step: impl FnMut(&Model, &StepResult) -> Result<()>,
 ) -> Result<RunSummary> {
+    check_history(case)?;
+    let session = Session {
+        out_dir,
+        progress,
+        restart: None,
+    };
+    run_session(case, spec, mesh, mesh_seconds, &session, on_step)
+}
+
+/// Where and how a run writes: its folder, the progress bar, and the restart records (none
+/// for a study's levels).
+struct Session<'a> {
+    out_dir: &'a Path,
+    progress: bool,
+    restart: Option<&'a Restart>,
+}
+
+/// A run that keeps restart records: the case file's text they are checked against, and
+/// whether to continue from the one on disk.
+struct Restart {
+    case_text: String,
+    resume: bool,
+}
+
+/// Solves and writes the summary, also when the run fails.
+fn run_session(
+    case: &Case,
+    spec: ModelSpec,
+    mesh: Mesh,
+    mesh_seconds: f64,
+    session: &Session,
+    on_step: impl FnMut(&Model, &StepResult) -> Result<()>,
+) -> Result<RunSummary> {
     let start = Instant::now();
+    let out_dir = session.out_dir;
     let mut summary = Summary::new(&case.path);
     summary.seconds.mesh = mesh_seconds;
-    let result = solve(case, spec, mesh, out_dir, progress, &mut summary, on_step);
+    let result = solve(case, spec, mesh, session, &mut summary, on_step);
     summary.seconds.total = mesh_seconds + start.elapsed().as_secs_f64();
     match &result {
         Ok(run) => {
@@ -193,17 +327,17 @@ pub fn run_model(
     result
 }
 
-/// The model, the load steps and their files: the work of [`run_mesh`], which writes the
+/// The model, the load steps and their files: the work of [`run_session`], which writes the
 /// summary.
 fn solve(
     case: &Case,
     spec: ModelSpec,
     mesh: Mesh,
-    out_dir: &Path,
-    progress: bool,
+    session: &Session,
     summary: &mut Summary,
-    mut on_step: impl FnMut(&Model, &StepResult) -> Result<()>,
+    on_step: impl FnMut(&Model, &StepResult) -> Result<()>,
 ) -> Result<RunSummary> {
+    let out_dir = session.out_dir;
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
     let t = Instant::now();
     let model = Model::build(mesh, spec)?;
@@ -216,33 +350,280 @@ fn solve(
         model.analysis.name()
     );
     describe_model(summary, &model, model_seconds);
-    let bar = progress_bar(progress, model.schedule.steps());
-    let mut writer = StepWriter::new(&model, out_dir, case.output.vtu, summary);
-    let mut last_reactions = Vec::new();
-    let (_, stats) = run_steps(&model, &newton_settings(&case.solver), |step| {
-        let t = Instant::now();
-        last_reactions = writer.write(step)?;
-        on_step(&model, step)?;
-        bar.inc(1);
-        bar.set_message(format!("load factor {}", step.load_factor));
-        Ok(t.elapsed().as_secs_f64())
-    })?;
-    bar.finish_and_clear();
+    let record = match session.restart {
+        Some(r) if r.resume => resume_record(&model, out_dir, &r.case_text)?,
+        _ => None,
+    };
+    if record.is_some() && model.control.arc_length.is_some() {
+        return Err(Error::Restart {
+            path: out_dir.join(RESTART_FILE),
+            reason: "arc-length runs cannot be resumed yet; run without --resume".into(),
+        });
+    }
+    let settings = newton_settings(&case.solver);
+    let mut writer = StepWriter::new(case, &model, session, summary, on_step);
+    let resume = match record {
+        Some(record) => Some(writer.restore(record)?),
+        None => {
+            writer.write_start()?;
+            None
+        }
+    };
+    let stats = if model.control.arc_length.is_some() {
+        run_steps(&model, &settings, |step| writer.step(step, None))?.1
+    } else {
+        run_steps_from(&model, &settings, resume, &mut writer)?.1
+    };
+    writer.bar.finish_and_clear();
     Ok(RunSummary {
         out_dir: out_dir.to_path_buf(),
         nodes: model.mesh.nodes.len(),
         cells: model.continuum.cells.len(),
         dofs: model.dofs.free_count(),
-        mesh_seconds: summary.seconds.mesh,
+        mesh_seconds: writer.summary.seconds.mesh,
         model_seconds,
         stats,
         reactions: model
             .supports
             .iter()
             .map(|s| s.name.clone())
-            .zip(last_reactions)
+            .zip(writer.last_reactions)
             .collect(),
     })
+}
+
+/// The restart record in `out_dir` for resuming `model`, or `None` (with a warning) when
+/// there is none: the run then starts over.
+fn resume_record(model: &Model, out_dir: &Path, case_text: &str) -> Result<Option<Record>> {
+    let path = out_dir.join(RESTART_FILE);
+    if !path.is_file() {
+        tracing::warn!(
+            "{}: no restart record (the run stopped before its first increment converged); \
+             starting from the beginning",
+            path.display()
+        );
+        return Ok(None);
+    }
+    read_record(&path, case_text, &Solution::new(model)).map(Some)
+}
+
+/// Checks the case's `[[history]]` requests as the quantities they are.
+fn check_history(case: &Case) -> Result<()> {
+    crate::config::history::check(case)
+}
+
+// --- the output folder ------------------------------------------------------------------------
+
+/// Names of the single files a run writes (besides the per-step ones, [`is_run_file`]).
+/// `log.txt` is not among them: the logging set-up opens it before the run starts.
+const RUN_FILES: [&str; 6] = [
+    "run.json",
+    "summary.json",
+    "results.pvd",
+    "history.csv",
+    "mesh.msh",
+    RESTART_FILE,
+];
+
+/// Whether `name` is a file a run writes: one of [`RUN_FILES`], a step's file
+/// (`bodies_NNNN.vtu`, `interface_NNNN.vtu`, `contact_<pair>_NNNN.csv`), or the hidden
+/// temporary file of one of these that a killed run left (`.NAME.XXXXXX.tmp`).
+pub fn is_run_file(name: &str) -> bool {
+    step_of_file(name).is_some() || RUN_FILES.contains(&name) || temporary_of(name).is_some()
+}
+
+/// The step number of a step's file name.
+fn step_of_file(name: &str) -> Option<usize> {
+    let digits = match name
+        .strip_prefix("contact_")
+        .and_then(|r| r.strip_suffix(".csv"))
+    {
+        Some(rest) => match rest.rsplit_once('_') {
+            Some((pair, digits)) if !pair.is_empty() => digits,
+            _ => return None,
+        },
+        None => ["bodies_", "interface_"]
+            .iter()
+            .find_map(|p| name.strip_prefix(p)?.strip_suffix(".vtu"))?,
+    };
+    if digits.len() >= 4 && digits.bytes().all(|b| b.is_ascii_digit()) {
+        digits.parse().ok()
+    } else {
+        None
+    }
+}
+
+/// The run file whose temporary file `name` is ([`crate::output`]'s atomic writer names them
+/// `.NAME.XXXXXX.tmp`).
+fn temporary_of(name: &str) -> Option<&str> {
+    let inner = name.strip_prefix('.')?.strip_suffix(".tmp")?;
+    let (target, _random) = inner.rsplit_once('.')?;
+    (step_of_file(target).is_some() || RUN_FILES.contains(&target)).then_some(target)
+}
+
+/// The run files in `dir` (none if it does not exist).
+fn run_files(dir: &Path) -> Result<Vec<PathBuf>> {
+    let entries = match std::fs::read_dir(dir) {
+        Ok(entries) => entries,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(Error::io(dir, e)),
+    };
+    let mut files = Vec::new();
+    for entry in entries {
+        let entry = entry.map_err(|e| Error::io(dir, e))?;
+        let name = entry.file_name();
+        if name.to_str().is_some_and(is_run_file) && entry.path().is_file() {
+            files.push(entry.path());
+        }
+    }
+    files.sort();
+    Ok(files)
+}
+
+/// Prepares `dir` for a run in `mode`: refuses a folder with an earlier run's files
+/// (`Fresh`), removes them (`Force`, and `Resume` without a restart record), or removes only
+/// the temporary files a killed run left (`Resume`). Other files are never touched.
+pub fn prepare_output(dir: &Path, mode: OutputMode) -> Result<()> {
+    let files = run_files(dir)?;
+    let resumable = dir.join(RESTART_FILE).is_file();
+    let remove = |keep: &dyn Fn(&str) -> bool| -> Result<()> {
+        for f in &files {
+            let name = f.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+            if !keep(name) {
+                std::fs::remove_file(f).map_err(|e| Error::io(f, e))?;
+            }
+        }
+        Ok(())
+    };
+    match mode {
+        OutputMode::Fresh if !files.is_empty() => Err(Error::OutputExists {
+            dir: dir.to_path_buf(),
+            files: files.len(),
+            example: files[0]
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+        }),
+        OutputMode::Fresh => Ok(()),
+        OutputMode::Resume if resumable => remove(&|name| temporary_of(name).is_none()),
+        OutputMode::Force | OutputMode::Resume => remove(&|_| false),
+    }
+}
+
+/// Removes the files of steps from `first` on (written after the restart record a run
+/// resumes from, or of a step that failed).
+fn remove_step_files(dir: &Path, first: usize) -> Result<()> {
+    for f in run_files(dir)? {
+        let name = f.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+        if step_of_file(name).is_some_and(|s| s >= first) {
+            std::fs::remove_file(&f).map_err(|e| Error::io(&f, e))?;
+        }
+    }
+    Ok(())
+}
+
+// --- run.json ---------------------------------------------------------------------------------
+
+/// The contents of `run.json`: what made the results in the folder.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct RunInfo {
+    /// `asperity`.
+    pub program: &'static str,
+    pub version: &'static str,
+    pub command_line: Vec<String>,
+    /// The case file (absolute where it can be made so) and its text.
+    pub case_file: PathBuf,
+    pub case: String,
+    /// The folder the command ran in.
+    pub working_directory: Option<PathBuf>,
+    /// UTC, RFC 3339.
+    pub start: String,
+    /// `null` while the run goes on (or if it was killed).
+    pub end: Option<String>,
+    pub host: String,
+    /// Threads of the parallel assembly and solves.
+    pub threads: usize,
+    /// Whether the run continued from a restart record.
+    pub resumed: bool,
+    /// `running`, `converged` or `failed`.
+    pub status: &'static str,
+    pub error: Option<String>,
+}
+
+impl RunInfo {
+    fn new(case: &Case, case_text: &str, options: &RunOptions) -> Self {
+        Self {
+            program: "asperity",
+            version: env!("CARGO_PKG_VERSION"),
+            command_line: options.command_line.clone(),
+            case_file: std::path::absolute(&case.path).unwrap_or_else(|_| case.path.clone()),
+            case: case_text.to_string(),
+            working_directory: std::env::current_dir().ok(),
+            start: utc_now(),
+            end: None,
+            host: host_name(),
+            threads: rayon::current_num_threads(),
+            resumed: options.mode == OutputMode::Resume,
+            status: "running",
+            error: None,
+        }
+    }
+
+    fn finish<T>(&mut self, result: &Result<T>) {
+        self.end = Some(utc_now());
+        self.status = if result.is_ok() {
+            "converged"
+        } else {
+            "failed"
+        };
+        self.error = result.as_ref().err().map(ToString::to_string);
+    }
+
+    fn write(&self, dir: &Path) -> Result<()> {
+        let path = dir.join("run.json");
+        let text = serde_json::to_string_pretty(self)
+            .map_err(|e| Error::io(&path, std::io::Error::other(e)))?;
+        write_text(&path, &text)
+    }
+}
+
+/// The machine's name (Linux; `unknown` elsewhere).
+fn host_name() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .map(|h| h.trim().to_string())
+        .ok()
+        .filter(|h| !h.is_empty())
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .unwrap_or_else(|| "unknown".into())
+}
+
+/// The current time as RFC 3339 UTC with seconds (`2026-11-23T12:45:48Z`).
+fn utc_now() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let (days, rest) = (secs / 86_400, secs % 86_400);
+    let (y, m, d) = civil_from_days(days as i64);
+    format!(
+        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
+        rest / 3600,
+        rest % 3600 / 60,
+        rest % 60
+    )
+}
+
+/// The proleptic Gregorian date of a day count since 1970-01-01 (H. Hinnant's
+/// `civil_from_days`).
+fn civil_from_days(z: i64) -> (i64, u32, u32) {
+    let z = z + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = (doy - (153 * mp + 2) / 5 + 1) as u32;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
+    (yoe + era * 400 + i64::from(m <= 2), m, d)
 }
 
 /// The Newton settings of a case's `[solver]` table (the numerics never read the case file).
@@ -333,31 +714,34 @@ fn progress_bar(enabled: bool, steps: usize) -> indicatif::ProgressBar {
     bar
 }
 
-/// Writes the files of each converged step, keeps the series and history up to date, and
-/// records the step in the summary.
-struct StepWriter<'m, 's> {
-    model: &'m Model,
-    points: BodyPoints,
-    interface: InterfaceOutput,
-    out_dir: PathBuf,
-    vtu: bool,
-    series: Vec<PvdEntry>,
-    history: CsvTable,
-    summary: &'s mut Summary,
+/// The columns of `history.csv` before the reactions: where each value of a row is, so that
+/// the summary's step records can be read back from the rows a restart record keeps.
+struct HistoryLayout {
+    /// Per-load factors: the `factors` of each support and load that has its own.
+    load_factors: Vec<Schedule>,
+    supports: usize,
+    pairs: usize,
 }
 
-impl<'m, 's> StepWriter<'m, 's> {
-    fn new(model: &'m Model, out_dir: &Path, vtu: bool, summary: &'s mut Summary) -> Self {
-        let mut columns: Vec<String> = [
-            "step",
-            "load_factor",
-            "increments",
-            "iterations",
-            "residual",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
+/// Leading columns: step, time, load_factor, then the per-load factors, then these.
+const COUNTERS: [&str; 4] = ["increments", "cutbacks", "iterations", "residual"];
+
+impl HistoryLayout {
+    fn new(case: &Case, model: &Model) -> (Self, Vec<String>) {
+        let mut columns: Vec<String> = ["step", "time", "load_factor"].map(String::from).into();
+        let mut load_factors = Vec::new();
+        let own = case
+            .supports
+            .iter()
+            .map(|s| ("support", &s.group, &s.factors))
+            .chain(case.loads.iter().map(|l| ("load", &l.group, &l.factors)));
+        for (role, group, factors) in own {
+            if let Some(f) = factors {
+                columns.push(format!("factor_{role}_{group}"));
+                load_factors.push(Schedule::new(f.clone()));
+            }
+        }
+        columns.extend(COUNTERS.map(String::from));
         for s in &model.supports {
             columns.push(format!("reaction_{}_x", s.name));
             columns.push(format!("reaction_{}_y", s.name));
@@ -372,27 +756,224 @@ impl<'m, 's> StepWriter<'m, 's> {
                 columns.push(format!("{}_{quantity}", p.name));
             }
         }
+        columns.extend(case.history.iter().map(|q| q.name.clone()));
+        let layout = Self {
+            load_factors,
+            supports: model.supports.len(),
+            pairs: model.interface.pairs.len(),
+        };
+        (layout, columns)
+    }
+
+    /// The row of a state at pseudo-time `time`.
+    fn row(
+        &self,
+        step: &StepResult,
+        time: f64,
+        reactions: &[[f64; 2]],
+        resultants: &[[f64; 4]],
+        requested: &[f64],
+    ) -> Vec<f64> {
+        let residual = *step.newton.residuals.last().unwrap_or(&0.0);
+        let mut row = vec![step.step as f64, time, step.load_factor];
+        row.extend(self.load_factors.iter().map(|f| f.value(0, time)));
+        row.extend([
+            step.increments as f64,
+            step.cutbacks as f64,
+            step.newton.iterations as f64,
+            residual,
+        ]);
+        row.extend(reactions.iter().flatten());
+        row.extend(resultants.iter().flatten());
+        row.extend(requested);
+        row
+    }
+
+    /// The summary's record of the step whose history row is `row`.
+    fn step_summary(&self, model: &Model, row: &[f64]) -> StepSummary {
+        let counters = 3 + self.load_factors.len();
+        let [increments, cutbacks, iterations, residual] =
+            std::array::from_fn(|i| row[counters + i]);
+        let reactions = &row[counters + COUNTERS.len()..];
+        let resultants = &reactions[2 * self.supports..2 * self.supports + 4 * self.pairs];
+        StepSummary {
+            step: row[0] as usize,
+            load_factor: row[2],
+            increments: increments as usize,
+            cutbacks: cutbacks as usize,
+            iterations: iterations as usize,
+            residual,
+            reactions: Named(
+                model
+                    .supports
+                    .iter()
+                    .zip(reactions.chunks_exact(2))
+                    .map(|(s, r)| (s.name.clone(), Force { x: r[0], y: r[1] }))
+                    .collect(),
+            ),
+            contact: Named(
+                model
+                    .interface
+                    .pairs
+                    .iter()
+                    .zip(resultants.chunks_exact(4))
+                    .map(|(p, r)| {
+                        let resultant = ContactResultant {
+                            normal_force: r[0],
+                            tangential_force: r[1],
+                            force_on_b_x: r[2],
+                            force_on_b_y: r[3],
+                        };
+                        (p.name.clone(), resultant)
+                    })
+                    .collect(),
+            ),
+        }
+    }
+}
+
+/// Writes the files of each converged step and the restart record of each converged
+/// increment, keeps the series and history up to date, and records the steps in the
+/// summary.
+struct StepWriter<'m, 's, F> {
+    case: &'m Case,
+    model: &'m Model,
+    points: BodyPoints,
+    interface: InterfaceOutput,
+    out_dir: PathBuf,
+    vtu: bool,
+    /// The case's text when restart records are kept.
+    case_text: Option<&'m str>,
+    layout: HistoryLayout,
+    series: Vec<PvdEntry>,
+    history: CsvTable,
+    summary: &'s mut Summary,
+    last_reactions: Vec<[f64; 2]>,
+    bar: indicatif::ProgressBar,
+    on_step: F,
+}
+
+impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> {
+    fn new(
+        case: &'m Case,
+        model: &'m Model,
+        session: &'m Session,
+        summary: &'s mut Summary,
+        on_step: F,
+    ) -> Self {
+        let (layout, columns) = HistoryLayout::new(case, model);
         Self {
+            case,
             model,
             points: BodyPoints::new(model),
             interface: InterfaceOutput::new(model),
-            out_dir: out_dir.to_path_buf(),
-            vtu,
+            out_dir: session.out_dir.to_path_buf(),
+            vtu: case.output.vtu,
+            case_text: session.restart.map(|r| r.case_text.as_str()),
+            layout,
             series: Vec::new(),
-            history: CsvTable {
-                columns,
-                rows: Vec::new(),
-            },
+            history: CsvTable::new(columns),
             summary,
+            last_reactions: Vec::new(),
+            bar: progress_bar(session.progress, model.schedule.steps()),
+            on_step,
         }
     }
 
-    /// Writes the step's files; returns the reactions of the supports.
-    fn write(&mut self, step: &StepResult) -> Result<Vec<[f64; 2]>> {
+    /// Writes `history.csv` with the row of the unloaded state (step 0).
+    fn write_start(&mut self) -> Result<()> {
+        let model = self.model;
+        let solution = Solution::new(model);
+        let zero = vec![0.0; model.dofs.dof_count()];
+        let start = StepResult {
+            step: 0,
+            load_factor: 0.0,
+            newton: NewtonLog::default(),
+            increments: 0,
+            cutbacks: 0,
+            solution: &solution,
+            internal_force: &zero,
+            external_force: &zero,
+        };
+        let row = self.row(&start, 0.0)?;
+        self.history.rows.push(row);
+        self.write_history()
+    }
+
+    /// Takes over the output state of a restart `record`: the history rows, series and
+    /// step records of its steps; removes the files of later steps and rewrites the
+    /// indexes. Returns the run to continue.
+    fn restore(&mut self, record: Record) -> Result<Resume> {
+        let Record { resume, output } = record;
+        let [history]: [Vec<Vec<f64>>; 1] =
+            output.tables.try_into().map_err(|_| Error::Restart {
+                path: self.out_dir.join(RESTART_FILE),
+                reason: "the record has no history table".into(),
+            })?;
+        if history
+            .iter()
+            .any(|row| row.len() != self.history.columns.len())
+        {
+            return Err(Error::Restart {
+                path: self.out_dir.join(RESTART_FILE),
+                reason: "its history rows do not match the case's columns".into(),
+            });
+        }
+        self.history.rows = history;
+        self.series = output.series;
+        for row in self.history.rows.iter().filter(|r| r[0] > 0.0) {
+            let step = self.layout.step_summary(self.model, row);
+            self.summary.push_step(step);
+        }
+        remove_step_files(&self.out_dir, resume.state.step)?;
+        self.write_indexes()?;
+        self.bar.inc(resume.state.step as u64 - 1);
+        tracing::info!(
+            step = resume.state.step,
+            time = resume.state.time,
+            "resuming from the restart record"
+        );
+        Ok(resume)
+    }
+
+    /// Writes the files of a converged step (or of the last converged sub-increment of a
+    /// failed step, `progress` `None`), then the restart record, then the indexes.
+    fn step(&mut self, step: &StepResult, progress: Option<&Progress>) -> Result<f64> {
         let start = Instant::now();
+        let row = self.write_step_files(step, step.step as f64)?;
+        self.history.rows.push(row);
+        if let Some(p) = progress {
+            self.write_record(p)?;
+        }
+        self.write_indexes()?;
+        let last = self
+            .history
+            .rows
+            .last()
+            .map(Vec::as_slice)
+            .unwrap_or_default();
+        let summary = self.layout.step_summary(self.model, last);
+        self.last_reactions = summary
+            .reactions
+            .0
+            .iter()
+            .map(|(_, f)| [f.x, f.y])
+            .collect();
+        self.summary.push_step(summary);
+        (self.on_step)(self.model, step)?;
+        self.bar.inc(1);
+        self.bar
+            .set_message(format!("load factor {}", step.load_factor));
+        Ok(start.elapsed().as_secs_f64())
+    }
+
+    /// The VTU and CSV files of a state at pseudo-time `time` (each complete or absent; not
+    /// yet listed anywhere); returns its history row.
+    fn write_step_files(&mut self, step: &StepResult, time: f64) -> Result<Vec<f64>> {
         let (mut post, mut vtu) = (0.0, 0.0);
-        let reactions = reactions(self.model, step.internal_force, step.external_force);
+        let start = Instant::now();
         let states = &step.solution.interface_committed;
+        let mut entries = Vec::new();
         if self.vtu {
             let name = format!("bodies_{:04}.vtu", step.step);
             let t = Instant::now();
@@ -406,8 +987,8 @@ impl<'m, 's> StepWriter<'m, 's> {
             let t = Instant::now();
             write_vtu(&self.out_dir.join(&name), &grid)?;
             vtu += t.elapsed().as_secs_f64();
-            self.series.push(PvdEntry {
-                time: step.step as f64,
+            entries.push(PvdEntry {
+                time,
                 part: 0,
                 name: "bodies".into(),
                 file: name.into(),
@@ -420,14 +1001,13 @@ impl<'m, 's> StepWriter<'m, 's> {
                     &self.interface.grid(self.model, states),
                 )?;
                 vtu += t.elapsed().as_secs_f64();
-                self.series.push(PvdEntry {
-                    time: step.step as f64,
+                entries.push(PvdEntry {
+                    time,
                     part: 1,
                     name: "interface".into(),
                     file: name.into(),
                 });
             }
-            write_pvd(&self.out_dir.join("results.pvd"), &self.series)?;
         }
         let tables = self.interface.tables(self.model, states);
         for (pair, table) in self.model.interface.pairs.iter().zip(&tables) {
@@ -438,59 +1018,77 @@ impl<'m, 's> StepWriter<'m, 's> {
                 table,
             )?;
         }
-        let residual = *step.newton.residuals.last().unwrap_or(&0.0);
-        let resultants = resultants(self.model, states);
-        let mut row = vec![
-            step.step as f64,
-            step.load_factor,
-            step.increments as f64,
-            step.newton.iterations as f64,
-            residual,
-        ];
-        row.extend(reactions.iter().flatten());
-        row.extend(resultants.iter().flatten());
-        self.history.rows.push(row);
-        write_csv(&self.out_dir.join("history.csv"), &self.history)?;
-        self.summary.push_step(StepSummary {
-            step: step.step,
-            load_factor: step.load_factor,
-            increments: step.increments,
-            cutbacks: step.cutbacks,
-            iterations: step.newton.iterations,
-            residual,
-            reactions: Named(
-                self.model
-                    .supports
-                    .iter()
-                    .zip(&reactions)
-                    .map(|(s, r)| (s.name.clone(), Force { x: r[0], y: r[1] }))
-                    .collect(),
-            ),
-            contact: Named(
-                self.model
-                    .interface
-                    .pairs
-                    .iter()
-                    .zip(&resultants)
-                    .map(|(p, r)| {
-                        let resultant = ContactResultant {
-                            normal_force: r[0],
-                            tangential_force: r[1],
-                            force_on_b_x: r[2],
-                            force_on_b_y: r[3],
-                        };
-                        (p.name.clone(), resultant)
-                    })
-                    .collect(),
-            ),
-        });
+        let row = self.row(step, time)?;
+        self.series.extend(entries);
         tracing::debug!(
             step = step.step,
             post,
             vtu,
             rest = start.elapsed().as_secs_f64() - post - vtu,
-            "output seconds (body recovery, VTU files, interface/CSV/PVD)"
+            "output seconds (body recovery, VTU files, contact CSV files)"
         );
-        Ok(reactions)
+        Ok(row)
+    }
+
+    /// The history row of a state at pseudo-time `time`.
+    fn row(&self, step: &StepResult, time: f64) -> Result<Vec<f64>> {
+        let model = self.model;
+        let reactions = reactions(model, step.internal_force, step.external_force);
+        let resultants = resultants(model, &step.solution.interface_committed);
+        let requested = evaluate(&self.case.history, model, step)?;
+        Ok(self
+            .layout
+            .row(step, time, &reactions, &resultants, &requested))
+    }
+
+    /// The restart record of a converged increment (when the run keeps them).
+    fn write_record(&self, progress: &Progress) -> Result<()> {
+        let Some(case_text) = self.case_text else {
+            return Ok(());
+        };
+        let output = OutputState {
+            tables: vec![self.history.rows.clone()],
+            series: self.series.clone(),
+        };
+        write_record(
+            &self.out_dir.join(RESTART_FILE),
+            case_text,
+            &progress.state,
+            progress.stats,
+            progress.solution,
+            &output,
+        )
+    }
+
+    fn write_history(&self) -> Result<()> {
+        write_csv(&self.out_dir.join("history.csv"), &self.history)
+    }
+
+    /// `history.csv`, then `results.pvd`: the series is the last file written for a step,
+    /// so it lists only steps whose other files are complete.
+    fn write_indexes(&self) -> Result<()> {
+        self.write_history()?;
+        if self.vtu && !self.series.is_empty() {
+            write_pvd(&self.out_dir.join("results.pvd"), &self.series)?;
+        }
+        Ok(())
+    }
+}
+
+impl<F: FnMut(&Model, &StepResult) -> Result<()>> Observer for StepWriter<'_, '_, F> {
+    fn step(&mut self, step: &StepResult, progress: &Progress) -> Result<f64> {
+        StepWriter::step(self, step, Some(progress))
+    }
+
+    fn increment(&mut self, progress: &Progress) -> Result<()> {
+        self.write_record(progress)
+    }
+
+    /// The last converged sub-increment of a failed step: its files and index entries at
+    /// its fractional pseudo-time (no restart record: a resumed run retries the step).
+    fn partial_step(&mut self, step: &StepResult, time: f64) -> Result<()> {
+        let row = self.write_step_files(step, time)?;
+        self.history.rows.push(row);
+        self.write_indexes()
     }
 }

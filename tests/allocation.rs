@@ -262,6 +262,27 @@ static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 fn iterations_allocate_nothing_after_the_first_step(linear_solver: LinearSolver) {
     let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    // An allocation in the Newton loop (what this test guards against) shows in every run.
+    // On a heavily loaded machine the thread pool's own bookkeeping on the counted worker
+    // allocates now and then (1-3 allocations in about 1 run of 10 at load > 8, in a random
+    // iteration), so one clean run out of three passes and three unclean ones fail.
+    let mut tables = Vec::new();
+    for _ in 0..3 {
+        let (allocated, table) = allocations_after_the_first_step(linear_solver);
+        if allocated == 0 {
+            return;
+        }
+        tables.push(table);
+    }
+    panic!(
+        "iterations after the first step allocated in three runs:\n{}",
+        tables.join("\n--\n")
+    );
+}
+
+/// Solves the frictional model and counts the allocations of every Newton iteration after
+/// the first step; returns their sum and the per-iteration table.
+fn allocations_after_the_first_step(linear_solver: LinearSolver) -> (usize, String) {
     let (model, settings) = frictional_model();
     let settings = NewtonSettings {
         linear_solver,
@@ -320,8 +341,5 @@ fn iterations_allocate_nothing_after_the_first_step(linear_solver: LinearSolver)
         symmetric_solves > 0 && unsymmetric_solves > 0 && line_searches > 0,
         "both paths and the line search must be measured:\n{table}"
     );
-    assert_eq!(
-        allocated, 0,
-        "iterations after the first step allocated:\n{table}"
-    );
+    (allocated, table)
 }

@@ -146,6 +146,55 @@ fn an_unsupported_body_is_reported_as_such() {
         text.contains("not positive definite") && text.contains("supports"),
         "{text}"
     );
+    // Named, and no cut-backs: a smaller increment meets the same singular matrix.
+    assert!(
+        text.contains("a body without support: 'body_b' (free to move in x and y)")
+            && text.contains("after 0 cut-backs"),
+        "{text}"
+    );
+    assert!(!text.contains("'body_a' (free"), "{text}");
+}
+
+/// The upper block rests on a frictional joint (μ = 0.3) and is pushed sideways by half its
+/// normal load: no equilibrium exists at any load level. The message names the physical
+/// cause and the pair, summarises the attempts instead of listing each, and the exit code is
+/// 1 (did not converge).
+#[test]
+fn friction_capacity_exceeded_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = dir.path().join("case.toml");
+    std::fs::write(
+        &case,
+        format!(
+            "[mesh]\nfile = \"{}\"\n{ANALYSIS}[[body]]\ngroup = \"lower\"\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n\
+             [[body]]\ngroup = \"upper\"\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n[[support]]\ngroup = \"base\"\n\
+             ux = 0.0\nuy = 0.0\n[[load]]\ngroup = \"lid\"\ntraction = [5.0, -10.0]\n[[contact]]\nname = \"joint\"\n\
+             side_a = \"lower_top\"\nside_b = \"upper_bottom\"\nlaw = {{ type = \"linear_coulomb\", \
+             normal_stiffness = 1e4, tangential_stiffness = 1e4, friction = 0.3 }}\n",
+            fixture("contact_pair.msh")
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let (code, text) = asperity_code(&[
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(
+        text.contains("friction capacity exceeded") && text.contains("contact 'joint'"),
+        "{text}"
+    );
+    assert!(text.contains("of body 'upper'"), "{text}");
+    assert!(
+        text.contains("Attempts (9)") && text.contains("3 more attempts"),
+        "{text}"
+    );
+    // The report itself (from "error:" on; INFO lines of the run come before it).
+    let report = &text[text.find("error:").expect("an error report")..];
+    assert!(report.lines().count() < 20, "{text}");
 }
 
 #[test]
@@ -205,7 +254,12 @@ fn a_successful_run_writes_the_series_and_history() {
         "{text}"
     );
     let history = std::fs::read_to_string(out.join("history.csv")).unwrap();
-    assert_eq!(history.lines().count(), 3, "{history}");
+    // Header, the unloaded state (step 0) and the two steps.
+    assert_eq!(history.lines().count(), 4, "{history}");
+    assert!(
+        history.lines().nth(1).unwrap().starts_with("0,0,0,"),
+        "{history}"
+    );
 }
 
 /// A block pressed (step 1, linear) then dragged into sliding (step 2, needs several Newton
@@ -287,10 +341,10 @@ max_cutbacks = 0
 
 /// A perfectly plastic block in plane strain, clamped at its base and pulled at its top by
 /// twice its plane-strain limit traction (2/√3) σ_Y: no equilibrium exists above a load factor
-/// of about one half. The run must stop with "plastic collapse", exit code 3 (README "Exit
+/// of about one half. The run must stop with "plastic collapse", exit code 5 (README "Exit
 /// codes"), the converged steps on disk and summary.json saying "failed".
 #[test]
-fn plastic_collapse_exits_with_code_3_and_keeps_the_converged_steps() {
+fn plastic_collapse_exits_with_code_5_and_keeps_the_converged_steps() {
     let dir = tempfile::tempdir().unwrap();
     let case = dir.path().join("case.toml");
     let traction = 2.0 * 2.0 / 3f64.sqrt() * 100.0;
@@ -325,7 +379,7 @@ count = 4
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert_eq!(code, Some(3), "{text}");
+    assert_eq!(code, Some(5), "{text}");
     assert!(
         text.contains("plastic collapse") && text.contains("last converged load factor"),
         "{text}"
@@ -333,4 +387,115 @@ count = 4
     assert!(out.join("bodies_0001.vtu").is_file(), "step 1 is on disk");
     let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
     assert!(summary.contains("\"failed\""), "{summary}");
+}
+
+/// A plane-strain block on its base, pressed at its top, with `steps` equal steps.
+fn block_case(dir: &Path, steps: usize) -> std::path::PathBuf {
+    let case = dir.join("case.toml");
+    std::fs::write(
+        &case,
+        format!(
+            "[mesh]\nfile = \"{}\"\n{ANALYSIS}[[body]]\ngroup = \"body_a\"\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n\
+             [[support]]\ngroup = \"bottom\"\nux = 0.0\nuy = 0.0\n[[support]]\ngroup = \"corner\"\nux = 0.0\n\
+             [steps]\ncount = {steps}\n",
+            fixture("two_bodies_ascii.msh")
+        ),
+    )
+    .unwrap();
+    case
+}
+
+/// A second run into a results folder refuses (exit 2) and changes nothing; `--force`
+/// replaces the earlier run's files — a run with fewer steps leaves none of the old step files
+/// — and never touches a file of the user's.
+#[test]
+fn an_existing_results_folder_is_refused_unless_forced() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out_s = out.to_str().unwrap();
+    let case = block_case(dir.path(), 3);
+    let case_s = case.to_str().unwrap();
+    let (code, text) = asperity_code(&["run", case_s, "--out", out_s]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(out.join("bodies_0003.vtu").is_file());
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    let before = std::fs::read(out.join("history.csv")).unwrap();
+
+    let case = block_case(dir.path(), 2);
+    let (code, text) = asperity_code(&["run", case_s, "--out", out_s]);
+    assert_eq!(code, Some(2), "{text}");
+    assert!(
+        text.contains("--force") && text.contains("earlier run"),
+        "{text}"
+    );
+    assert_eq!(std::fs::read(out.join("history.csv")).unwrap(), before);
+
+    let (code, text) = asperity_code(&["run", case.to_str().unwrap(), "--out", out_s, "--force"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(out.join("bodies_0002.vtu").is_file());
+    assert!(
+        !out.join("bodies_0003.vtu").exists(),
+        "a stale step file survived --force"
+    );
+    assert_eq!(
+        std::fs::read_to_string(out.join("notes.txt")).unwrap(),
+        "mine"
+    );
+    let pvd = std::fs::read_to_string(out.join("results.pvd")).unwrap();
+    assert!(!pvd.contains("0003"), "{pvd}");
+}
+
+/// `run.json` records what made the results, and the default folder is next to the case
+/// file (README "Output"), not in the working directory.
+#[test]
+fn run_json_describes_the_run_and_the_default_folder_follows_the_case() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = block_case(dir.path(), 1);
+    let cwd = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args(["run", case.to_str().unwrap()])
+        .current_dir(cwd.path())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let folder = dir.path().join("out/case");
+    assert!(folder.join("results.pvd").is_file());
+    assert!(std::fs::read_dir(cwd.path()).unwrap().next().is_none());
+    let info: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(folder.join("run.json")).unwrap()).unwrap();
+    assert_eq!(info["program"], "asperity");
+    assert_eq!(info["version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(info["status"], "converged");
+    assert_eq!(info["case"], std::fs::read_to_string(&case).unwrap());
+    assert_eq!(info["command_line"][1], "run");
+    assert!(info["threads"].as_u64().unwrap() >= 1);
+    for key in ["start", "end"] {
+        let t = info[key].as_str().unwrap();
+        assert!(
+            t.len() == 20 && t.ends_with('Z') && t.starts_with("20"),
+            "{key} = {t}"
+        );
+    }
+    assert!(info["start"].as_str() <= info["end"].as_str());
+}
+
+/// README "Exit codes": 2 usage, 3 bad input, 4 a file that cannot be read.
+#[test]
+fn exit_codes_tell_usage_input_and_io_errors_apart() {
+    let (code, text) = asperity_code(&["run"]);
+    assert_eq!(code, Some(2), "{text}");
+    let (code, text) = asperity_code(&["run", "x.toml", "--force", "--resume"]);
+    assert_eq!(code, Some(2), "{text}");
+    let (code, text) = asperity_code(&["run", "/nonexistent/case.toml"]);
+    assert_eq!(code, Some(4), "{text}");
+    let dir = tempfile::tempdir().unwrap();
+    let case = dir.path().join("case.toml");
+    std::fs::write(&case, "[mesh]\nfile = \"m.msh\"\n").unwrap();
+    let (code, text) = asperity_code(&["run", case.to_str().unwrap()]);
+    assert_eq!(code, Some(3), "{text}");
+    assert!(!dir.path().join("out").exists(), "bad input wrote output");
 }

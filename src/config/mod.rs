@@ -18,6 +18,7 @@ use serde::Deserialize;
 use crate::{Error, Result};
 
 mod check;
+pub mod history;
 mod names;
 mod quantity;
 
@@ -50,6 +51,9 @@ pub struct Case {
     /// Quantities of interest for `asperity converge` (ignored by `asperity run`).
     #[serde(default, rename = "quantity")]
     pub quantities: Vec<QuantitySpec>,
+    /// Quantities written to `history.csv` at every step (`[[history]]`, [`history`]).
+    #[serde(default, rename = "history")]
+    pub history: Vec<QuantitySpec>,
     /// Folder of the case file; relative paths are resolved against it.
     #[serde(skip)]
     pub base_dir: PathBuf,

@@ -378,6 +378,6 @@ mod tests {
         else {
             panic!("{line}")
         };
-        assert_eq!((c_n, m, s, beta), (2e-3, 0.5, 0.5, 1.0));
+        assert_eq!((c_n, m, s, beta), (2e-3, 0.5, Some(0.5), 1.0));
     }
 }

@@ -33,6 +33,16 @@ pub(crate) fn write_atomically(
     write: impl FnOnce(&mut dyn Write) -> io::Result<()>,
 ) -> Result<()> {
     super::paths::check_output_path(path)?;
+    write_through(path, |file| Box::new(file), write)
+}
+
+/// [`write_atomically`] with the temporary file reached through `sink` (the file itself;
+/// in tests, a writer that fails like a full disk).
+fn write_through(
+    path: &Path,
+    sink: impl for<'f> FnOnce(&'f std::fs::File) -> Box<dyn Write + 'f>,
+    write: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+) -> Result<()> {
     let file_name = path.file_name().ok_or_else(|| {
         Error::io(
             path,
@@ -59,19 +69,26 @@ pub(crate) fn write_atomically(
             builder.permissions(std::fs::Permissions::from_mode(0o666));
         }
         let tmp = builder.tempfile_in(dir)?;
-        let mut writer = BufWriter::with_capacity(1 << 20, tmp.as_file());
+        let mut writer = BufWriter::with_capacity(1 << 20, sink(tmp.as_file()));
         write(&mut writer)?;
         // `into_inner` flushes and reports flush errors, which dropping a `BufWriter` would
         // silently swallow (a full disk would then yield a truncated file and `Ok`).
-        writer
-            .into_inner()
-            .map_err(io::IntoInnerError::into_error)?;
+        drop(
+            writer
+                .into_inner()
+                .map_err(io::IntoInnerError::into_error)?,
+        );
         // Make the data durable before the rename makes it visible, so that a crash of the
         // machine cannot leave a renamed but empty file.
         tmp.as_file().sync_all()?;
         persist(tmp, path)
     })();
     result.map_err(|e| Error::io(path, e))
+}
+
+/// Writes `text` to `path` atomically ([`write_atomically`]).
+pub(crate) fn write_text(path: &Path, text: &str) -> Result<()> {
+    write_atomically(path, |w| w.write_all(text.as_bytes()))
 }
 
 /// Renames `tmp` onto `path`; on failure `tmp` is dropped, which deletes it.
@@ -116,6 +133,53 @@ mod tests {
         assert!(err.to_string().contains("boom"), "{err}");
         assert_eq!(fs::read_to_string(&path).unwrap(), "old");
         assert_eq!(names(dir.path()), vec![std::ffi::OsString::from("a.txt")]);
+    }
+
+    /// A file that takes `room` bytes and then fails as a full disk does.
+    struct FullDisk<'f> {
+        file: &'f std::fs::File,
+        room: usize,
+    }
+
+    impl Write for FullDisk<'_> {
+        fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+            if self.room == 0 {
+                return Err(io::Error::from(io::ErrorKind::StorageFull));
+            }
+            let n = buf.len().min(self.room);
+            self.room -= n;
+            self.file.write(&buf[..n])
+        }
+        fn flush(&mut self) -> io::Result<()> {
+            self.file.flush()
+        }
+    }
+
+    #[test]
+    fn a_full_disk_is_an_error_naming_the_file_and_leaves_the_old_one() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("history.csv");
+        fs::write(&path, "old").unwrap();
+        // Larger than the buffer, so the disk fills both during writing and at the flush.
+        for (room, size) in [(0, 10), (5, 10), (1000, 3 << 20)] {
+            let err = write_through(
+                &path,
+                |file| Box::new(FullDisk { file, room }),
+                |w| w.write_all(&vec![b'x'; size]),
+            )
+            .unwrap_err();
+            assert!(
+                matches!(&err, Error::Io { path: p, source } if p == &path
+                && source.kind() == io::ErrorKind::StorageFull),
+                "{err}"
+            );
+            assert!(err.to_string().contains("history.csv"), "{err}");
+            assert_eq!(fs::read_to_string(&path).unwrap(), "old");
+            assert_eq!(
+                names(dir.path()),
+                vec![std::ffi::OsString::from("history.csv")]
+            );
+        }
     }
 
     #[test]

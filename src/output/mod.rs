@@ -10,6 +10,7 @@ pub(crate) mod atomic;
 pub mod csv;
 pub mod paths;
 pub mod pvd;
+pub mod restart;
 pub mod summary;
 pub mod vtu;
 

@@ -119,6 +119,9 @@ pub struct CondensedSolver {
     /// Largest scaled change of the continuum matrix for which the last factorisation is
     /// kept (see [`Self::set_reuse_threshold`]).
     reuse_threshold: f64,
+    /// Set by [`Self::start_increment`]: the next factorisation request keeps the factor only
+    /// for an unchanged matrix.
+    increment_started: bool,
     /// Numeric factorisations done, and calls of [`Self::factor_bulk`] that kept the factor.
     factorizations: usize,
     reuses: usize,
@@ -333,6 +336,7 @@ impl CondensedSolver {
             inverse_scale: vec![0.0; n],
             last_change: f64::INFINITY,
             reuse_threshold: DEFAULT_REUSE_THRESHOLD,
+            increment_started: false,
             factorizations: 0,
             reuses: 0,
             interface_diagonal,
@@ -375,6 +379,15 @@ impl CondensedSolver {
     /// factorisation"). Default [`DEFAULT_REUSE_THRESHOLD`].
     pub fn set_reuse_threshold(&mut self, threshold: f64) {
         self.reuse_threshold = threshold.max(0.0);
+    }
+
+    /// Marks the start of a load increment: the next [`Self::factor_bulk`] keeps the last
+    /// factorisation only for an unchanged matrix. Every increment then starts from a factor
+    /// of its own first tangent, whatever earlier increments factored, so a run resumed from
+    /// a restart record (which cannot hold the factor) repeats the uninterrupted run bit for
+    /// bit.
+    pub fn start_increment(&mut self) {
+        self.increment_started = true;
     }
 
     /// The scaled change of the continuum matrix measured by the last [`Self::factor_bulk`]
@@ -477,7 +490,13 @@ impl CondensedSolver {
         if self.factored {
             let change = self.change_from_factored(continuum.val());
             self.last_change = change;
-            if change <= self.reuse_threshold {
+            let threshold = if self.increment_started {
+                0.0
+            } else {
+                self.reuse_threshold
+            };
+            self.increment_started = false;
+            if change <= threshold {
                 self.reuses += 1;
                 tracing::debug!(change, "bulk factorisation kept");
                 return Ok(false);

@@ -159,6 +159,15 @@ impl Flux {
     }
 }
 
+/// The converged increments' part of the time-averaged force q̃: the sum of their fluxes and
+/// their number. Carried across increments by [`Newton`], and by a restart record across a
+/// resumed run ([`Newton::force_average`], [`Newton::restore_force_average`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ForceAverage {
+    pub sum: f64,
+    pub count: usize,
+}
+
 /// The time average q̃ of the flux: over the run's converged increments with non-zero flux
 /// (their converged q̄) and the present iteration's q̄. In the first increment, which has no
 /// history, zero flux is judged against the mean of q̄ over its iterations so far (CalculiX's
@@ -168,8 +177,7 @@ impl Flux {
 /// frictional punch's first increment accepted at 7e-4 relative residual).
 #[derive(Clone, Copy, Debug, Default)]
 struct FluxHistory {
-    sum: f64,
-    count: usize,
+    past: ForceAverage,
     /// Σ q̄ and the number of iterations of the present increment.
     present: f64,
     iterations: usize,
@@ -189,26 +197,27 @@ impl FluxHistory {
         self.present += current;
         self.iterations += 1;
         let present = self.present / self.iterations as f64;
-        if self.count == 0 {
+        let ForceAverage { sum, count } = self.past;
+        if count == 0 {
             return if current <= zero_flux * present {
                 (present, true)
             } else {
                 (current, false)
             };
         }
-        let past = self.sum / self.count as f64;
+        let past = sum / count as f64;
         if current <= zero_flux * past {
             (past, true)
         } else {
-            ((self.sum + current) / (self.count + 1) as f64, false)
+            ((sum + current) / (count + 1) as f64, false)
         }
     }
 
     /// Records the flux `current` of a converged increment that had `zero` flux or not.
     fn record(&mut self, current: f64, zero: bool) {
         if current > 0.0 && !zero {
-            self.sum += current;
-            self.count += 1;
+            self.past.sum += current;
+            self.past.count += 1;
         }
     }
 }
@@ -653,6 +662,16 @@ impl<'a> Newton<'a> {
     /// already hold this increment's values) for the external forces `f_ext` (all dofs).
     /// `force_floor` is an absolute force level below which residuals count as zero (e.g.
     /// from earlier steps), for increments whose loads vanish.
+    /// The converged increments' record of the time-averaged force q̃ (for a restart record).
+    pub fn force_average(&self) -> ForceAverage {
+        self.flux_history.past
+    }
+
+    /// Continues the time average of q̃ of an interrupted run.
+    pub fn restore_force_average(&mut self, average: ForceAverage) {
+        self.flux_history.past = average;
+    }
+
     pub fn solve_increment(
         &mut self,
         problem: &mut impl Problem,
@@ -671,6 +690,13 @@ impl<'a> Newton<'a> {
         dofs.gather_free(f_ext, &mut self.external);
         self.increment_start.copy_from_slice(u);
         self.flux_history.start();
+        // Nothing cached from earlier increments may change this one's iterates (a resumed
+        // run must repeat the uninterrupted one): the kept elastic-cell sum is rebuilt and
+        // the bulk factor kept only for an unchanged tangent.
+        self.system.forget_reference();
+        if let Some(c) = &mut self.condensed {
+            c.solver.start_increment();
+        }
         if settings.extrapolate {
             log.predictor = self.predictor.predict(dofs, u, f_ext);
         }

@@ -4,13 +4,15 @@
 //! converged state, up to `max_cutbacks` times; sub-increments are solved silently and only
 //! the scheduled steps are handed to the output.
 
-use crate::contact::InterfaceState;
-use crate::element::set::INTERFACE_POINTS;
-use crate::error::{Attempt, NoConvergence};
+use crate::assembly::{AssemblyInput, GlobalSystem};
+use crate::contact::{ContactStatus, InterfaceState};
+use crate::element::set::{ElementSet, INTERFACE_POINTS};
+use crate::error::{Attempt, NoConvergence, ResidualAt};
 use crate::material::PointState;
 use crate::model::Model;
 use crate::solver::mechanics::Mechanics;
-use crate::solver::newton::{Newton, NewtonLog, NewtonSettings, norm};
+use crate::solver::newton::Problem;
+use crate::solver::newton::{ForceAverage, Newton, NewtonLog, NewtonSettings, norm};
 use crate::{Error, Result};
 
 /// The evolving solution: displacements and integration-point states.
@@ -113,6 +115,102 @@ impl RunStatistics {
     }
 }
 
+/// Where the stepping loop stands after a converged increment: with the [`Solution`] and the
+/// [`RunStatistics`], everything a run needs to continue bit for bit ([`Resume`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LoopState {
+    /// The step being worked on (1-based); `steps() + 1` once every step has converged.
+    pub step: usize,
+    /// Pseudo-time of the last converged state (step j ends at time j).
+    pub time: f64,
+    /// Size of the next sub-increment in pseudo-time.
+    pub size: f64,
+    /// Cut-backs, converged increments and Newton iterations of the current step so far.
+    pub cutbacks: usize,
+    pub increments: usize,
+    pub iterations: usize,
+    /// The absolute force level below which residuals count as zero.
+    pub force_floor: f64,
+    pub stiffness: StiffnessHistory,
+    /// The converged increments' part of the convergence criteria's average force q̃.
+    pub force_average: ForceAverage,
+}
+
+impl LoopState {
+    /// The state before the first increment.
+    pub fn start() -> Self {
+        Self {
+            step: 1,
+            time: 0.0,
+            size: 1.0,
+            cutbacks: 0,
+            increments: 0,
+            iterations: 0,
+            force_floor: 0.0,
+            stiffness: StiffnessHistory::default(),
+            force_average: ForceAverage::default(),
+        }
+    }
+
+    /// The state after step `step` converged: the next one starts with a full increment.
+    fn next_step(self, step: usize) -> Self {
+        Self {
+            step: step + 1,
+            time: step as f64,
+            size: 1.0,
+            cutbacks: 0,
+            increments: 0,
+            iterations: 0,
+            ..self
+        }
+    }
+}
+
+/// A run to continue: the loop state, the counters and the solution of a converged increment
+/// (as a restart record stores them).
+#[derive(Clone, Debug)]
+pub struct Resume {
+    pub state: LoopState,
+    pub stats: RunStatistics,
+    /// Displacements and committed states (trial states are made equal to them).
+    pub solution: Solution,
+}
+
+/// A converged increment as the [`Observer`] sees it.
+#[derive(Clone, Copy, Debug)]
+pub struct Progress<'a> {
+    pub state: LoopState,
+    pub stats: &'a RunStatistics,
+    pub solution: &'a Solution,
+}
+
+/// What the stepping loop reports to its caller (the output): converged steps, converged
+/// sub-increments in between, and the last converged sub-increment of a step that failed.
+pub trait Observer {
+    /// After a converged step; `progress` is the state from which the run continues with the
+    /// next step. Returns the seconds spent (writing files).
+    fn step(&mut self, step: &StepResult, progress: &Progress) -> Result<f64>;
+    /// After a converged sub-increment that does not end its step.
+    fn increment(&mut self, _progress: &Progress) -> Result<()> {
+        Ok(())
+    }
+    /// When step `step.step` failed after some of its sub-increments had converged: `step`
+    /// holds the last of them, at pseudo-time `time` (its `load_factor` is the one reached),
+    /// so that the state closest to the failure can be looked at.
+    fn partial_step(&mut self, _step: &StepResult, _time: f64) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// An [`Observer`] of converged steps only.
+struct OnStep<F>(F);
+
+impl<F: FnMut(&StepResult) -> Result<f64>> Observer for OnStep<F> {
+    fn step(&mut self, step: &StepResult, _: &Progress) -> Result<f64> {
+        (self.0)(step)
+    }
+}
+
 /// Runs all load steps of the model's schedule, calling `on_step` after each converged step
 /// (it returns the seconds it spent writing). Stops with an error naming the step, its load
 /// factor and the residual history if a step cannot be made to converge by cutting it back
@@ -123,39 +221,60 @@ impl RunStatistics {
 pub fn run_steps(
     model: &Model,
     settings: &NewtonSettings,
-    mut on_step: impl FnMut(&StepResult) -> Result<f64>,
+    on_step: impl FnMut(&StepResult) -> Result<f64>,
 ) -> Result<(Solution, RunStatistics)> {
     if let Some(arc) = &model.control.arc_length {
         return crate::solver::arclength::run_arc_length(model, settings, arc, on_step);
     }
-    let mut stats = RunStatistics::default();
+    run_steps_from(model, settings, None, &mut OnStep(on_step))
+}
+
+/// [`run_steps`] (load control only) reporting every converged increment to `observer`, and
+/// starting from `resume` when given (a run continued from a restart record reaches the
+/// same results, bit for bit, as one that was never stopped: the loop state, the solution
+/// and the force floor are all it depends on).
+///
+/// A step fails without further cut-backs when the tangent is singular in a model whose
+/// tangent cannot change (elastic bodies, no interface): a smaller increment meets the same
+/// matrix.
+pub fn run_steps_from(
+    model: &Model,
+    settings: &NewtonSettings,
+    resume: Option<Resume>,
+    observer: &mut impl Observer,
+) -> Result<(Solution, RunStatistics)> {
     let mut newton = Newton::new(*settings, &model.dofs, &model.pattern)?;
-    stats.symbolic_seconds = newton.linear().symbolic_seconds();
-    stats.factor_nnz = newton.linear().factor_nnz();
-    let mut solution = Solution::new(model);
+    let (mut state, mut stats, mut solution) = match resume {
+        Some(r) => (r.state, r.stats, r.solution),
+        None => (
+            LoopState::start(),
+            RunStatistics::default(),
+            Solution::new(model),
+        ),
+    };
+    newton.restore_force_average(state.force_average);
+    solution.trial.copy_from_slice(&solution.committed);
+    solution
+        .interface_trial
+        .copy_from_slice(&solution.interface_committed);
     let mut converged_u = solution.u.clone();
     let mut f_ext = vec![0.0; model.dofs.dof_count()];
-    let mut force_floor: f64 = 0.0;
-    let mut stiffness = StiffnessHistory::default();
-    // Pseudo-time: step j ends at time j (see `Schedule`).
-    let mut time = 0.0;
-    for step in 1..=model.schedule.steps() {
+    let constant_tangent = !model.control.plastic && model.interface.elements.is_empty();
+    while state.step <= model.schedule.steps() {
+        let step = state.step;
         let target = step as f64;
-        let mut size = 1.0;
-        let mut cutbacks = 0;
-        let mut increments = 0;
-        let mut iterations = 0;
+        let step_start = (step - 1) as f64;
         let mut attempts: Vec<Attempt> = Vec::new();
         let log = loop {
-            let trial_time = if time + size >= target - 1e-12 {
+            let trial_time = if state.time + state.size >= target - 1e-12 {
                 target
             } else {
-                time + size
+                state.time + state.size
             };
             model.apply_prescribed(trial_time, &mut solution.u);
             model.external_force(trial_time, &mut f_ext);
             let (u, mut problem) = solution.split(model);
-            let attempt = newton.solve_increment(&mut problem, u, &f_ext, force_floor);
+            let attempt = newton.solve_increment(&mut problem, u, &f_ext, state.force_floor);
             let implausible = match &attempt {
                 Ok(log) if log.converged => implausible_increment(model, &solution, &converged_u),
                 _ => None,
@@ -163,22 +282,31 @@ pub fn run_steps(
             match attempt {
                 Ok(log) if log.converged && implausible.is_none() => {
                     stats.add(&log);
-                    iterations += log.iterations;
-                    increments += 1;
-                    stiffness.record(
-                        model.schedule.value(0, trial_time) - model.schedule.value(0, time),
+                    state.iterations += log.iterations;
+                    state.increments += 1;
+                    state.stiffness.record(
+                        model.schedule.value(0, trial_time) - model.schedule.value(0, state.time),
                         distance(&solution.u, &converged_u),
                     );
                     solution.commit();
+                    state.force_average = newton.force_average();
                     converged_u.copy_from_slice(&solution.u);
-                    time = trial_time;
-                    if time == target {
+                    state.time = trial_time;
+                    log_increment(model, &state, &log);
+                    if state.time == target {
                         break log;
                     }
                     // Grow the sub-increment again after a success.
-                    size *= 2.0;
+                    state.size *= 2.0;
+                    let progress = Progress {
+                        state,
+                        stats: &stats,
+                        solution: &solution,
+                    };
+                    observer.increment(&progress)?;
                 }
                 outcome => {
+                    let singular = matches!(&outcome, Err(Error::Linear(_)));
                     attempts.push(Attempt {
                         time: trial_time,
                         load_factor: model.schedule.value(0, trial_time),
@@ -192,47 +320,283 @@ pub fn run_steps(
                     if let Ok(log) = &outcome {
                         stats.add(log);
                     }
-                    if cutbacks == settings.max_cutbacks {
-                        let failure = NoConvergence {
-                            step,
-                            load_factor: model.schedule.load_factor(step),
-                            converged_time: time,
-                            converged_load_factor: model.schedule.value(0, time),
-                            cutbacks,
-                            attempts,
-                        };
-                        return Err(step_failure(model, failure, &stiffness));
+                    if state.cutbacks == settings.max_cutbacks || (singular && constant_tangent) {
+                        let failure = diagnose(
+                            model,
+                            &solution,
+                            &f_ext,
+                            newton.system().internal_force.as_slice(),
+                            NoConvergence {
+                                step,
+                                load_factor: model.schedule.load_factor(step),
+                                converged_time: state.time,
+                                converged_load_factor: model.schedule.value(0, state.time),
+                                cutbacks: state.cutbacks,
+                                attempts,
+                                ..NoConvergence::default()
+                            },
+                        );
+                        if state.time > step_start {
+                            report_partial(
+                                model,
+                                &mut solution,
+                                &converged_u,
+                                &state,
+                                settings,
+                                observer,
+                            )?;
+                        }
+                        return Err(step_failure(model, failure, &state.stiffness));
                     }
-                    cutbacks += 1;
+                    state.cutbacks += 1;
                     stats.cutbacks += 1;
                     solution.u.copy_from_slice(&converged_u);
-                    size = 0.5 * (trial_time - time);
-                    tracing::info!("step {step}: cutting back to time {:.6}", time + size);
+                    state.size = 0.5 * (trial_time - state.time);
+                    tracing::info!(
+                        "step {step}: cutting back to time {:.6}",
+                        state.time + state.size
+                    );
                 }
             }
         };
         let internal_force = &newton.system().internal_force;
-        force_floor = force_floor.max(1e-3 * norm(internal_force));
+        state.force_floor = state.force_floor.max(1e-3 * norm(internal_force));
         stats.steps += 1;
         stats.last_residual = *log.residuals.last().unwrap_or(&0.0);
         let result = StepResult {
             step,
             load_factor: model.schedule.load_factor(step),
-            newton: NewtonLog { iterations, ..log },
-            increments,
-            cutbacks,
+            newton: NewtonLog {
+                iterations: state.iterations,
+                ..log
+            },
+            increments: state.increments,
+            cutbacks: state.cutbacks,
             solution: &solution,
             internal_force,
             external_force: &f_ext,
         };
-        stats.output_seconds += on_step(&result)?;
+        let done = state.next_step(step);
+        let progress = Progress {
+            state: done,
+            stats: &stats,
+            solution: &solution,
+        };
+        stats.output_seconds += observer.step(&result, &progress)?;
+        state = done;
     }
+    // Read at the end: the symbolic analysis runs at the first factorisation.
+    stats.symbolic_seconds = newton.linear().symbolic_seconds();
+    stats.factor_nnz = newton.linear().factor_nnz();
     Ok((solution, stats))
+}
+
+/// The INFO line of a converged increment (one per increment, for batch logs).
+fn log_increment(model: &Model, state: &LoopState, log: &NewtonLog) {
+    tracing::info!(
+        step = state.step,
+        time = state.time,
+        load_factor = model.schedule.value(0, state.time),
+        iterations = log.iterations,
+        residual = *log.residuals.last().unwrap_or(&0.0),
+        cutbacks = state.cutbacks,
+        "increment converged"
+    );
+}
+
+/// Hands the last converged sub-increment of a failed step to the observer. The solution is
+/// re-evaluated there (one assembly, no solve) so that its internal forces (reactions)
+/// belong to that state and not to the failed attempt.
+fn report_partial(
+    model: &Model,
+    solution: &mut Solution,
+    converged_u: &[f64],
+    state: &LoopState,
+    settings: &NewtonSettings,
+    observer: &mut impl Observer,
+) -> Result<()> {
+    solution.u.copy_from_slice(converged_u);
+    let mut system = GlobalSystem::new(model.pattern.clone(), model.dofs.dof_count());
+    system.clear(false);
+    let (u, mut problem) = solution.split(model);
+    problem.assemble(
+        &mut system,
+        &AssemblyInput {
+            dofs: &model.dofs,
+            u,
+            tangent: false,
+            algorithm: settings.contact_algorithm,
+        },
+    );
+    let mut external = vec![0.0; model.dofs.dof_count()];
+    model.external_force(state.time, &mut external);
+    let result = StepResult {
+        step: state.step,
+        load_factor: model.schedule.value(0, state.time),
+        newton: NewtonLog {
+            iterations: state.iterations,
+            ..NewtonLog::default()
+        },
+        increments: state.increments,
+        cutbacks: state.cutbacks,
+        solution,
+        internal_force: &system.internal_force,
+        external_force: &external,
+    };
+    observer.partial_step(&result, state.time)
+}
+
+/// Completes `failure` with where it happened: the node with the largest out-of-balance
+/// force of the last attempt (and its body), how many interface points changed their
+/// contact status against the last converged state, and a physical reading where one is
+/// recognisable (a contact pair slipping everywhere: its friction cannot carry the load).
+fn diagnose(
+    model: &Model,
+    solution: &Solution,
+    f_ext: &[f64],
+    f_int: &[f64],
+    mut failure: NoConvergence,
+) -> NoConvergence {
+    failure.largest_residual = largest_residual(model, f_ext, f_int);
+    failure.status_changes = solution
+        .interface_trial
+        .iter()
+        .zip(&solution.interface_committed)
+        .filter(|(t, c)| t.status != c.status)
+        .count();
+    failure.hint = friction_exceeded(model, solution).or_else(|| unsupported_bodies(model));
+    failure
+}
+
+/// The free node with the largest out-of-balance force |f_ext − f_int|, with its body.
+fn largest_residual(model: &Model, f_ext: &[f64], f_int: &[f64]) -> Option<ResidualAt> {
+    let mut best: Option<(usize, [f64; 2])> = None;
+    let mut best_norm = 0.0;
+    for (node, (e, i)) in f_ext.chunks_exact(2).zip(f_int.chunks_exact(2)).enumerate() {
+        let mut r = [0.0; 2];
+        for c in 0..2 {
+            if model.dofs.equation(2 * node + c).is_some() {
+                r[c] = e[c] - i[c];
+            }
+        }
+        let size = r[0].hypot(r[1]);
+        if size.is_finite() && size > best_norm {
+            best_norm = size;
+            best = Some((node, r));
+        }
+    }
+    let (node, force) = best?;
+    Some(ResidualAt {
+        node: model
+            .mesh
+            .node_tags
+            .get(node)
+            .copied()
+            .unwrap_or(node as u64),
+        position: model.mesh.nodes[node],
+        body: body_of_node(model, node),
+        force,
+    })
+}
+
+/// The name of a body that `node` belongs to.
+fn body_of_node(model: &Model, node: usize) -> Option<String> {
+    let cells = &model.continuum.cells;
+    (0..cells.len())
+        .find(|&e| model.continuum.nodes(e).contains(&(node as u32)))
+        .map(|e| model.bodies[cells[e].body as usize].clone())
+}
+
+/// "Friction capacity exceeded" when, in the last attempt, every closed point of a contact
+/// pair slips: the pair transmits at most μ·|p_N| everywhere and the tangential load asks
+/// for more (Buczkowski & Kleiber (1994), Eq. 11: F = 0 at every point).
+fn friction_exceeded(model: &Model, solution: &Solution) -> Option<String> {
+    let pairs: Vec<&str> = model
+        .interface
+        .pairs
+        .iter()
+        .filter(|p| {
+            let points = &solution.interface_trial
+                [p.elements.start * INTERFACE_POINTS..p.elements.end * INTERFACE_POINTS];
+            let closed = points.iter().filter(|s| s.status != ContactStatus::Open);
+            let mut any = false;
+            closed.clone().all(|s| {
+                any = true;
+                s.status == ContactStatus::Slip
+            }) && any
+        })
+        .map(|p| p.name.as_str())
+        .collect();
+    (!pairs.is_empty()).then(|| {
+        format!(
+            "friction capacity exceeded: every closed point of contact '{}' slips, so friction \
+             cannot carry the tangential load there (raise the friction or the normal load, or \
+             support the sliding body)",
+            pairs.join("', '")
+        )
+    })
+}
+
+/// "A body without support" when a group of bodies joined by shared nodes or interface
+/// elements has no prescribed dof in x or in y: nothing stops its rigid translation.
+fn unsupported_bodies(model: &Model) -> Option<String> {
+    let nodes = model.mesh.nodes.len();
+    let mut parent: Vec<usize> = (0..nodes).collect();
+    fn root(parent: &mut [usize], mut n: usize) -> usize {
+        while parent[n] != n {
+            parent[n] = parent[parent[n]];
+            n = parent[n];
+        }
+        n
+    }
+    let mut join = |nodes: &[u32]| {
+        let first = root(&mut parent, nodes[0] as usize);
+        for &n in &nodes[1..] {
+            let r = root(&mut parent, n as usize);
+            parent[r] = first;
+        }
+    };
+    for e in 0..model.continuum.cells.len() {
+        join(model.continuum.nodes(e));
+    }
+    for e in 0..model.interface.elements.len() {
+        join(model.interface.nodes(e));
+    }
+    let mut held = vec![[false; 2]; nodes];
+    for &(dof, _, _) in &model.prescribed {
+        let r = root(&mut parent, dof / 2);
+        held[r][dof % 2] = true;
+    }
+    let mut free: Vec<(String, &str)> = Vec::new();
+    for cell in &model.continuum.cells {
+        let r = root(&mut parent, cell.nodes[0] as usize);
+        let body = &model.bodies[cell.body as usize];
+        let missing = match held[r] {
+            [false, false] => "x and y",
+            [false, true] => "x",
+            [true, false] => "y",
+            [true, true] => continue,
+        };
+        if !free.iter().any(|(b, _)| b == body) {
+            free.push((body.clone(), missing));
+        }
+    }
+    (!free.is_empty()).then(|| {
+        let list: Vec<String> = free
+            .iter()
+            .map(|(b, m)| format!("'{b}' (free to move in {m})"))
+            .collect();
+        format!(
+            "a body without support: {} — no support holds it, directly or through another \
+             body or a contact interface, against rigid-body motion",
+            list.join(", ")
+        )
+    })
 }
 
 /// Secant stiffnesses Δλ/‖Δu‖ of the converged increments of a run: the first one (the
 /// reference) and the latest.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StiffnessHistory {
     pub first: Option<f64>,
     pub last: Option<f64>,

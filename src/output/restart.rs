@@ -1,0 +1,448 @@
+//! The restart record `restart.bin`: everything a run needs to continue from its last
+//! converged increment as if it had never stopped (`asperity run CASE --resume`).
+//!
+//! It holds the stepping loop's state ([`LoopState`]: step, pseudo-time, next increment
+//! size, counters, force floor, stiffness history), the run's counters, the displacements,
+//! every integration point's committed state (strain, stress, plastic strain, equivalent
+//! plastic strain, yield flag; at interface points relative displacement, contact stress,
+//! plastic and accumulated slip, largest closure, friction, stiffness, contact status), and
+//! the output's own state (the rows of `history.csv`, the entries of `results.pvd`, the step
+//! records of `summary.json`), so that a resumed run rewrites those files exactly.
+//!
+//! Numbers are stored as their IEEE-754 bits (little-endian), never as text, so a resumed
+//! run starts from bit-identical values. The record also stores the case file's text and the
+//! program version: a record made by another case or program is refused, since continuing
+//! it would mix two models. It is written atomically after the files of its increment, so
+//! the record on disk always belongs to a state whose files are complete.
+
+use std::io::{self, Read, Write};
+use std::path::Path;
+
+use super::atomic::write_atomically;
+use super::pvd::PvdEntry;
+use crate::contact::{ContactStatus, InterfaceState};
+use crate::material::{PointState, Voigt};
+use crate::solver::newton::ForceAverage;
+use crate::solver::stepping::{LoopState, Resume, RunStatistics, Solution, StiffnessHistory};
+use crate::{Error, Result};
+
+/// File name of the record in the output folder.
+pub const RESTART_FILE: &str = "restart.bin";
+
+/// First bytes of a record; the trailing digit is the format version.
+const MAGIC: &[u8; 16] = b"asperity-rst-v1\n";
+
+/// What a record holds besides the solver's state: the output's tables (rows of numbers,
+/// e.g. `history.csv`) and the PVD series.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct OutputState {
+    pub tables: Vec<Vec<Vec<f64>>>,
+    pub series: Vec<PvdEntry>,
+}
+
+/// A record read back: the run to continue and the output's state.
+#[derive(Clone, Debug)]
+pub struct Record {
+    pub resume: Resume,
+    pub output: OutputState,
+}
+
+/// Writes the record of a converged increment to `path` (atomically). `case` is the case
+/// file's text, which [`read_record`] compares with the case being resumed.
+pub fn write_record(
+    path: &Path,
+    case: &str,
+    state: &LoopState,
+    stats: &RunStatistics,
+    solution: &Solution,
+    output: &OutputState,
+) -> Result<()> {
+    write_atomically(path, |w| {
+        let mut e = Encoder(w);
+        e.bytes(MAGIC)?;
+        e.text(env!("CARGO_PKG_VERSION"))?;
+        e.text(case)?;
+        encode_state(&mut e, state)?;
+        encode_stats(&mut e, stats)?;
+        e.floats(&solution.u)?;
+        e.len(solution.committed.len())?;
+        for s in &solution.committed {
+            encode_point(&mut e, s)?;
+        }
+        e.len(solution.interface_committed.len())?;
+        for s in &solution.interface_committed {
+            encode_interface(&mut e, s)?;
+        }
+        e.len(output.tables.len())?;
+        for table in &output.tables {
+            e.len(table.len())?;
+            for row in table {
+                e.floats(row)?;
+            }
+        }
+        e.len(output.series.len())?;
+        for entry in &output.series {
+            e.f64(entry.time)?;
+            e.u64(u64::from(entry.part))?;
+            e.text(&entry.name)?;
+            e.text(&entry.file.to_string_lossy())?;
+        }
+        Ok(())
+    })
+}
+
+/// Reads the record at `path` for the case whose text is `case` and a model whose solution
+/// has the sizes of `template` (from [`Solution::new`]). A record of another case, program
+/// version or model size, or a damaged one, is an [`Error::Restart`].
+pub fn read_record(path: &Path, case: &str, template: &Solution) -> Result<Record> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let refuse = |reason: String| Error::Restart {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let mut d = Decoder(&bytes[..]);
+    let damaged = |e: io::Error| refuse(format!("the record is damaged ({e})"));
+    let mut magic = [0u8; 16];
+    d.0.read_exact(&mut magic).map_err(damaged)?;
+    if &magic != MAGIC {
+        return Err(refuse(
+            "not an asperity restart record of this format".into(),
+        ));
+    }
+    let version = d.text().map_err(damaged)?;
+    if version != env!("CARGO_PKG_VERSION") {
+        return Err(refuse(format!(
+            "it was written by asperity {version}, this is {}",
+            env!("CARGO_PKG_VERSION")
+        )));
+    }
+    if d.text().map_err(damaged)? != case {
+        return Err(refuse(
+            "the case file changed since the record was written; run without --resume".into(),
+        ));
+    }
+    let record = decode_rest(&mut d, template).map_err(damaged)?;
+    if !d.0.is_empty() {
+        return Err(refuse("the record has trailing bytes".into()));
+    }
+    Ok(record)
+}
+
+/// Everything after the header.
+fn decode_rest(d: &mut Decoder, template: &Solution) -> io::Result<Record> {
+    let state = decode_state(d)?;
+    let stats = decode_stats(d)?;
+    let mut solution = template.clone();
+    let u = d.floats()?;
+    expect_len("displacements", u.len(), solution.u.len())?;
+    solution.u = u;
+    expect_len("integration points", d.len()?, solution.committed.len())?;
+    for s in &mut solution.committed {
+        *s = decode_point(d)?;
+    }
+    let n = d.len()?;
+    expect_len("interface points", n, solution.interface_committed.len())?;
+    for s in &mut solution.interface_committed {
+        *s = decode_interface(d)?;
+    }
+    solution.trial.clone_from(&solution.committed);
+    solution
+        .interface_trial
+        .clone_from(&solution.interface_committed);
+    let mut output = OutputState::default();
+    for _ in 0..d.len()? {
+        let rows = d.len()?;
+        output
+            .tables
+            .push((0..rows).map(|_| d.floats()).collect::<io::Result<_>>()?);
+    }
+    for _ in 0..d.len()? {
+        output.series.push(PvdEntry {
+            time: d.f64()?,
+            part: u32::try_from(d.u64()?).map_err(|_| corrupt("part number"))?,
+            name: d.text()?,
+            file: d.text()?.into(),
+        });
+    }
+    Ok(Record {
+        resume: Resume {
+            state,
+            stats,
+            solution,
+        },
+        output,
+    })
+}
+
+fn expect_len(what: &str, found: usize, expected: usize) -> io::Result<()> {
+    if found == expected {
+        Ok(())
+    } else {
+        Err(corrupt(&format!(
+            "{found} {what}, the model has {expected}"
+        )))
+    }
+}
+
+fn corrupt(what: &str) -> io::Error {
+    io::Error::new(io::ErrorKind::InvalidData, what.to_string())
+}
+
+fn encode_state(e: &mut Encoder, s: &LoopState) -> io::Result<()> {
+    // Destructured so that a new field cannot be forgotten here.
+    let LoopState {
+        step,
+        time,
+        size,
+        cutbacks,
+        increments,
+        iterations,
+        force_floor,
+        stiffness: StiffnessHistory { first, last },
+        force_average: ForceAverage { sum, count },
+    } = *s;
+    for n in [step, cutbacks, increments, iterations, count] {
+        e.len(n)?;
+    }
+    for v in [time, size, force_floor, sum] {
+        e.f64(v)?;
+    }
+    e.option(first)?;
+    e.option(last)
+}
+
+fn decode_state(d: &mut Decoder) -> io::Result<LoopState> {
+    let [step, cutbacks, increments, iterations, count] =
+        [d.len()?, d.len()?, d.len()?, d.len()?, d.len()?];
+    let [time, size, force_floor, sum] = [d.f64()?, d.f64()?, d.f64()?, d.f64()?];
+    let stiffness = StiffnessHistory {
+        first: d.option()?,
+        last: d.option()?,
+    };
+    Ok(LoopState {
+        step,
+        time,
+        size,
+        cutbacks,
+        increments,
+        iterations,
+        force_floor,
+        stiffness,
+        force_average: ForceAverage { sum, count },
+    })
+}
+
+/// The counters and timings of the run so far (the symbolic factorisation's are measured
+/// again by the resumed run).
+fn encode_stats(e: &mut Encoder, s: &RunStatistics) -> io::Result<()> {
+    for n in [
+        s.steps,
+        s.increments,
+        s.iterations,
+        s.cutbacks,
+        s.unsymmetric_solves,
+        s.krylov_iterations,
+    ] {
+        e.len(n)?;
+    }
+    e.floats(&[
+        s.assembly_seconds,
+        s.factorization_seconds,
+        s.solve_seconds,
+        s.output_seconds,
+        s.last_residual,
+    ])
+}
+
+fn decode_stats(d: &mut Decoder) -> io::Result<RunStatistics> {
+    let mut s = RunStatistics {
+        steps: d.len()?,
+        increments: d.len()?,
+        iterations: d.len()?,
+        cutbacks: d.len()?,
+        unsymmetric_solves: d.len()?,
+        krylov_iterations: d.len()?,
+        ..RunStatistics::default()
+    };
+    let f = d.floats()?;
+    let [a, b, c, o, r] = f[..] else {
+        return Err(corrupt("run statistics"));
+    };
+    (
+        s.assembly_seconds,
+        s.factorization_seconds,
+        s.solve_seconds,
+        s.output_seconds,
+        s.last_residual,
+    ) = (a, b, c, o, r);
+    Ok(s)
+}
+
+fn encode_point(e: &mut Encoder, s: &PointState) -> io::Result<()> {
+    let PointState {
+        strain,
+        stress,
+        plastic_strain,
+        equivalent_plastic_strain,
+        yielding,
+    } = s;
+    for v in [strain, stress, plastic_strain] {
+        for x in v.iter() {
+            e.f64(*x)?;
+        }
+    }
+    e.f64(*equivalent_plastic_strain)?;
+    e.bytes(&[u8::from(*yielding)])
+}
+
+fn decode_point(d: &mut Decoder) -> io::Result<PointState> {
+    let mut voigt =
+        || -> io::Result<Voigt> { Ok(Voigt::new(d.f64()?, d.f64()?, d.f64()?, d.f64()?)) };
+    Ok(PointState {
+        strain: voigt()?,
+        stress: voigt()?,
+        plastic_strain: voigt()?,
+        equivalent_plastic_strain: d.f64()?,
+        yielding: d.flag()?,
+    })
+}
+
+fn encode_interface(e: &mut Encoder, s: &InterfaceState) -> io::Result<()> {
+    let InterfaceState {
+        relative,
+        stress,
+        plastic_slip,
+        accumulated_slip,
+        max_closure,
+        friction,
+        stiffness,
+        status,
+        unsymmetric,
+    } = s;
+    let [r0, r1] = *relative;
+    let [s0, s1] = *stress;
+    let [k0, k1] = *stiffness;
+    for v in [
+        r0,
+        r1,
+        s0,
+        s1,
+        *plastic_slip,
+        *accumulated_slip,
+        *max_closure,
+        *friction,
+        k0,
+        k1,
+    ] {
+        e.f64(v)?;
+    }
+    e.bytes(&[*status as u8, u8::from(*unsymmetric)])
+}
+
+fn decode_interface(d: &mut Decoder) -> io::Result<InterfaceState> {
+    let mut v = [0.0; 10];
+    for x in &mut v {
+        *x = d.f64()?;
+    }
+    let status = match d.byte()? {
+        0 => ContactStatus::Open,
+        1 => ContactStatus::Stick,
+        2 => ContactStatus::Slip,
+        _ => return Err(corrupt("contact status")),
+    };
+    Ok(InterfaceState {
+        relative: [v[0], v[1]],
+        stress: [v[2], v[3]],
+        plastic_slip: v[4],
+        accumulated_slip: v[5],
+        max_closure: v[6],
+        friction: v[7],
+        stiffness: [v[8], v[9]],
+        status,
+        unsymmetric: d.flag()?,
+    })
+}
+
+/// Little-endian binary writer.
+struct Encoder<'w>(&'w mut dyn Write);
+
+impl Encoder<'_> {
+    fn bytes(&mut self, b: &[u8]) -> io::Result<()> {
+        self.0.write_all(b)
+    }
+    fn u64(&mut self, v: u64) -> io::Result<()> {
+        self.bytes(&v.to_le_bytes())
+    }
+    fn len(&mut self, n: usize) -> io::Result<()> {
+        self.u64(n as u64)
+    }
+    fn f64(&mut self, v: f64) -> io::Result<()> {
+        self.bytes(&v.to_bits().to_le_bytes())
+    }
+    fn floats(&mut self, v: &[f64]) -> io::Result<()> {
+        self.len(v.len())?;
+        v.iter().try_for_each(|x| self.f64(*x))
+    }
+    fn option(&mut self, v: Option<f64>) -> io::Result<()> {
+        self.bytes(&[u8::from(v.is_some())])?;
+        self.f64(v.unwrap_or(0.0))
+    }
+    fn text(&mut self, s: &str) -> io::Result<()> {
+        self.len(s.len())?;
+        self.bytes(s.as_bytes())
+    }
+}
+
+/// Reader of what [`Encoder`] wrote; lengths are checked against the bytes left before
+/// anything is allocated, so a damaged record cannot ask for a huge allocation.
+struct Decoder<'b>(&'b [u8]);
+
+impl Decoder<'_> {
+    fn take<const N: usize>(&mut self) -> io::Result<[u8; N]> {
+        let mut b = [0u8; N];
+        self.0.read_exact(&mut b)?;
+        Ok(b)
+    }
+    fn byte(&mut self) -> io::Result<u8> {
+        Ok(self.take::<1>()?[0])
+    }
+    fn flag(&mut self) -> io::Result<bool> {
+        match self.byte()? {
+            0 => Ok(false),
+            1 => Ok(true),
+            _ => Err(corrupt("flag")),
+        }
+    }
+    fn u64(&mut self) -> io::Result<u64> {
+        Ok(u64::from_le_bytes(self.take()?))
+    }
+    /// A count of items of at least one byte each.
+    fn len(&mut self) -> io::Result<usize> {
+        let n = self.u64()?;
+        usize::try_from(n)
+            .ok()
+            .filter(|&n| n <= self.0.len())
+            .ok_or_else(|| corrupt("a count larger than the record"))
+    }
+    fn f64(&mut self) -> io::Result<f64> {
+        Ok(f64::from_bits(self.u64()?))
+    }
+    fn floats(&mut self) -> io::Result<Vec<f64>> {
+        let n = self.len()?;
+        if n > self.0.len() / 8 {
+            return Err(corrupt("an array longer than the record"));
+        }
+        (0..n).map(|_| self.f64()).collect()
+    }
+    fn option(&mut self) -> io::Result<Option<f64>> {
+        let present = self.flag()?;
+        let v = self.f64()?;
+        Ok(present.then_some(v))
+    }
+    fn text(&mut self) -> io::Result<String> {
+        let n = self.len()?;
+        let (s, rest) = self.0.split_at(n);
+        self.0 = rest;
+        String::from_utf8(s.to_vec()).map_err(|_| corrupt("text"))
+    }
+}

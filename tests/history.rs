@@ -1,0 +1,118 @@
+//! `history.csv`: the unloaded state as step 0, the pseudo-time, the global and per-load
+//! factors, and the `[[history]]` quantities of the case, every step — checked against
+//! equilibrium (the base carries the lid's pressure load at every step) and the factors the
+//! case gives.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::process::Command;
+
+/// Two blocks on a frictional joint: the lid pressed by p = 3 MPa along its own factors and
+/// dragged sideways by a prescribed displacement along others; global factors of their own.
+fn case(dir: &Path) -> std::path::PathBuf {
+    let case = dir.join("case.toml");
+    std::fs::write(
+        &case,
+        format!(
+            r#"[mesh]
+file = "{}"
+[analysis]
+type = "plane_strain"
+thickness = 2.5
+[[body]]
+group = "lower"
+material = {{ E = 1000.0, nu = 0.3 }}
+[[body]]
+group = "upper"
+material = {{ E = 1000.0, nu = 0.3 }}
+[[support]]
+group = "base"
+ux = 0.0
+uy = 0.0
+[[support]]
+group = "lid"
+ux = 0.01
+factors = [0.0, 0.5, 1.0]
+[[load]]
+group = "lid"
+pressure = 3.0
+factors = [1.0, 2.0, 0.5]
+[[contact]]
+name = "joint"
+side_a = "lower_top"
+side_b = "upper_bottom"
+law = {{ type = "linear_coulomb", normal_stiffness = 1e4, tangential_stiffness = 1e4, friction = 0.5 }}
+[steps]
+factors = [0.2, 0.6, 1.0]
+[[history]]
+name = "base_y"
+kind = "reaction"
+support = "base"
+component = "y"
+[[history]]
+name = "lid_x"
+kind = "reaction"
+support = "lid"
+component = "x"
+"#,
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("tests/fixtures/contact_pair.msh")
+                .display()
+        ),
+    )
+    .unwrap();
+    case
+}
+
+fn read_history(path: &Path) -> Vec<HashMap<String, f64>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .zip(l.split(','))
+                .map(|(h, v)| (h.to_string(), v.parse().unwrap()))
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn history_has_the_start_the_factors_and_the_requested_quantities() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let status = Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .arg("run")
+        .arg(case(dir.path()))
+        .arg("--out")
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let rows = read_history(&out.join("history.csv"));
+    assert_eq!(rows.len(), 4, "step 0 and three steps");
+    assert!(rows[0].values().all(|&v| v == 0.0), "step 0: {:?}", rows[0]);
+    let (width, thickness, pressure) = (2.0, 2.5, 3.0);
+    for (j, row) in rows.iter().enumerate().skip(1) {
+        assert_eq!(row["step"], j as f64);
+        assert_eq!(row["time"], j as f64);
+        assert_eq!(row["load_factor"], [0.2, 0.6, 1.0][j - 1]);
+        assert_eq!(row["factor_support_lid"], [0.0, 0.5, 1.0][j - 1]);
+        let f = [1.0, 2.0, 0.5][j - 1];
+        assert_eq!(row["factor_load_lid"], f);
+        // The requested quantities are the reactions, and equilibrium of the whole model:
+        // the base carries the lid's pressure load p·w·t·f (to the solver's tolerance).
+        assert_eq!(row["base_y"], row["reaction_base_y"]);
+        assert_eq!(row["lid_x"], row["reaction_lid_x"]);
+        let load = pressure * width * thickness * f;
+        assert!(
+            (row["base_y"] - load).abs() <= 1e-6 * load,
+            "step {j}: {} vs {load}",
+            row["base_y"]
+        );
+        // The shear the base takes is what the lid is dragged with.
+        assert!((row["reaction_base_x"] + row["lid_x"]).abs() <= 1e-6 * load);
+    }
+}

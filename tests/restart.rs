@@ -1,0 +1,254 @@
+//! The restart record (`restart.bin`) and `asperity run --resume`: the record gives back every
+//! bit it was given, and a record that does not belong to the case is refused with a clear
+//! error instead of continuing a different model. (Resuming killed runs is `tests/crash.rs`.)
+
+use std::path::Path;
+use std::process::Command;
+
+use asperity::contact::{ContactStatus, InterfaceState};
+use asperity::material::{PointState, Voigt};
+use asperity::output::pvd::PvdEntry;
+use asperity::output::restart::{OutputState, read_record, write_record};
+use asperity::solver::newton::ForceAverage;
+use asperity::solver::stepping::{LoopState, RunStatistics, Solution, StiffnessHistory};
+
+/// Values that no formatting round trip would keep: thirds, subnormals, negative zero.
+fn awkward(i: usize) -> f64 {
+    match i % 4 {
+        0 => (i as f64 + 1.0) / 3.0,
+        1 => -0.0,
+        2 => f64::MIN_POSITIVE / 3.0,
+        _ => -1e300 / (i as f64 + 7.0),
+    }
+}
+
+fn solution() -> Solution {
+    let point = |k: usize| PointState {
+        strain: Voigt::from_fn(|i, _| awkward(k + i)),
+        stress: Voigt::from_fn(|i, _| awkward(k + i + 4)),
+        plastic_strain: Voigt::from_fn(|i, _| awkward(k + i + 8)),
+        equivalent_plastic_strain: awkward(k + 12),
+        yielding: k.is_multiple_of(2),
+    };
+    let interface = |k: usize| InterfaceState {
+        relative: [awkward(k), awkward(k + 1)],
+        stress: [awkward(k + 2), awkward(k + 3)],
+        plastic_slip: awkward(k + 4),
+        accumulated_slip: awkward(k + 5),
+        max_closure: awkward(k + 6),
+        friction: awkward(k + 7),
+        stiffness: [awkward(k + 8), awkward(k + 9)],
+        status: [
+            ContactStatus::Open,
+            ContactStatus::Stick,
+            ContactStatus::Slip,
+        ][k % 3],
+        unsymmetric: !k.is_multiple_of(2),
+    };
+    let committed: Vec<PointState> = (0..7).map(point).collect();
+    let interface_committed: Vec<InterfaceState> = (0..5).map(interface).collect();
+    Solution {
+        u: (0..10).map(awkward).collect(),
+        trial: vec![PointState::default(); 7],
+        interface_trial: vec![InterfaceState::default(); 5],
+        committed,
+        interface_committed,
+    }
+}
+
+fn state() -> LoopState {
+    LoopState {
+        step: 3,
+        time: 2.0 + 1.0 / 3.0,
+        size: 1.0 / 6.0,
+        cutbacks: 4,
+        increments: 2,
+        iterations: 17,
+        force_floor: 1e-7 / 3.0,
+        stiffness: StiffnessHistory {
+            first: Some(1.0 / 7.0),
+            last: None,
+        },
+        force_average: ForceAverage {
+            sum: 1.0 / 3.0,
+            count: 5,
+        },
+    }
+}
+
+fn bits(v: &[f64]) -> Vec<u64> {
+    v.iter().map(|x| x.to_bits()).collect()
+}
+
+#[test]
+fn a_record_gives_back_every_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("restart.bin");
+    let original = solution();
+    let stats = RunStatistics {
+        steps: 2,
+        increments: 9,
+        iterations: 40,
+        cutbacks: 4,
+        last_residual: 1e-13 / 3.0,
+        ..RunStatistics::default()
+    };
+    let output = OutputState {
+        tables: vec![vec![vec![0.0, -0.0], vec![1.0 / 3.0, 2e-310]]],
+        series: vec![PvdEntry {
+            time: 1.0,
+            part: 1,
+            name: "interface".into(),
+            file: "interface_0001.vtu".into(),
+        }],
+    };
+    write_record(&path, "case text", &state(), &stats, &original, &output).unwrap();
+    let template = Solution {
+        u: vec![0.0; 10],
+        committed: vec![PointState::default(); 7],
+        trial: vec![PointState::default(); 7],
+        interface_committed: vec![InterfaceState::default(); 5],
+        interface_trial: vec![InterfaceState::default(); 5],
+    };
+    let record = read_record(&path, "case text", &template).unwrap();
+    let resume = &record.resume;
+    assert_eq!(resume.state, state());
+    assert_eq!(resume.state.time.to_bits(), state().time.to_bits());
+    assert_eq!(resume.stats.iterations, 40);
+    assert_eq!(
+        resume.stats.last_residual.to_bits(),
+        stats.last_residual.to_bits()
+    );
+    assert_eq!(bits(&resume.solution.u), bits(&original.u));
+    for (a, b) in resume.solution.committed.iter().zip(&original.committed) {
+        for (x, y) in [
+            (a.strain, b.strain),
+            (a.stress, b.stress),
+            (a.plastic_strain, b.plastic_strain),
+        ] {
+            assert_eq!(bits(x.as_slice()), bits(y.as_slice()));
+        }
+        assert_eq!(
+            a.equivalent_plastic_strain.to_bits(),
+            b.equivalent_plastic_strain.to_bits()
+        );
+        assert_eq!(a.yielding, b.yielding);
+    }
+    for (a, b) in resume
+        .solution
+        .interface_committed
+        .iter()
+        .zip(&original.interface_committed)
+    {
+        let flat = |s: &InterfaceState| {
+            bits(&[
+                s.relative[0],
+                s.relative[1],
+                s.stress[0],
+                s.stress[1],
+                s.plastic_slip,
+                s.accumulated_slip,
+                s.max_closure,
+                s.friction,
+                s.stiffness[0],
+                s.stiffness[1],
+            ])
+        };
+        assert_eq!(flat(a), flat(b));
+        assert_eq!((a.status, a.unsymmetric), (b.status, b.unsymmetric));
+    }
+    // Trial states start from the committed ones.
+    assert_eq!(
+        resume.solution.interface_trial,
+        resume.solution.interface_committed
+    );
+    assert_eq!(
+        bits(&record.output.tables[0][1]),
+        bits(&output.tables[0][1])
+    );
+    assert_eq!(record.output.series, output.series);
+
+    // Another case, another model size, and a damaged file are refused with the reason.
+    let err = read_record(&path, "other case", &template)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("case file changed"), "{err}");
+    let mut small = template.clone();
+    small.u.pop();
+    let err = read_record(&path, "case text", &small)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("damaged") && err.contains("displacements"),
+        "{err}"
+    );
+    let bytes = std::fs::read(&path).unwrap();
+    for cut in [0, 10, bytes.len() / 2, bytes.len() - 1] {
+        std::fs::write(&path, &bytes[..cut]).unwrap();
+        let err = read_record(&path, "case text", &template).unwrap_err();
+        assert!(
+            matches!(err, asperity::Error::Restart { .. }),
+            "cut at {cut}: {err}"
+        );
+    }
+}
+
+fn asperity(args: &[&str]) -> (Option<i32>, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn write_case(path: &Path, steps: usize) {
+    std::fs::write(
+        path,
+        format!(
+            "[mesh]\nfile = \"{}\"\n[analysis]\ntype = \"plane_strain\"\n[[body]]\ngroup = \"body_a\"\n\
+             material = {{ E = 1000.0, nu = 0.3 }}\n[[support]]\ngroup = \"bottom\"\nux = 0.0\nuy = 0.0\n\
+             [[support]]\ngroup = \"corner\"\nux = 0.0\n[steps]\ncount = {steps}\n",
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("tests/fixtures/two_bodies_ascii.msh")
+                .display()
+        ),
+    )
+    .unwrap();
+}
+
+/// `--resume` of a finished run changes no result; of a changed case it is refused (exit 3)
+/// and leaves the results alone; without a record it starts from the beginning.
+#[test]
+fn resume_continues_only_the_same_case() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = dir.path().join("case.toml");
+    let case_s = case.to_str().unwrap();
+    let out = dir.path().join("out");
+    let out_s = out.to_str().unwrap();
+    write_case(&case, 2);
+    assert_eq!(asperity(&["run", case_s, "--out", out_s]).0, Some(0));
+    let history = std::fs::read(out.join("history.csv")).unwrap();
+    let vtu = std::fs::read(out.join("bodies_0002.vtu")).unwrap();
+
+    let (code, text) = asperity(&["run", case_s, "--out", out_s, "--resume"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert_eq!(std::fs::read(out.join("history.csv")).unwrap(), history);
+    assert_eq!(std::fs::read(out.join("bodies_0002.vtu")).unwrap(), vtu);
+
+    write_case(&case, 3);
+    let (code, text) = asperity(&["run", case_s, "--out", out_s, "--resume"]);
+    assert_eq!(code, Some(3), "{text}");
+    assert!(
+        text.contains("cannot resume") && text.contains("case file changed"),
+        "{text}"
+    );
+    assert_eq!(std::fs::read(out.join("history.csv")).unwrap(), history);
+
+    let fresh = dir.path().join("fresh");
+    let (code, text) = asperity(&["run", case_s, "--out", fresh.to_str().unwrap(), "--resume"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(fresh.join("bodies_0003.vtu").is_file());
+}
