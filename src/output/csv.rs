@@ -93,7 +93,7 @@ impl CsvCell for Cell {
     fn push_to(&self, out: &mut String) {
         match self {
             Cell::Number(v) => push_f64(out, *v),
-            Cell::Text(s) => out.push_str(&quote_field(s)),
+            Cell::Text(s) => out.push_str(s),
             Cell::Empty => {}
         }
     }
@@ -131,32 +131,30 @@ pub fn write_csv<C: CsvCell>(path: &Path, table: &CsvTable<C>) -> Result<()> {
         }
     }
 
-    // Formatting into one buffer first keeps the per-value cost to a `write!` into memory;
-    // the atomic writer then streams it out in one go.
-    let mut text = String::with_capacity(16 * (ncols + 1) * (table.rows.len() + 1));
-    let header: Vec<String> = table.columns.iter().map(|c| quote_field(c)).collect();
-    text.push_str(&header.join(","));
-    text.push('\n');
-    for row in &table.rows {
-        for (c, v) in row.iter().enumerate() {
-            if c > 0 {
-                text.push(',');
-            }
-            v.push_to(&mut text);
-        }
-        text.push('\n');
-    }
-    write_atomically(path, |w| w.write_all(text.as_bytes()))
+    // The csv crate does the quoting (RFC 4180: only fields with a comma, quote or line
+    // break); the numbers are formatted here, in the shortest round-trip form.
+    let text = csv_text(table).map_err(|e| invalid_data(path, e))?;
+    write_atomically(path, |w| w.write_all(&text))
 }
 
-/// Quotes a column name or text cell if it contains a comma, quote or line break (RFC
-/// 4180), so that names like `p_N, MPa` do not shift the columns.
-fn quote_field(name: &str) -> String {
-    if name.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", name.replace('"', "\"\""))
-    } else {
-        name.to_string()
+/// The CSV text of a checked table.
+fn csv_text<C: CsvCell>(table: &CsvTable<C>) -> std::result::Result<Vec<u8>, String> {
+    let capacity = 16 * (table.columns.len() + 1) * (table.rows.len() + 1);
+    let mut writer = csv::WriterBuilder::new()
+        .terminator(csv::Terminator::Any(b'\n'))
+        .from_writer(Vec::with_capacity(capacity));
+    let mut cell = String::new();
+    let error = |e: csv::Error| e.to_string();
+    writer.write_record(&table.columns).map_err(error)?;
+    for row in &table.rows {
+        for v in row {
+            cell.clear();
+            v.push_to(&mut cell);
+            writer.write_field(&cell).map_err(error)?;
+        }
+        writer.write_record(None::<&[u8]>).map_err(error)?;
     }
+    writer.into_inner().map_err(|e| e.to_string())
 }
 
 /// Appends `v` in a form that parses back to exactly `v` (Rust's `Display` and `LowerExp`
@@ -226,9 +224,13 @@ mod tests {
     }
 
     #[test]
-    fn names_with_commas_are_quoted() {
-        assert_eq!(quote_field("p_N, MPa"), "\"p_N, MPa\"");
-        assert_eq!(quote_field("a\"b"), "\"a\"\"b\"");
-        assert_eq!(quote_field("u_y"), "u_y");
+    fn names_with_commas_and_quotes_are_quoted() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("q.csv");
+        let mut table = CsvTable::new(["p_N, MPa", "a\"b", "u_y"]);
+        table.rows.push(vec![1.0, 2.0, 3.0]);
+        write_csv(&path, &table).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(text, "\"p_N, MPa\",\"a\"\"b\",u_y\n1,2,3\n");
     }
 }
