@@ -35,7 +35,7 @@ use crate::model::{Model, ModelSpec, Schedule};
 use crate::output::atomic::write_text;
 use crate::output::csv::{CsvTable, write_csv};
 use crate::output::pvd::{PvdEntry, write_pvd};
-use crate::output::restart::{OutputState, RESTART_FILE, Record, read_record, write_record};
+use crate::output::restart::{OutputState, RESTART_FILE, Record, RecordWriter, read_record};
 use crate::output::summary::{
     ContactResultant, Force, ModelSize, Named, Status, StepSummary, Summary,
 };
@@ -372,7 +372,9 @@ fn solve(
     let stats = if model.control.arc_length.is_some() {
         run_steps(&model, &settings, |step| writer.step(step, None))?.1
     } else {
-        run_steps_from(&model, &settings, resume, &mut writer)?.1
+        let stats = run_steps_from(&model, &settings, resume, &mut writer)?.1;
+        writer.records.finish()?;
+        stats
     };
     writer.bar.finish_and_clear();
     Ok(RunSummary {
@@ -850,6 +852,7 @@ struct StepWriter<'m, 's, F> {
     summary: &'s mut Summary,
     last_reactions: Vec<[f64; 2]>,
     bar: indicatif::ProgressBar,
+    records: RecordWriter,
     on_step: F,
 }
 
@@ -876,6 +879,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             summary,
             last_reactions: Vec::new(),
             bar: progress_bar(session.progress, model.schedule.steps()),
+            records: RecordWriter::default(),
             on_step,
         }
     }
@@ -1042,7 +1046,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
     }
 
     /// The restart record of a converged increment (when the run keeps them).
-    fn write_record(&self, progress: &Progress) -> Result<()> {
+    fn write_record(&mut self, progress: &Progress) -> Result<()> {
         let Some(case_text) = self.case_text else {
             return Ok(());
         };
@@ -1050,7 +1054,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             tables: vec![self.history.rows.clone()],
             series: self.series.clone(),
         };
-        write_record(
+        self.records.write(
             &self.out_dir.join(RESTART_FILE),
             case_text,
             &progress.state,
