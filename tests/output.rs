@@ -931,6 +931,9 @@ mod step_grids {
             Ok(0.0)
         })
         .unwrap();
+        let e = asperity::config::parse_quantity("n:node_displacement:node=7.5,component=x")
+            .unwrap_err();
+        assert!(e.contains("node = '7.5' is not a node tag"), "{e}");
         let [area, stick, slip, open, max_slip, g, p, _] = last[..] else {
             unreachable!()
         };
