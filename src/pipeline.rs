@@ -6,9 +6,11 @@
 //!   command line, start and end, host, threads;
 //! - `mesh.msh` when the case meshes a `.geo` script;
 //! - `bodies_NNNN.vtu` per converged step and `results.pvd` listing them (time = step
-//!   number, since load factors may go down again when unloading);
-//! - `interface_NNNN.vtu` (when the case has contact pairs): the contact fields on the
-//!   interface, listed in `results.pvd` as a second part;
+//!   number, since load factors may go down again when unloading), with the nodal reaction
+//!   forces and the step's FieldData (`TimeValue`, `step`, `load_factor`), see
+//!   [`step_grids`];
+//! - `interface_NNNN.vtu` (when the case has contact pairs): the contact fields and the
+//!   side-B displacement on the interface, listed in `results.pvd` as a second part;
 //! - `contact_<pair>_NNNN.csv`: the contact fields along each pair's curve;
 //! - `history.csv`: a step-0 row, then per step the pseudo-time, the global and per-load
 //!   factors, increments, cut-backs, Newton iterations, final residual, the reaction force
