@@ -229,7 +229,7 @@ fn init_logging(cli: &Cli) -> LogFile {
     };
     let log_file = LogFile::default();
     let stderr = tracing_subscriber::fmt::layer()
-        .with_writer(std::io::stderr)
+        .with_writer(|| asperity::pipeline::LogToStderr)
         .with_ansi(std::io::stderr().is_terminal())
         .with_target(false)
         .with_filter(level);

@@ -6,9 +6,11 @@
 //!   command line, start and end, host, threads;
 //! - `mesh.msh` when the case meshes a `.geo` script;
 //! - `bodies_NNNN.vtu` per converged step and `results.pvd` listing them (time = step
-//!   number, since load factors may go down again when unloading);
-//! - `interface_NNNN.vtu` (when the case has contact pairs): the contact fields on the
-//!   interface, listed in `results.pvd` as a second part;
+//!   number, since load factors may go down again when unloading), with the nodal reaction
+//!   forces and the step's FieldData (`TimeValue`, `step`, `load_factor`), see
+//!   [`step_grids`];
+//! - `interface_NNNN.vtu` (when the case has contact pairs): the contact fields and the
+//!   side-B displacement on the interface, listed in `results.pvd` as a second part;
 //! - `contact_<pair>_NNNN.csv`: the contact fields along each pair's curve;
 //! - `history.csv`: a step-0 row, then per step the pseudo-time, the global and per-load
 //!   factors, increments, cut-backs, Newton iterations, final residual, the reaction force
@@ -25,8 +27,12 @@
 //! When a step fails after some of its sub-increments converged, the last of them is written
 //! as that step (its fractional pseudo-time in `history.csv` and `results.pvd` tells it apart).
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 use std::time::Instant;
+
+use indicatif::ProgressBar;
 
 use crate::config::{Case, LinearSolverKind, SolverSpec};
 use crate::element::Analysis;
@@ -42,7 +48,7 @@ use crate::output::summary::{
 use crate::output::vtu::write_vtu;
 use crate::post::interface::{InterfaceOutput, resultants};
 use crate::post::quantities::evaluate;
-use crate::post::{BodyPoints, body_grid, reactions};
+use crate::post::{BodyPoints, StepInfo, reactions, step_grids};
 use crate::solver::newton::{LinearSolver, NewtonLog, NewtonSettings};
 use crate::solver::stepping::{
     Observer, Progress, Resume, RunStatistics, Solution, StepResult, run_steps, run_steps_from,
@@ -376,7 +382,7 @@ fn solve(
         writer.records.finish()?;
         stats
     };
-    writer.bar.finish_and_clear();
+    writer.bar.finish();
     Ok(RunSummary {
         out_dir: out_dir.to_path_buf(),
         nodes: model.mesh.nodes.len(),
@@ -702,18 +708,71 @@ fn write_summary_after_failure(summary: &Summary, out_dir: &Path) {
     }
 }
 
-fn progress_bar(enabled: bool, steps: usize) -> indicatif::ProgressBar {
-    if !enabled {
-        return indicatif::ProgressBar::hidden();
+/// The progress bar of the run in progress, if it is drawn: [`LogToStderr`] writes log lines
+/// through it.
+static ACTIVE_BAR: Mutex<Option<ProgressBar>> = Mutex::new(None);
+
+/// stderr for log lines (`tracing_subscriber`'s `with_writer(|| LogToStderr)`): while a run
+/// draws its progress bar on the terminal, each line is written with the bar hidden and the
+/// bar redrawn below it ([`ProgressBar::suspend`]), so that lines and bar do not interleave.
+/// Without a bar (stderr not a terminal, `-q`, no run) it is plain stderr.
+pub struct LogToStderr;
+
+impl Write for LogToStderr {
+    fn write(&mut self, line: &[u8]) -> std::io::Result<usize> {
+        let bar = ACTIVE_BAR.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        write_log_line(bar.as_ref(), &mut std::io::stderr(), line)
     }
-    let bar = indicatif::ProgressBar::new(steps as u64);
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        std::io::stderr().flush()
+    }
+}
+
+/// Writes a log `line` to `out`, with `bar` (when there is one) hidden meanwhile.
+pub fn write_log_line(
+    bar: Option<&ProgressBar>,
+    out: &mut impl Write,
+    line: &[u8],
+) -> std::io::Result<usize> {
+    match bar {
+        Some(bar) => bar.suspend(|| out.write_all(line))?,
+        None => out.write_all(line)?,
+    }
+    Ok(line.len())
+}
+
+/// The run's progress bar, registered for [`LogToStderr`] while it lives; dropping it (at the
+/// end of the run, also a failed one) clears it from the terminal.
+struct RunBar(ProgressBar);
+
+impl RunBar {
+    /// Clears the bar from the terminal; log lines go straight to stderr again.
+    fn finish(&self) {
+        *ACTIVE_BAR.lock().unwrap_or_else(|e| e.into_inner()) = None;
+        self.0.finish_and_clear();
+    }
+}
+
+impl Drop for RunBar {
+    fn drop(&mut self) {
+        self.finish();
+    }
+}
+
+fn progress_bar(enabled: bool, steps: usize) -> RunBar {
+    if !enabled {
+        return RunBar(ProgressBar::hidden());
+    }
+    let bar = ProgressBar::new(steps as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template(
             "{spinner} step {pos}/{len} [{elapsed_precise}] {wide_bar} {msg}",
         )
         .expect("valid progress template"),
     );
-    bar
+    *ACTIVE_BAR.lock().unwrap_or_else(|e| e.into_inner()) = Some(bar.clone());
+    RunBar(bar)
 }
 
 /// The columns of `history.csv` before the reactions: where each value of a row is, so that
@@ -851,7 +910,7 @@ struct StepWriter<'m, 's, F> {
     history: CsvTable,
     summary: &'s mut Summary,
     last_reactions: Vec<[f64; 2]>,
-    bar: indicatif::ProgressBar,
+    bar: RunBar,
     records: RecordWriter,
     on_step: F,
 }
@@ -931,7 +990,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         }
         remove_step_files(&self.out_dir, resume.state.step)?;
         self.write_indexes()?;
-        self.bar.inc(resume.state.step as u64 - 1);
+        self.bar.0.inc(resume.state.step as u64 - 1);
         tracing::info!(
             step = resume.state.step,
             time = resume.state.time,
@@ -965,8 +1024,9 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             .collect();
         self.summary.push_step(summary);
         (self.on_step)(self.model, step)?;
-        self.bar.inc(1);
+        self.bar.0.inc(1);
         self.bar
+            .0
             .set_message(format!("load factor {}", step.load_factor));
         Ok(start.elapsed().as_secs_f64())
     }
@@ -979,39 +1039,29 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         let states = &step.solution.interface_committed;
         let mut entries = Vec::new();
         if self.vtu {
-            let name = format!("bodies_{:04}.vtu", step.step);
+            let info = StepInfo {
+                step: step.step,
+                time,
+                load_factor: step.load_factor,
+            };
             let t = Instant::now();
-            let grid = body_grid(
-                self.model,
-                &self.points,
-                &step.solution.u,
-                &step.solution.committed,
-            );
+            let (bodies, interface) =
+                step_grids(self.model, &self.points, &self.interface, step, info);
             post += t.elapsed().as_secs_f64();
             let t = Instant::now();
-            write_vtu(&self.out_dir.join(&name), &grid)?;
-            vtu += t.elapsed().as_secs_f64();
-            entries.push(PvdEntry {
-                time,
-                part: 0,
-                name: "bodies".into(),
-                file: name.into(),
-            });
-            if !self.model.interface.elements.is_empty() {
-                let name = format!("interface_{:04}.vtu", step.step);
-                let t = Instant::now();
-                write_vtu(
-                    &self.out_dir.join(&name),
-                    &self.interface.grid(self.model, states),
-                )?;
-                vtu += t.elapsed().as_secs_f64();
+            let parts = [("bodies", Some(bodies)), ("interface", interface)];
+            for (part, (name, grid)) in parts.into_iter().enumerate() {
+                let Some(grid) = grid else { continue };
+                let file = format!("{name}_{:04}.vtu", step.step);
+                write_vtu(&self.out_dir.join(&file), &grid)?;
                 entries.push(PvdEntry {
                     time,
-                    part: 1,
-                    name: "interface".into(),
-                    file: name.into(),
+                    part: part as u32,
+                    name: name.into(),
+                    file: file.into(),
                 });
             }
+            vtu += t.elapsed().as_secs_f64();
         }
         let tables = self.interface.tables(self.model, states);
         for (pair, table) in self.model.interface.pairs.iter().zip(&tables) {

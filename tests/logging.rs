@@ -107,3 +107,115 @@ fn threads_option_gives_the_same_answer() {
         "{one} vs {default}"
     );
 }
+
+/// `-v` prints the Newton iterations (DEBUG); each carries the step it belongs to as the
+/// `step{step=N}` span, and the steps run 1, 2, 3, 4 in order (the template has four steps).
+#[test]
+fn newton_lines_name_their_step() {
+    let (_dir, case) = template();
+    let (_, stderr) = run(&case, &["-v"]);
+    let newton: Vec<&str> = lines_at(&stderr, "DEBUG")
+        .into_iter()
+        .filter(|l| l.contains(" newton "))
+        .collect();
+    assert!(!newton.is_empty(), "no Newton lines with -v:\n{stderr}");
+    let steps: Vec<usize> = newton
+        .iter()
+        .map(|l| {
+            let rest = l
+                .strip_prefix("step{step=")
+                .unwrap_or_else(|| panic!("Newton line without its step: {l}"));
+            rest[..rest.find('}').unwrap()].parse().unwrap()
+        })
+        .collect();
+    assert!(steps.windows(2).all(|w| w[0] <= w[1]), "{steps:?}");
+    let mut seen = steps.clone();
+    seen.dedup();
+    assert_eq!(seen, [1, 2, 3, 4], "{stderr}");
+}
+
+/// On a terminal a log line is written with the progress bar cleared first and redrawn
+/// after it, so the two never share a line; without a bar the line is written as it is.
+#[test]
+fn log_lines_go_through_the_progress_bar() {
+    use asperity::pipeline::write_log_line;
+    use indicatif::{ProgressBar, ProgressDrawTarget, TermLike};
+    use std::io::Write;
+    use std::sync::{Arc, Mutex};
+
+    /// What reaches the terminal, in order: bar drawing and log lines alike.
+    #[derive(Clone, Debug, Default)]
+    struct Screen(Arc<Mutex<Vec<String>>>);
+    impl Screen {
+        fn push(&self, event: String) -> std::io::Result<()> {
+            self.0.lock().unwrap().push(event);
+            Ok(())
+        }
+    }
+    impl TermLike for Screen {
+        fn width(&self) -> u16 {
+            80
+        }
+        fn move_cursor_up(&self, _: usize) -> std::io::Result<()> {
+            Ok(())
+        }
+        fn move_cursor_down(&self, _: usize) -> std::io::Result<()> {
+            Ok(())
+        }
+        fn move_cursor_right(&self, _: usize) -> std::io::Result<()> {
+            Ok(())
+        }
+        fn move_cursor_left(&self, _: usize) -> std::io::Result<()> {
+            Ok(())
+        }
+        fn write_line(&self, s: &str) -> std::io::Result<()> {
+            self.push(format!("bar {s}"))
+        }
+        fn write_str(&self, s: &str) -> std::io::Result<()> {
+            self.push(format!("bar {s}"))
+        }
+        fn clear_line(&self) -> std::io::Result<()> {
+            self.push("clear".into())
+        }
+        fn flush(&self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+    impl Write for Screen {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            self.push(format!("log {}", String::from_utf8_lossy(b)))?;
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    let mut screen = Screen::default();
+    let bar = ProgressBar::with_draw_target(
+        Some(4),
+        ProgressDrawTarget::term_like(Box::new(screen.clone())),
+    );
+    bar.inc(1);
+    write_log_line(Some(&bar), &mut screen, b"INFO increment 1\n").unwrap();
+    let events = screen.0.lock().unwrap().clone();
+    let log = events
+        .iter()
+        .position(|e| e == "log INFO increment 1\n")
+        .unwrap_or_else(|| panic!("{events:?}"));
+    let drawn_before = events[..log].iter().rposition(|e| e.starts_with("bar "));
+    let cleared = events[..log].iter().rposition(|e| e == "clear");
+    assert!(drawn_before.is_some(), "the bar was drawn: {events:?}");
+    assert!(
+        cleared > drawn_before,
+        "bar cleared before the line: {events:?}"
+    );
+    assert!(
+        events[log + 1..].iter().any(|e| e.starts_with("bar ")),
+        "bar redrawn after the line: {events:?}"
+    );
+
+    let mut plain = Screen::default();
+    write_log_line(None, &mut plain, b"INFO x\n").unwrap();
+    assert_eq!(*plain.0.lock().unwrap(), ["log INFO x\n"]);
+}

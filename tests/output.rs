@@ -874,6 +874,80 @@ mod step_grids {
         check(case(CaseBuilder::plane_strain()));
     }
 
+    /// The contact extent of pair `joint` as quantities: area, stick, slip and open lengths,
+    /// max slip.
+    const EXTENT: [&str; 5] = [
+        "a:contact_area:pair=joint",
+        "st:stick_length:pair=joint",
+        "sl:slip_length:pair=joint",
+        "op:open_length:pair=joint",
+        "ms:max_slip:pair=joint",
+    ];
+
+    /// The quantities of `[[quantity]]`/`[[history]]` (`name:kind:keys`) on `step`.
+    fn quantities(
+        model: &asperity::model::Model,
+        step: &asperity::solver::stepping::StepResult,
+        specs: &[&str],
+    ) -> Vec<f64> {
+        let specs: Vec<_> = specs
+            .iter()
+            .map(|s| asperity::config::parse_quantity(s).unwrap())
+            .collect();
+        asperity::post::quantities::evaluate(&specs, model, step).unwrap()
+    }
+
+    /// The pushed block (plane stress, thickness 0.5) slides as a whole at the last step: the
+    /// pair slips over its full 2 mm, its contact area is 2 mm × 0.5 mm, and the largest slip
+    /// is at least the mean slip. With Coulomb's τ = μ p and the elastic tangential gap τ/k_T
+    /// at every sliding point, the mean slip is |ḡ_x| − μ p̄ / k_T (ḡ_x the mean relative
+    /// displacement, p̄ the mean pressure, both length-weighted on a flat contact); it is at
+    /// most the 0.02 mm pushed.
+    #[test]
+    fn contact_extent_quantities_of_a_sliding_block() {
+        let case = case(CaseBuilder::plane_stress(0.5))
+            .pressed_and_pushed(10.0, 0.01, &[0.0, 1.0, 2.0])
+            .case();
+        let model = model(mesh(), &case).unwrap();
+        let tag = model.mesh.node_tags[7];
+        let mut last = Vec::new();
+        run_steps(&model, &settings(&case), |step| {
+            let node = format!("n:node_displacement:node={tag},component=y");
+            let mut specs = EXTENT.to_vec();
+            specs.extend([
+                "g:relative_displacement:pair=joint,component=x",
+                "p:contact_pressure:pair=joint,statistic=mean",
+                &node,
+            ]);
+            last = quantities(&model, step, &specs);
+            assert_eq!(last[7], step.solution.u[2 * 7 + 1], "node {tag}");
+            let unknown =
+                asperity::config::parse_quantity("n:node_displacement:node=999999,component=x")
+                    .unwrap();
+            let e = asperity::post::quantities::evaluate(&[unknown], &model, step)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("'n'") && e.contains("no node 999999"), "{e}");
+            Ok(0.0)
+        })
+        .unwrap();
+        let e = asperity::config::parse_quantity("n:node_displacement:node=7.5,component=x")
+            .unwrap_err();
+        assert!(e.contains("node = '7.5' is not a node tag"), "{e}");
+        let [area, stick, slip, open, max_slip, g, p, _] = last[..] else {
+            unreachable!()
+        };
+        assert!(close(area, 1.0, 1.0), "area {area}");
+        assert_eq!((stick, open), (0.0, 0.0));
+        assert!(close(slip, 2.0, 1.0), "slip length {slip}");
+        let mean_slip = g.abs() - 0.3 * p / 1e3;
+        assert!(mean_slip > 0.0, "{g} {p}");
+        assert!(
+            max_slip >= mean_slip * (1.0 - 1e-9) && max_slip <= 0.02,
+            "max slip {max_slip}, mean {mean_slip}"
+        );
+    }
+
     /// The same bodies as rings about the y axis, pressed: the contact area is the annulus
     /// π (3² − 1²), its normal force the pressure on the top annulus, and the tensors are
     /// named in cylindrical components.
@@ -897,6 +971,11 @@ mod step_grids {
             let extent = contact_extent(&model, &step.solution.interface_committed)[0];
             assert!(close(extent.area, annulus, annulus), "{extent:?}");
             assert!(close(extent.stick_length, 2.0, 1.0), "{extent:?}");
+            // All of it closed and sticking under the pressure alone (no shear load, no slip).
+            let q = quantities(&model, step, &EXTENT);
+            assert!(close(q[0], annulus, annulus), "{q:?}");
+            assert!(close(q[1], 2.0, 1.0), "{q:?}");
+            assert_eq!(q[2..], [0.0; 3], "{q:?}");
             let normal = sum_xy(field(&contact.unwrap().point_data, "contact_normal_force"));
             assert!(
                 close(normal[1], 10.0 * annulus, 10.0 * annulus),
@@ -910,4 +989,88 @@ mod step_grids {
         })
         .unwrap();
     }
+}
+
+/// `asperity run` on the `asperity init` template (a block pressed and pushed on a
+/// foundation, four steps): the written VTU files carry the nodal reaction forces (summed,
+/// the supports' reactions of `summary.json`), the interface displacement (the side-B body
+/// displacement at the same point) and the step's FieldData.
+#[test]
+fn run_writes_reactions_interface_displacement_and_field_data() {
+    use std::process::Command;
+    let dir = tempfile::tempdir().unwrap();
+    let exe = env!("CARGO_BIN_EXE_asperity");
+    let init = Command::new(exe)
+        .args(["-q", "init", dir.path().to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(init.status.success());
+    let case = dir.path().join("case.toml");
+    let text = fs::read_to_string(&case).unwrap();
+    fs::write(&case, text.replacen("size = 1.0", "size = 2.0", 1)).unwrap();
+    let run = Command::new(exe)
+        .args(["-q", "run", case.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let out = dir.path().join("out");
+    let summary: serde_json::Value =
+        serde_json::from_slice(&fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let steps = summary["steps"].as_array().unwrap();
+    for s in steps {
+        let k = s["step"].as_u64().unwrap() as usize;
+        let bodies = read_vtu(&out.join(format!("bodies_{k:04}.vtu"))).unwrap();
+        let interface = read_vtu(&out.join(format!("interface_{k:04}.vtu"))).unwrap();
+        let get = |fields: &[Field], name: &str| -> Vec<f64> {
+            match &fields.iter().find(|f| f.name == name).unwrap().values {
+                FieldValues::F64(v) => v.clone(),
+                FieldValues::I32(v) => v.iter().map(|&i| i as f64).collect(),
+                other => panic!("{name}: {other:?}"),
+            }
+        };
+        for grid in [&bodies, &interface] {
+            assert_eq!(get(&grid.field_data, "TimeValue"), [k as f64]);
+            assert_eq!(get(&grid.field_data, "step"), [k as f64]);
+            assert_eq!(
+                get(&grid.field_data, "load_factor"),
+                [s["load_factor"].as_f64().unwrap()]
+            );
+        }
+        // Σ RF over the grid = Σ of the supports' reactions.
+        let rf = get(&bodies.point_data, "reaction_force");
+        let reactions = s["reactions"].as_object().unwrap();
+        for (c, key) in ["x", "y"].iter().enumerate() {
+            let total: f64 = reactions.values().map(|r| r[key].as_f64().unwrap()).sum();
+            let sum: f64 = rf.iter().skip(c).step_by(3).sum();
+            let scale = reactions
+                .values()
+                .map(|r| r[key].as_f64().unwrap().abs())
+                .fold(1.0, f64::max);
+            assert!(
+                (sum - total).abs() <= 1e-9 * scale,
+                "{key}: {sum} vs {total}"
+            );
+        }
+        // Each interface point moves with a body point at the same place (side B).
+        let u_body = get(&bodies.point_data, "displacement");
+        let u_face = get(&interface.point_data, "displacement");
+        assert_eq!(u_face.len(), 3 * interface.points.len());
+        assert!(u_face.iter().any(|&v| v != 0.0), "a loaded interface moves");
+        for (i, x) in interface.points.iter().enumerate() {
+            let found = bodies
+                .points
+                .iter()
+                .enumerate()
+                .any(|(j, y)| y == x && u_body[3 * j..3 * j + 3] == u_face[3 * i..3 * i + 3]);
+            assert!(
+                found,
+                "interface point {x:?}: no body point with its displacement"
+            );
+        }
+    }
+    assert_eq!(steps.len(), 4);
 }

@@ -19,6 +19,8 @@ pub struct QuantitySpec {
     pub support: Option<String>,
     /// `displacement`: a physical point group (the mean over its nodes).
     pub point: Option<String>,
+    /// `node_displacement`: the node's tag in the mesh file (gmsh's node number).
+    pub node: Option<u64>,
     /// Contact kinds: the pair's name.
     pub pair: Option<String>,
     /// `"x"` (alias `"r"`) or `"y"` (alias `"z"`).
@@ -54,7 +56,19 @@ pub enum QuantityKind {
     /// Contact pressure −p_N of a pair (MPa): peak, area-weighted mean, or at a coordinate.
     ContactPressure,
     /// Length of the sticking part of a pair (mm, measured along side B).
+    #[serde(alias = "stick_length")]
     StickZone,
+    /// Length of the slipping part of a pair (mm, along side B).
+    SlipLength,
+    /// Length of the open (separated) part of a pair (mm, along side B).
+    OpenLength,
+    /// Area of a pair in contact, stick or slip (mm²: length × thickness in a plane analysis,
+    /// ∫ 2πr dl in axisymmetry; Abaqus' CAREA).
+    ContactArea,
+    /// Largest accumulated slip over the integration points of a pair (mm).
+    MaxSlip,
+    /// Displacement of one node, given by its tag in the mesh file (mm).
+    NodeDisplacement,
     /// Mean relative displacement (body B minus body A) of a pair over its length (mm).
     RelativeDisplacement,
     /// Secant stiffness of a pair, −F / ū in one direction (N/mm): F the force body A exerts on
@@ -70,6 +84,11 @@ impl QuantityKind {
             QuantityKind::Displacement => "displacement",
             QuantityKind::ContactPressure => "contact_pressure",
             QuantityKind::StickZone => "stick_zone",
+            QuantityKind::SlipLength => "slip_length",
+            QuantityKind::OpenLength => "open_length",
+            QuantityKind::ContactArea => "contact_area",
+            QuantityKind::MaxSlip => "max_slip",
+            QuantityKind::NodeDisplacement => "node_displacement",
             QuantityKind::RelativeDisplacement => "relative_displacement",
             QuantityKind::Stiffness => "stiffness",
         }
@@ -123,6 +142,7 @@ impl QuantitySpec {
         let given = [
             ("support", self.support.is_some()),
             ("point", self.point.is_some()),
+            ("node", self.node.is_some()),
             ("pair", self.pair.is_some()),
             ("component", self.component.is_some()),
             ("statistic", self.statistic.is_some()),
@@ -133,7 +153,12 @@ impl QuantitySpec {
             QuantityKind::Reaction => &["support", "component"],
             QuantityKind::Displacement => &["point", "component"],
             QuantityKind::ContactPressure => &["pair", "statistic"],
-            QuantityKind::StickZone => &["pair"],
+            QuantityKind::StickZone
+            | QuantityKind::SlipLength
+            | QuantityKind::OpenLength
+            | QuantityKind::ContactArea
+            | QuantityKind::MaxSlip => &["pair"],
+            QuantityKind::NodeDisplacement => &["node", "component"],
             QuantityKind::RelativeDisplacement | QuantityKind::Stiffness => &["pair", "component"],
         };
         let at = self.statistic == Some(Statistic::At);
@@ -196,7 +221,8 @@ fn list(names: &[&str]) -> String {
 }
 /// Parses a command-line quantity `name:kind:key=value,key=value`, e.g.
 /// `u_bore:displacement:point=bore_point,component=x,reference=0.0123`. The keys are those of
-/// `[[quantity]]`; `x`, `y`, `reference`, `tolerance` and `min_order` are numbers.
+/// `[[quantity]]`; `x`, `y`, `reference`, `tolerance` and `min_order` are numbers, `node` a
+/// node tag.
 pub fn parse_quantity(text: &str) -> std::result::Result<QuantitySpec, String> {
     let bad =
         |why: String| format!("--quantity '{text}': {why} (syntax: name:kind:key=value,key=value)");
@@ -214,7 +240,13 @@ pub fn parse_quantity(text: &str) -> std::result::Result<QuantitySpec, String> {
             .split_once('=')
             .ok_or_else(|| bad(format!("'{item}' is not key=value")))?;
         let (key, value) = (key.trim(), value.trim());
-        let value = if ["x", "y", "reference", "tolerance", "min_order"].contains(&key) {
+        let value = if key == "node" {
+            toml::Value::Integer(
+                value
+                    .parse()
+                    .map_err(|_| bad(format!("node = '{value}' is not a node tag")))?,
+            )
+        } else if ["x", "y", "reference", "tolerance", "min_order"].contains(&key) {
             toml::Value::Float(
                 value
                     .parse()

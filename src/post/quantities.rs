@@ -1,6 +1,7 @@
 //! Quantities of interest evaluated in memory on a converged step, from typed model and
 //! interface data (no result tables read back): reactions, point displacements, contact
-//! pressure statistics, stick-zone length, relative displacement and stiffness of a pair.
+//! pressure statistics, the contact extent of a pair (area, stick / slip / open lengths, max
+//! slip), relative displacement and stiffness of a pair, and the displacement of one node.
 
 use crate::Error;
 use crate::Result;
@@ -10,7 +11,7 @@ use crate::element::Analysis;
 use crate::element::interface6::interface_point;
 use crate::element::set::INTERFACE_POINTS;
 use crate::model::Model;
-use crate::post::interface::{FIELDS, InterfaceOutput, contact_extent, resultants};
+use crate::post::interface::{ContactExtent, FIELDS, InterfaceOutput, contact_extent, resultants};
 use crate::post::reactions;
 use crate::solver::stepping::StepResult;
 
@@ -19,6 +20,7 @@ pub fn evaluate(quantities: &[QuantitySpec], model: &Model, step: &StepResult) -
     let states = &step.solution.interface_committed;
     let u = &step.solution.u;
     let mut interface: Option<InterfaceOutput> = None;
+    let mut extents: Option<Vec<ContactExtent>> = None;
     let pair_index = |q: &QuantitySpec| -> Result<usize> {
         let name = q.pair.as_deref().unwrap_or_default();
         model
@@ -106,7 +108,31 @@ pub fn evaluate(quantities: &[QuantitySpec], model: &Model, step: &StepResult) -
                     }
                 }
             }
-            QuantityKind::StickZone => contact_extent(model, states)[pair_index(q)?].stick_length,
+            QuantityKind::StickZone
+            | QuantityKind::SlipLength
+            | QuantityKind::OpenLength
+            | QuantityKind::ContactArea
+            | QuantityKind::MaxSlip => {
+                let p = pair_index(q)?;
+                let x = &extents.get_or_insert_with(|| contact_extent(model, states))[p];
+                match q.kind {
+                    QuantityKind::StickZone => x.stick_length,
+                    QuantityKind::SlipLength => x.slip_length,
+                    QuantityKind::OpenLength => x.open_length,
+                    QuantityKind::ContactArea => x.area,
+                    _ => x.max_slip,
+                }
+            }
+            QuantityKind::NodeDisplacement => {
+                let tag = q.node.unwrap_or_default();
+                let n = model
+                    .mesh
+                    .node_tags
+                    .iter()
+                    .position(|&t| t == tag)
+                    .ok_or_else(|| quantity_error(q, format!("no node {tag} in the mesh")))?;
+                u[2 * n + comp(q)]
+            }
             QuantityKind::RelativeDisplacement | QuantityKind::Stiffness => {
                 let p = pair_index(q)?;
                 let c = comp(q);

@@ -262,6 +262,8 @@ pub fn run_steps_from(
     let constant_tangent = !model.control.plastic && model.interface.elements.is_empty();
     while state.step <= model.schedule.steps() {
         let step = state.step;
+        // Every log line of the step (Newton iterations, cut-backs, its output) names it.
+        let _span = tracing::info_span!("step", step).entered();
         let target = step as f64;
         let step_start = (step - 1) as f64;
         let mut attempts: Vec<Attempt> = Vec::new();

@@ -177,6 +177,16 @@ fn describe(q: &QuantitySpec) -> String {
             format!("contact pressure of '{}', {at} [MPa]", get(&q.pair))
         }
         QuantityKind::StickZone => format!("stick-zone length of '{}' [mm]", get(&q.pair)),
+        QuantityKind::SlipLength => format!("slip length of '{}' [mm]", get(&q.pair)),
+        QuantityKind::OpenLength => format!("open length of '{}' [mm]", get(&q.pair)),
+        QuantityKind::ContactArea => format!("contact area of '{}' [mm²]", get(&q.pair)),
+        QuantityKind::MaxSlip => format!("largest slip of '{}' [mm]", get(&q.pair)),
+        QuantityKind::NodeDisplacement => {
+            format!(
+                "displacement of node {}, {comp} [mm]",
+                q.node.unwrap_or_default()
+            )
+        }
         QuantityKind::RelativeDisplacement => {
             format!(
                 "mean relative displacement of '{}', {comp} [mm]",
