@@ -8,7 +8,7 @@ use std::process::Command;
 use asperity::contact::{ContactStatus, InterfaceState};
 use asperity::material::{PointState, Voigt};
 use asperity::output::pvd::PvdEntry;
-use asperity::output::restart::{OutputState, read_record, write_record};
+use asperity::output::restart::{OutputState, RecordWriter, read_record};
 use asperity::solver::newton::ForceAverage;
 use asperity::solver::stepping::{LoopState, RunStatistics, Solution, StiffnessHistory};
 
@@ -102,7 +102,11 @@ fn a_record_gives_back_every_bit() {
             file: "interface_0001.vtu".into(),
         }],
     };
-    write_record(&path, "case text", &state(), &stats, &original, &output).unwrap();
+    let mut writer = RecordWriter::default();
+    writer
+        .write(&path, "case text", &state(), &stats, &original, &output)
+        .unwrap();
+    writer.finish().unwrap();
     let template = Solution {
         u: vec![0.0; 10],
         committed: vec![PointState::default(); 7],

@@ -47,22 +47,9 @@ pub struct Record {
     pub output: OutputState,
 }
 
-/// Writes the record of a converged increment to `path` (atomically). `case` is the case
-/// file's text, which [`read_record`] compares with the case being resumed.
-pub fn write_record(
-    path: &Path,
-    case: &str,
-    state: &LoopState,
-    stats: &RunStatistics,
-    solution: &Solution,
-    output: &OutputState,
-) -> Result<()> {
-    let buffer =
-        encode_record(case, state, stats, solution, output).map_err(|e| Error::io(path, e))?;
-    write_atomically(path, |w| w.write_all(&buffer))
-}
-
-/// Writes restart records in the background, one at a time: [`RecordWriter::write`] encodes
+/// Writes restart records (the record of a converged increment; `case` is the case file's
+/// text, which [`read_record`] compares with the case being resumed) in the background, one
+/// at a time: [`RecordWriter::write`] encodes
 /// the record into memory and hands the file write to a thread, so that writing a record
 /// (~10 MB for a 60k-unknown model, mostly integration-point states) overlaps the next
 /// increment instead of adding to the run's output time. A record may thus lag behind the
