@@ -949,6 +949,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         let solution = Solution::new(model);
         let zero = vec![0.0; model.dofs.dof_count()];
         let start = StepResult {
+            frame: crate::model::timeline::Frame::default(),
             step: 0,
             load_factor: 0.0,
             newton: NewtonLog::default(),

@@ -5,10 +5,11 @@
 use std::path::Path;
 use std::process::Command;
 
-use asperity::contact::{ContactStatus, InterfaceState};
+use asperity::contact::{ContactStatus, InterfaceState, PointHistory};
 use asperity::material::{PointState, Voigt};
 use asperity::output::pvd::PvdEntry;
 use asperity::output::restart::{OutputState, RecordWriter, read_record};
+use asperity::solver::energy::{Energy, EnergyLedger};
 use asperity::solver::newton::ForceAverage;
 use asperity::solver::stepping::{LoopState, RunStatistics, Solution, StiffnessHistory};
 
@@ -44,6 +45,18 @@ fn solution() -> Solution {
             ContactStatus::Slip,
         ][k % 3],
         unsymmetric: !k.is_multiple_of(2),
+        history: PointHistory {
+            dissipation: awkward(k + 10),
+            wear: [awkward(k + 11), awkward(k + 12)],
+            cycle_start_dissipation: awkward(k + 13),
+            cycle_start_wear: [awkward(k + 14), awkward(k + 15)],
+            cycle_slip_range: [awkward(k + 16), awkward(k + 17)],
+            cycle_max_shear: awkward(k + 18),
+            last_cycle_dissipation: awkward(k + 19),
+            last_cycle_slip_amplitude: awkward(k + 20),
+            last_cycle_max_shear: awkward(k + 21),
+            last_cycle_wear: [awkward(k + 22), awkward(k + 23)],
+        },
     };
     let committed: Vec<PointState> = (0..7).map(point).collect();
     let interface_committed: Vec<InterfaceState> = (0..5).map(interface).collect();
@@ -53,6 +66,18 @@ fn solution() -> Solution {
         interface_trial: vec![InterfaceState::default(); 5],
         committed,
         interface_committed,
+        energy: EnergyLedger {
+            total: Energy {
+                external_work: awkward(30),
+                elastic_energy: awkward(31),
+                interface_energy: awkward(32),
+                plastic_dissipation: awkward(33),
+                friction_dissipation: awkward(34),
+                wear_work: awkward(35),
+                numerical_dissipation: awkward(36),
+            },
+            previous_force: (40..50).map(awkward).collect(),
+        },
     }
 }
 
@@ -113,6 +138,7 @@ fn a_record_gives_back_every_bit() {
         trial: vec![PointState::default(); 7],
         interface_committed: vec![InterfaceState::default(); 5],
         interface_trial: vec![InterfaceState::default(); 5],
+        energy: EnergyLedger::default(),
     };
     let record = read_record(&path, "case text", &template).unwrap();
     let resume = &record.resume;
@@ -160,7 +186,9 @@ fn a_record_gives_back_every_bit() {
         };
         assert_eq!(flat(a), flat(b));
         assert_eq!((a.status, a.unsymmetric), (b.status, b.unsymmetric));
+        assert_eq!(a.history, b.history);
     }
+    assert_eq!(resume.solution.energy, original.energy);
     // Trial states start from the committed ones.
     assert_eq!(
         resume.solution.interface_trial,

@@ -53,6 +53,32 @@ pub struct InterfaceState {
     /// unsymmetric (∂p_T/∂u_N ≠ ∂p_N/∂u_T: slip with friction, Eq. 21, or a shear stiffness
     /// that depends on the pressure, Eq. 3). Set by the element, not by the law.
     pub unsymmetric: bool,
+    /// Cyclic-loading (fretting) and wear history of the point; kept by the element, not by
+    /// the law.
+    pub history: PointHistory,
+}
+
+/// What cyclic loading leaves at one interface point: frictional dissipation, wear depth and
+/// the trackers of the current load cycle (a non-cyclic step counts as one cycle).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PointHistory {
+    /// Accumulated frictional dissipation per unit area, ∫ p_T du_T^p (N/mm).
+    pub dissipation: f64,
+    /// Wear depth (mm) of the surface of body A and of body B; their sum opens the gap.
+    pub wear: [f64; 2],
+    /// `dissipation` and `wear` when the current cycle started.
+    pub cycle_start_dissipation: f64,
+    pub cycle_start_wear: [f64; 2],
+    /// Smallest and largest plastic slip u_T^p reached in the current cycle (mm).
+    pub cycle_slip_range: [f64; 2],
+    /// Largest |p_T| in the current cycle (MPa).
+    pub cycle_max_shear: f64,
+    /// Results of the last completed cycle: dissipation per unit area (N/mm), slip amplitude
+    /// (half the range of u_T^p, mm), largest |p_T| (MPa) and wear depth added (mm, A and B).
+    pub last_cycle_dissipation: f64,
+    pub last_cycle_slip_amplitude: f64,
+    pub last_cycle_max_shear: f64,
+    pub last_cycle_wear: [f64; 2],
 }
 
 impl InterfaceState {

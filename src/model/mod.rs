@@ -8,6 +8,7 @@
 mod constraints;
 mod loads;
 mod spec;
+pub mod timeline;
 
 pub use constraints::{AXIS_SUPPORT, Support};
 pub use loads::Schedule;

@@ -20,8 +20,9 @@ use std::path::Path;
 
 use super::atomic::write_atomically;
 use super::pvd::PvdEntry;
-use crate::contact::{ContactStatus, InterfaceState};
+use crate::contact::{ContactStatus, InterfaceState, PointHistory};
 use crate::material::{PointState, Voigt};
+use crate::solver::energy::{Energy, EnergyLedger};
 use crate::solver::newton::ForceAverage;
 use crate::solver::stepping::{LoopState, Resume, RunStatistics, Solution, StiffnessHistory};
 use crate::{Error, Result};
@@ -130,6 +131,7 @@ fn encode_record(
         for s in &solution.interface_committed {
             encode_interface(&mut e, s)?;
         }
+        encode_energy(&mut e, &solution.energy)?;
         e.len(output.tables.len())?;
         for table in &output.tables {
             e.len(table.len())?;
@@ -210,6 +212,7 @@ fn decode_rest(d: &mut Decoder, template: &Solution) -> io::Result<Record> {
     for s in &mut solution.interface_committed {
         *s = decode_interface(d)?;
     }
+    solution.energy = decode_energy(d)?;
     solution.trial.clone_from(&solution.committed);
     solution
         .interface_trial
@@ -383,7 +386,9 @@ fn encode_interface(e: &mut Encoder, s: &InterfaceState) -> io::Result<()> {
         stiffness,
         status,
         unsymmetric,
+        history,
     } = s;
+    encode_history(e, history)?;
     let [r0, r1] = *relative;
     let [s0, s1] = *stress;
     let [k0, k1] = *stiffness;
@@ -405,6 +410,7 @@ fn encode_interface(e: &mut Encoder, s: &InterfaceState) -> io::Result<()> {
 }
 
 fn decode_interface(d: &mut Decoder) -> io::Result<InterfaceState> {
+    let history = decode_history(d)?;
     let mut v = [0.0; 10];
     for x in &mut v {
         *x = d.f64()?;
@@ -425,6 +431,98 @@ fn decode_interface(d: &mut Decoder) -> io::Result<InterfaceState> {
         stiffness: [v[8], v[9]],
         status,
         unsymmetric: d.flag()?,
+        history,
+    })
+}
+
+fn encode_energy(e: &mut Encoder, ledger: &EnergyLedger) -> io::Result<()> {
+    let EnergyLedger {
+        total,
+        previous_force,
+    } = ledger;
+    let Energy {
+        external_work,
+        elastic_energy,
+        interface_energy,
+        plastic_dissipation,
+        friction_dissipation,
+        wear_work,
+        numerical_dissipation,
+    } = total;
+    e.floats(&[
+        *external_work,
+        *elastic_energy,
+        *interface_energy,
+        *plastic_dissipation,
+        *friction_dissipation,
+        *wear_work,
+        *numerical_dissipation,
+    ])?;
+    e.floats(previous_force)
+}
+
+fn decode_energy(d: &mut Decoder) -> io::Result<EnergyLedger> {
+    let v = d.floats()?;
+    expect_len("energy totals", v.len(), 7)?;
+    Ok(EnergyLedger {
+        total: Energy {
+            external_work: v[0],
+            elastic_energy: v[1],
+            interface_energy: v[2],
+            plastic_dissipation: v[3],
+            friction_dissipation: v[4],
+            wear_work: v[5],
+            numerical_dissipation: v[6],
+        },
+        previous_force: d.floats()?,
+    })
+}
+
+fn encode_history(e: &mut Encoder, h: &PointHistory) -> io::Result<()> {
+    let PointHistory {
+        dissipation,
+        wear,
+        cycle_start_dissipation,
+        cycle_start_wear,
+        cycle_slip_range,
+        cycle_max_shear,
+        last_cycle_dissipation,
+        last_cycle_slip_amplitude,
+        last_cycle_max_shear,
+        last_cycle_wear,
+    } = h;
+    e.floats(&[
+        *dissipation,
+        wear[0],
+        wear[1],
+        *cycle_start_dissipation,
+        cycle_start_wear[0],
+        cycle_start_wear[1],
+        cycle_slip_range[0],
+        cycle_slip_range[1],
+        *cycle_max_shear,
+        *last_cycle_dissipation,
+        *last_cycle_slip_amplitude,
+        *last_cycle_max_shear,
+        last_cycle_wear[0],
+        last_cycle_wear[1],
+    ])
+}
+
+fn decode_history(d: &mut Decoder) -> io::Result<PointHistory> {
+    let v = d.floats()?;
+    expect_len("interface point history", v.len(), 14)?;
+    Ok(PointHistory {
+        dissipation: v[0],
+        wear: [v[1], v[2]],
+        cycle_start_dissipation: v[3],
+        cycle_start_wear: [v[4], v[5]],
+        cycle_slip_range: [v[6], v[7]],
+        cycle_max_shear: v[8],
+        last_cycle_dissipation: v[9],
+        last_cycle_slip_amplitude: v[10],
+        last_cycle_max_shear: v[11],
+        last_cycle_wear: [v[12], v[13]],
     })
 }
 

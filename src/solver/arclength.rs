@@ -200,6 +200,7 @@ pub fn run_arc_length(
                 }
                 stats.last_residual = *log.residuals.last().unwrap_or(&0.0);
                 let result = StepResult {
+                    frame: crate::model::timeline::Frame::default(),
                     step,
                     load_factor: lambda,
                     newton: log,

@@ -4,6 +4,8 @@
 
 pub mod arclength;
 pub mod condensed;
+pub mod cycles;
+pub mod energy;
 pub mod linear;
 pub mod mechanics;
 pub mod newton;

@@ -10,6 +10,8 @@ use crate::element::set::{ElementSet, INTERFACE_POINTS};
 use crate::error::{Attempt, NoConvergence, ResidualAt};
 use crate::material::PointState;
 use crate::model::Model;
+use crate::model::timeline::Frame;
+use crate::solver::energy::EnergyLedger;
 use crate::solver::mechanics::Mechanics;
 use crate::solver::newton::Problem;
 use crate::solver::newton::{ForceAverage, Newton, NewtonLog, NewtonSettings, norm};
@@ -28,6 +30,8 @@ pub struct Solution {
     pub interface_committed: Vec<InterfaceState>,
     /// Interface states of the current iteration.
     pub interface_trial: Vec<InterfaceState>,
+    /// Energy totals of the converged increments.
+    pub energy: EnergyLedger,
 }
 
 impl Solution {
@@ -41,6 +45,7 @@ impl Solution {
             trial: vec![PointState::default(); states],
             interface_committed: vec![InterfaceState::default(); interface],
             interface_trial: vec![InterfaceState::default(); interface],
+            energy: EnergyLedger::default(),
         }
     }
 
@@ -71,6 +76,8 @@ pub struct StepResult<'a> {
     /// 1-based step number.
     pub step: usize,
     pub load_factor: f64,
+    /// Where the step lies in the case's load history.
+    pub frame: Frame,
     /// Newton log of the last (sub-)increment; `iterations` counts all sub-increments.
     pub newton: NewtonLog,
     /// Number of increments the step took (1 unless it was cut back).
@@ -366,6 +373,7 @@ pub fn run_steps_from(
         stats.steps += 1;
         stats.last_residual = *log.residuals.last().unwrap_or(&0.0);
         let result = StepResult {
+            frame: crate::model::timeline::Frame::default(),
             step,
             load_factor: model.schedule.load_factor(step),
             newton: NewtonLog {
@@ -433,6 +441,7 @@ fn report_partial(
     let mut external = vec![0.0; model.dofs.dof_count()];
     model.external_force(state.time, &mut external);
     let result = StepResult {
+        frame: crate::model::timeline::Frame::default(),
         step: state.step,
         load_factor: model.schedule.value(0, state.time),
         newton: NewtonLog {
