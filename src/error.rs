@@ -173,6 +173,40 @@ pub enum Error {
     /// by another case or program version, arc-length control).
     #[error("{}: cannot resume: {reason}", path.display())]
     Restart { path: PathBuf, reason: String },
+    /// A wear jump (cycle jumping) would add more depth at a point than its stability limit
+    /// allows: `depth` added over the `jump_cycles − 1` extrapolated cycles against `limit` =
+    /// `jump_limit` × |p_N| / k_N. `contact` is the pair's name, `contact_index` its place in
+    /// the case (`contact[j]`), `step_index` the `[[step]]` (0-based) when the caller knows
+    /// it ([`Error::in_analysis_step`]).
+    #[error(
+        "contact '{contact}': a wear jump over {jump_cycles} cycles would add a depth of {depth:.4e} mm          at ({x}, {y}), more than its stability limit {limit:.4e} mm (contact[{contact_index}].wear.jump_limit          = {jump_limit} times the elastic closure |p_N|/k_N of the point); lower {} or raise          contact[{contact_index}].wear.jump_limit (the results up to the cycle before are kept)",
+        step_key(*step_index, "cycles_per_jump"), x = position[0], y = position[1]
+    )]
+    WearJump {
+        contact: String,
+        contact_index: usize,
+        step_index: Option<usize>,
+        position: [f64; 2],
+        jump_cycles: f64,
+        depth: f64,
+        limit: f64,
+        jump_limit: f64,
+    },
+    /// The total wear depth h_A + h_B of a point of contact `contact` (`contact[contact_index]`
+    /// in the case) would exceed the pair's `max_depth`: the interface is worn through.
+    #[error(
+        "contact '{contact}': worn through at ({x}, {y}): the wear depth {depth:.4e} mm exceeds          contact[{contact_index}].wear.max_depth = {max_depth} mm{}; the converged results before it are kept",
+        step_index.map_or_else(String::new, |i| format!(" in step[{i}]")),
+        x = position[0], y = position[1]
+    )]
+    WornThrough {
+        contact: String,
+        contact_index: usize,
+        step_index: Option<usize>,
+        position: [f64; 2],
+        depth: f64,
+        max_depth: f64,
+    },
     /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]
     Io {
@@ -209,7 +243,11 @@ impl Error {
     /// bad arguments, and an output folder that would be overwritten.
     pub fn exit_code(&self) -> u8 {
         match self {
-            Error::NoConvergence(_) | Error::ArcLength(_) | Error::Linear(_) => 1,
+            Error::NoConvergence(_)
+            | Error::ArcLength(_)
+            | Error::Linear(_)
+            | Error::WearJump { .. }
+            | Error::WornThrough { .. } => 1,
             Error::OutputExists { .. } => 2,
             Error::Mesh { .. }
             | Error::Case { .. }
@@ -230,6 +268,18 @@ impl Error {
             Error::Collapse { .. } => 5,
             Error::StudyLevel { source, .. } => source.exit_code(),
         }
+    }
+
+    /// The error with the 0-based `[[step]]` index it happened in, for the errors of
+    /// [`crate::solver::cycles::end_cycle`] (which knows the model, not the load history);
+    /// other errors are returned unchanged.
+    pub fn in_analysis_step(mut self, index: usize) -> Self {
+        if let Error::WearJump { step_index, .. } | Error::WornThrough { step_index, .. } =
+            &mut self
+        {
+            *step_index = Some(index);
+        }
+        self
     }
 
     /// Shorthand for an [`Error::Io`].
@@ -595,5 +645,13 @@ fn residual_history(residuals: &[f64]) -> String {
             n - 2 * SHOWN_RESIDUALS,
             text(&residuals[n - SHOWN_RESIDUALS..])
         )
+    }
+}
+
+/// The case key `step[i].<key>` of a step, or a description when the step is unknown.
+fn step_key(index: Option<usize>, key: &str) -> String {
+    match index {
+        Some(i) => format!("step[{i}].{key}"),
+        None => format!("the step's {key}"),
     }
 }

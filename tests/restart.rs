@@ -48,10 +48,13 @@ fn solution() -> Solution {
         history: PointHistory {
             dissipation: awkward(k + 10),
             wear: [awkward(k + 11), awkward(k + 12)],
+            gap_wear: awkward(k + 24),
             cycle_start_dissipation: awkward(k + 13),
             cycle_start_wear: [awkward(k + 14), awkward(k + 15)],
+            cycle_slip: awkward(k + 25),
             cycle_slip_range: [awkward(k + 16), awkward(k + 17)],
             cycle_max_shear: awkward(k + 18),
+            cycle_elastic_closure: awkward(k + 26),
             last_cycle_dissipation: awkward(k + 19),
             last_cycle_slip_amplitude: awkward(k + 20),
             last_cycle_max_shear: awkward(k + 21),

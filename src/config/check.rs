@@ -41,6 +41,7 @@ impl Case {
         }
         self.check_names()?;
         self.check_laws()?;
+        self.check_wear()?;
         self.check_steps()?;
         self.check_solver()
     }

@@ -21,6 +21,7 @@ mod check;
 pub mod history;
 mod names;
 mod quantity;
+pub mod wear;
 
 pub use check::{MAX_CUTBACKS, MAX_ITERATIONS, MAX_STEPS, MAX_TOLERANCE};
 pub use names::{MAX_NAME_LEN, check_name};
@@ -213,6 +214,8 @@ pub struct ContactSpec {
     #[serde(default)]
     pub interference: f64,
     pub law: LawSpec,
+    /// Wear of the pair's surfaces (default: none).
+    pub wear: Option<wear::WearSpec>,
 }
 
 /// How the nodes of `side_a` and `side_b` are paired.

@@ -12,9 +12,12 @@
 
 pub mod linear;
 pub mod rough;
+pub mod wear;
 
 use nalgebra::SMatrix;
 use serde::Deserialize;
+
+use wear::WearModel;
 
 /// d(p_T, p_N)/d(u_T, u_N): the (generally unsymmetric, paper Eq. 21) interface tangent.
 pub type InterfaceTangent = SMatrix<f64, 2, 2>;
@@ -60,25 +63,83 @@ pub struct InterfaceState {
 
 /// What cyclic loading leaves at one interface point: frictional dissipation, wear depth and
 /// the trackers of the current load cycle (a non-cyclic step counts as one cycle).
+///
+/// The element advances it after every law update ([`PointHistory::advanced`]); the cycle
+/// hooks of [`crate::solver::cycles`] close and restart the cycle.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PointHistory {
-    /// Accumulated frictional dissipation per unit area, ∫ p_T du_T^p (N/mm).
+    /// Accumulated frictional dissipation per unit area, ∫ p_T du_T^p (N/mm), counting the
+    /// cycles a wear jump stands for.
     pub dissipation: f64,
     /// Wear depth (mm) of the surface of body A and of body B; their sum opens the gap.
     pub wear: [f64; 2],
+    /// The wear h_A + h_B the law saw in this state's update (the committed wear at the
+    /// start of the increment): `InterfaceState::relative[1]` includes it, so the
+    /// kinematic normal displacement of the faces is `relative[1] − gap_wear`.
+    pub gap_wear: f64,
     /// `dissipation` and `wear` when the current cycle started.
     pub cycle_start_dissipation: f64,
     pub cycle_start_wear: [f64; 2],
-    /// Smallest and largest plastic slip u_T^p reached in the current cycle (mm).
+    /// Plastic slip Σ Δu_T^p of the closed increments since the cycle started (mm); open
+    /// increments do not count (an open face carries no slip: the linear law's u_T^p
+    /// follows it).
+    pub cycle_slip: f64,
+    /// Smallest and largest `cycle_slip` reached in the current cycle (mm).
     pub cycle_slip_range: [f64; 2],
     /// Largest |p_T| in the current cycle (MPa).
     pub cycle_max_shear: f64,
+    /// Largest |p_N| / k_N of the current cycle at the closed point (mm): the elastic
+    /// closure the cycle-jump stability limit is a fraction of.
+    pub cycle_elastic_closure: f64,
     /// Results of the last completed cycle: dissipation per unit area (N/mm), slip amplitude
     /// (half the range of u_T^p, mm), largest |p_T| (MPa) and wear depth added (mm, A and B).
     pub last_cycle_dissipation: f64,
     pub last_cycle_slip_amplitude: f64,
     pub last_cycle_max_shear: f64,
     pub last_cycle_wear: [f64; 2],
+}
+
+impl PointHistory {
+    /// The history after a law update from the committed state whose history is `self` to
+    /// `trial` (stress p_{n+1}, plastic slip u_T^p), with `wear` the pair's wear model and
+    /// `gap_wear` the wear the law saw. Backward Euler like the law: the dissipation
+    /// increment is p_T,{n+1} Δu_T^p (exact for Coulomb at constant pressure, where p_T is
+    /// constant during slip) and the wear increment is explicit in the trial stress.
+    pub fn advanced(
+        &self,
+        committed_slip: f64,
+        trial: &InterfaceState,
+        wear: Option<&WearModel>,
+        gap_wear: f64,
+    ) -> Self {
+        let mut h = *self;
+        h.gap_wear = gap_wear;
+        if trial.status == ContactStatus::Open {
+            return h;
+        }
+        let slip = trial.plastic_slip - committed_slip;
+        let [p_t, p_n] = trial.stress;
+        h.dissipation += p_t * slip;
+        h.cycle_slip += slip;
+        h.cycle_slip_range = [
+            h.cycle_slip_range[0].min(h.cycle_slip),
+            h.cycle_slip_range[1].max(h.cycle_slip),
+        ];
+        h.cycle_max_shear = h.cycle_max_shear.max(p_t.abs());
+        if trial.stiffness[1] > 0.0 {
+            h.cycle_elastic_closure = h.cycle_elastic_closure.max(p_n.abs() / trial.stiffness[1]);
+        }
+        if let Some(w) = wear {
+            let dh = w.increment(trial.stress, slip);
+            h.wear = [h.wear[0] + dh[0], h.wear[1] + dh[1]];
+        }
+        h
+    }
+
+    /// Total wear depth h_A + h_B (mm).
+    pub fn depth(&self) -> f64 {
+        self.wear[0] + self.wear[1]
+    }
 }
 
 impl InterfaceState {
@@ -114,6 +175,11 @@ pub trait InterfaceLaw: Send + Sync + std::fmt::Debug {
 
     /// Short description for logs.
     fn describe(&self) -> String;
+
+    /// The wear model of the surfaces this law joins ([`wear::Worn`]); none by default.
+    fn wear(&self) -> Option<&WearModel> {
+        None
+    }
 }
 
 /// Whether a closed point sticks, given F = |p_T^trial| − μ|p_N| (paper Eq. 11) and the

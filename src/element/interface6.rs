@@ -109,7 +109,8 @@ pub fn relative_operator(p: &InterfacePoint) -> nalgebra::SMatrix<f64, 2, 16> {
 
 /// Tangent and internal force of one interface element for nodal displacements `input.u`
 /// (dofs of [a0, a1, a_mid, b0, b1, b_mid]), updating the trial states from the committed
-/// ones. The tangent is the one of `input.algorithm` (the consistent one, Buczkowski &
+/// ones, with their fretting and wear history ([`crate::contact::PointHistory`]); the law
+/// sees the gap opened by the committed wear. The tangent is the one of `input.algorithm` (the consistent one, Buczkowski &
 /// Kleiber (1994), Eq. 21, for Newton).
 pub fn evaluate_interface(
     analysis: &Analysis,
@@ -125,6 +126,7 @@ pub fn evaluate_interface(
         algorithm,
     } = *input;
     let ElementOutput { trial, mut k, f } = output;
+    let wear = law.wear();
     for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
         let p = interface_point(analysis, &element.b_coords, xi, w);
         let b = relative_operator(&p);
@@ -135,8 +137,12 @@ pub fn evaluate_interface(
             gap[1] += p.n[i] * element.offsets[i][1];
         }
         let g0 = gap[0] * p.normal[0] + gap[1] * p.normal[1];
-        let relative = [jump[0], jump[1] + g0 - interference];
-        let (state, tangent) = law.update(relative, &committed[g]);
+        // Worn material opens the gap; the committed depth keeps the wear explicit, so the
+        // law's tangent needs no wear term.
+        let before = &committed[g];
+        let worn = before.history.depth();
+        let relative = [jump[0], jump[1] + g0 - interference + worn];
+        let (state, tangent) = law.update(relative, before);
         let stress = nalgebra::Vector2::new(state.stress[0], state.stress[1]);
         f.gemv_tr(p.da, &b, &stress, 1.0);
         let used = algorithm.tangent(law, &state, tangent);
@@ -146,6 +152,9 @@ pub fn evaluate_interface(
         }
         let mut state = state;
         state.unsymmetric = used[(0, 1)] != used[(1, 0)];
+        state.history = before
+            .history
+            .advanced(before.plastic_slip, &state, wear, worn);
         trial[g] = state;
     }
 }

@@ -5,6 +5,7 @@ use super::continuum::{Formulation, evaluate_cell};
 use super::interface6::{InterfaceElement, evaluate_interface};
 use super::quadrature::MAX_CELL_POINTS;
 use super::{Analysis, ElementInput, ElementMatrix, ElementOutput, ElementVector};
+use crate::contact::wear::WearModel;
 use crate::contact::{InterfaceLaw, InterfaceState};
 use crate::material::{Material, PointState};
 use crate::mesh::CellKind;
@@ -157,6 +158,13 @@ pub struct ContactPair {
     pub elements: std::ops::Range<usize>,
 }
 
+impl ContactPair {
+    /// The wear model of the pair's surfaces, if they wear.
+    pub fn wear(&self) -> Option<&WearModel> {
+        self.law.wear()
+    }
+}
+
 /// All interface elements of the model, pair after pair.
 #[derive(Debug)]
 pub struct InterfaceSet {
@@ -167,6 +175,15 @@ pub struct InterfaceSet {
 
 /// Integration points per interface element.
 pub const INTERFACE_POINTS: usize = 3;
+
+impl InterfaceSet {
+    /// Position (on side B) of integration point `g` of element `e`.
+    pub fn point_position(&self, e: usize, g: usize) -> [f64; 2] {
+        let element = &self.elements[e];
+        let (xi, w) = element.rule.points()[g];
+        super::interface6::interface_point(&self.analysis, &element.b_coords, xi, w).x
+    }
+}
 
 impl ElementSet for InterfaceSet {
     type State = InterfaceState;

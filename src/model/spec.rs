@@ -3,12 +3,14 @@
 //! file's plain data. Every material and interface law is built here, exactly once, and so
 //! checked before any mesh exists; [`Model::build`](super::Model::build) consumes the spec.
 
+use crate::config::wear::{WearLawKind, WearSpec};
 use crate::config::{
     AnalysisSpec, Case, ContactAlgorithmKind, ControlKind, Faces, FormulationKind, IntegrationKind,
     LawSpec, MaterialSpec, PairingKind, Steps,
 };
 use crate::contact::linear::LinearCoulomb;
 use crate::contact::rough::RoughJoint;
+use crate::contact::wear::{DEFAULT_JUMP_LIMIT, WearLaw, WearModel, Worn};
 use crate::contact::{ContactAlgorithm, InterfaceLaw};
 use crate::element::Analysis;
 use crate::element::continuum::Formulation;
@@ -194,6 +196,13 @@ impl ModelSpec {
                         e,
                     )
                 })?;
+                let law = match &c.wear {
+                    Some(w) => Box::new(Worn {
+                        law,
+                        wear: wear_model(w),
+                    }),
+                    None => law,
+                };
                 let pairing = c.faces().map(pairing).ok_or_else(|| Error::Case {
                     path: case.path.clone(),
                     message: format!("[[contact]] '{name}': the faces are not given"),
@@ -354,6 +363,19 @@ fn build_material(spec: &MaterialSpec) -> std::result::Result<Box<dyn Material>,
             spec.hardening.unwrap_or(0.0),
         )?),
     })
+}
+
+/// The wear model of a pair (checked by the case validation).
+fn wear_model(spec: &WearSpec) -> WearModel {
+    WearModel {
+        law: match spec.model {
+            WearLawKind::Archard => WearLaw::Archard,
+            WearLawKind::Energy => WearLaw::Energy,
+        },
+        coefficients: spec.coefficients(),
+        max_depth: spec.max_depth,
+        jump_limit: spec.jump_limit.unwrap_or(DEFAULT_JUMP_LIMIT),
+    }
 }
 
 /// The interface law of a pair.

@@ -482,10 +482,13 @@ fn encode_history(e: &mut Encoder, h: &PointHistory) -> io::Result<()> {
     let PointHistory {
         dissipation,
         wear,
+        gap_wear,
         cycle_start_dissipation,
         cycle_start_wear,
+        cycle_slip,
         cycle_slip_range,
         cycle_max_shear,
+        cycle_elastic_closure,
         last_cycle_dissipation,
         last_cycle_slip_amplitude,
         last_cycle_max_shear,
@@ -495,12 +498,15 @@ fn encode_history(e: &mut Encoder, h: &PointHistory) -> io::Result<()> {
         *dissipation,
         wear[0],
         wear[1],
+        *gap_wear,
         *cycle_start_dissipation,
         cycle_start_wear[0],
         cycle_start_wear[1],
+        *cycle_slip,
         cycle_slip_range[0],
         cycle_slip_range[1],
         *cycle_max_shear,
+        *cycle_elastic_closure,
         *last_cycle_dissipation,
         *last_cycle_slip_amplitude,
         *last_cycle_max_shear,
@@ -511,18 +517,21 @@ fn encode_history(e: &mut Encoder, h: &PointHistory) -> io::Result<()> {
 
 fn decode_history(d: &mut Decoder) -> io::Result<PointHistory> {
     let v = d.floats()?;
-    expect_len("interface point history", v.len(), 14)?;
+    expect_len("interface point history", v.len(), 17)?;
     Ok(PointHistory {
         dissipation: v[0],
         wear: [v[1], v[2]],
-        cycle_start_dissipation: v[3],
-        cycle_start_wear: [v[4], v[5]],
-        cycle_slip_range: [v[6], v[7]],
-        cycle_max_shear: v[8],
-        last_cycle_dissipation: v[9],
-        last_cycle_slip_amplitude: v[10],
-        last_cycle_max_shear: v[11],
-        last_cycle_wear: [v[12], v[13]],
+        gap_wear: v[3],
+        cycle_start_dissipation: v[4],
+        cycle_start_wear: [v[5], v[6]],
+        cycle_slip: v[7],
+        cycle_slip_range: [v[8], v[9]],
+        cycle_max_shear: v[10],
+        cycle_elastic_closure: v[11],
+        last_cycle_dissipation: v[12],
+        last_cycle_slip_amplitude: v[13],
+        last_cycle_max_shear: v[14],
+        last_cycle_wear: [v[15], v[16]],
     })
 }
 

@@ -1,0 +1,499 @@
+//! Per-point fretting history and wear (issue 14): the interface elements of a block on a base
+//! driven through prescribed slip cycles at constant contact pressure (every point in the same
+//! state, so the closed forms of one point hold at each), the cycle hooks (last-cycle results,
+//! cycle jumping, its stability limit, wear-through), a frictional run of the full model, and
+//! the `wear` keys' bad input.
+
+mod common;
+
+use asperity::Error;
+use asperity::config::Case;
+use asperity::contact::{ContactAlgorithm, ContactStatus, InterfaceState};
+use asperity::element::interface6::interface_point;
+use asperity::element::set::{ElementSet, INTERFACE_POINTS};
+use asperity::element::{ElementInput, ElementOutput, ElementVector};
+use asperity::model::Model;
+use asperity::solver::cycles::{end_cycle, start_cycle};
+use asperity::solver::stepping::{Solution, run_steps};
+use common::{
+    add_curve_group, block_on_base, linear_coulomb, merge, settings, sliding_rough_joint, table,
+    tensor, uniform,
+};
+use toml::{Table, Value};
+
+/// Contact length (mm) of the block on the base; plane strain of unit thickness, so it is
+/// also the contact area A.
+const AREA: f64 = 2.0;
+
+/// The block [0.5, 2.5] × [1, 1.75] on the base [0, 3] × [0, 1] (plane strain), contact
+/// `base_top` (side A) – `block_bottom` (side B) with `law` and `wear`, and a load history
+/// of the block's top edge pressed by 8 MPa and pushed sideways by 0.01·factor.
+fn case(law: Table, wear: Option<Table>, factors: &[f64]) -> Case {
+    let mut keys = vec![("name", Value::from("joint"))];
+    if let Some(w) = wear {
+        keys.push(("wear", w.into()));
+    }
+    block_on_base(70000.0, 0.0, &keys, law)
+        .pressed_and_pushed(8.0, 0.01, factors)
+        .case()
+}
+
+fn model(case: &Case) -> Model {
+    let mut base = tensor(&uniform(0.0, 3.0, 6), &uniform(0.0, 1.0, 2), "base");
+    add_curve_group(&mut base, "ground", |x| x[1] == 0.0);
+    add_curve_group(&mut base, "base_top", |x| {
+        x[1] == 1.0 && (0.5..=2.5).contains(&x[0])
+    });
+    let mut block = tensor(&uniform(0.5, 2.5, 4), &uniform(1.0, 1.75, 2), "block");
+    add_curve_group(&mut block, "block_bottom", |x| x[1] == 1.0);
+    add_curve_group(&mut block, "block_top", |x| x[1] == 1.75);
+    common::model(merge(base, block, false), case).expect("model builds")
+}
+
+fn wear(entries: &[(&str, Value)]) -> Table {
+    table(entries)
+}
+
+/// Drives the interface elements of `model` directly: side A fixed, side B displaced by
+/// (u_T, u_N) uniformly (t = +x, n = +y on this contact). The normal displacement is
+/// −`closure` minus the committed wear depth, which keeps the closure the law sees, and so
+/// the pressure, constant as the surfaces wear: a constant normal load on a rigid block.
+struct Driver {
+    model: Model,
+    solution: Solution,
+    closure: f64,
+}
+
+impl Driver {
+    fn new(law: Table, wear: Option<Table>, closure: f64) -> Self {
+        let model = model(&case(law, wear, &[1.0]));
+        let solution = Solution::new(&model);
+        Self {
+            model,
+            solution,
+            closure,
+        }
+    }
+
+    /// One converged increment to tangential displacement `u_t`.
+    fn increment(&mut self, u_t: f64) {
+        let set = &self.model.interface;
+        let p = INTERFACE_POINTS;
+        for e in 0..set.len() {
+            let committed = &self.solution.interface_committed[e * p..(e + 1) * p];
+            let depth = committed[0].history.depth();
+            assert!(committed.iter().all(|s| s.history == committed[0].history));
+            let mut u = ElementVector::zeros();
+            for i in 3..6 {
+                u[2 * i] = u_t;
+                u[2 * i + 1] = -self.closure - depth;
+            }
+            let input = ElementInput {
+                u: &u,
+                committed,
+                algorithm: ContactAlgorithm::Newton,
+            };
+            let output = ElementOutput {
+                trial: &mut self.solution.interface_trial[e * p..(e + 1) * p],
+                k: None,
+                f: &mut ElementVector::zeros(),
+            };
+            set.evaluate(e, &input, output);
+        }
+        self.solution.commit();
+    }
+
+    /// Linear path from the current tangential displacement to `to` in `n` increments.
+    fn ramp(&mut self, from: f64, to: f64, n: usize) {
+        for i in 1..=n {
+            self.increment(from + (to - from) * i as f64 / n as f64);
+        }
+    }
+
+    /// One cycle δ → −δ → δ between the cycle hooks, standing for `jump` cycles.
+    fn cycle(&mut self, delta: f64, n: usize, jump: f64) -> asperity::Result<()> {
+        start_cycle(&mut self.solution);
+        self.ramp(delta, -delta, n);
+        self.ramp(-delta, delta, n);
+        end_cycle(&self.model, &mut self.solution, jump)
+    }
+
+    fn point(&self) -> &InterfaceState {
+        &self.solution.interface_committed[0]
+    }
+
+    /// ∫ f(state) dA over the contact.
+    fn integral(&self, f: impl Fn(&InterfaceState) -> f64) -> f64 {
+        let set = &self.model.interface;
+        let mut sum = 0.0;
+        for (e, element) in set.elements.iter().enumerate() {
+            for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
+                let da = interface_point(&set.analysis, &element.b_coords, xi, w).da;
+                sum += f(&self.solution.interface_committed[e * INTERFACE_POINTS + g]) * da;
+            }
+        }
+        sum
+    }
+}
+
+fn close(a: f64, b: f64, tolerance: f64) -> bool {
+    (a - b).abs() <= tolerance * b.abs()
+}
+
+// Linear Coulomb: k_N = 1e4, k_T = 1e3 MPa/mm, μ = 0.3; closure 0.01 mm gives p = 100 MPa and
+// the elastic slip limit μp/k_T = 0.03 mm; slip amplitude δ = 0.1 mm.
+const KN: f64 = 1e4;
+const KT: f64 = 1e3;
+const MU: f64 = 0.3;
+const CLOSURE: f64 = 0.01;
+const P: f64 = KN * CLOSURE;
+const DELTA: f64 = 0.1;
+
+/// Round-off tolerance: sums of a few hundred terms of one sign.
+const ROUND_OFF: f64 = 1e-12;
+
+#[test]
+fn coulomb_dissipation_per_cycle_is_the_closed_form_and_archard_depth_is_k_p_s() {
+    let (k_a, k_b) = (1e-7, 3e-7);
+    let wear = wear(&[
+        ("model", "archard".into()),
+        ("coefficient_a", k_a.into()),
+        ("coefficient_b", k_b.into()),
+    ]);
+    let mut d = Driver::new(linear_coulomb(KN, KT, MU), Some(wear), CLOSURE);
+    d.ramp(0.0, DELTA, 7);
+    let cycles = 3;
+    for _ in 0..cycles {
+        d.cycle(DELTA, 9, 1.0).unwrap();
+    }
+    // Elastic–perfectly-sliding Coulomb: each reversal slips 2(δ − μp/k_T) at |p_T| = μp.
+    let slip = DELTA - MU * P / KT;
+    let per_cycle = 4.0 * MU * P * AREA * slip;
+    let dissipated = d.integral(|s| s.history.last_cycle_dissipation);
+    assert!(
+        close(dissipated, per_cycle, ROUND_OFF),
+        "{dissipated} vs {per_cycle}"
+    );
+    let h = d.point().history;
+    assert!(close(h.last_cycle_slip_amplitude, slip, ROUND_OFF));
+    assert!(close(h.last_cycle_max_shear, MU * P, ROUND_OFF));
+    // Accumulated: the first loading slips δ − μp/k_T, each cycle 4(δ − μp/k_T).
+    let s = slip * (1.0 + 4.0 * cycles as f64);
+    assert!(close(d.point().accumulated_slip, s, ROUND_OFF));
+    assert!(close(h.dissipation, MU * P * s, ROUND_OFF));
+    // Archard at constant pressure: h = k p s on each surface with its own coefficient.
+    assert!(close(h.wear[0], k_a * P * s, ROUND_OFF), "{:?}", h.wear);
+    assert!(close(h.wear[1], k_b * P * s, ROUND_OFF), "{:?}", h.wear);
+    assert!(close(h.last_cycle_wear[0], k_a * P * 4.0 * slip, ROUND_OFF));
+    // The law saw the committed wear: the kinematic gap is the relative one less it.
+    assert_eq!(d.point().stress[1], -P);
+}
+
+#[test]
+fn energy_wear_depth_is_alpha_times_friction_work() {
+    let alpha = 2e-7;
+    let wear = wear(&[
+        ("model", "energy".into()),
+        ("coefficient", alpha.into()),
+        ("surface", "a".into()),
+    ]);
+    let mut d = Driver::new(linear_coulomb(KN, KT, MU), Some(wear), CLOSURE);
+    d.ramp(0.0, DELTA, 5);
+    d.cycle(DELTA, 6, 1.0).unwrap();
+    d.cycle(DELTA, 6, 1.0).unwrap();
+    let s = (DELTA - MU * P / KT) * 9.0;
+    let h = d.point().history;
+    assert!(close(h.wear[0], alpha * MU * P * s, ROUND_OFF), "{h:?}");
+    assert_eq!(h.wear[1], 0.0);
+}
+
+#[test]
+fn slip_hardening_follows_its_closed_form_friction_and_dissipation() {
+    // sliding_rough_joint: c = c_N p^m with c_N = 1e-4, m = 0.5, so closure 1e-3 gives
+    // p = 100 MPa; μ_F(ū) = μ_m [1 − (1 − β) e^{−nū}], μ_m = 0.3, β = 0.3, n = 100 /mm
+    // (Buczkowski & Kleiber (1994), Eq. 4).
+    let (p, mu_m, beta, n) = (100.0, 0.3, 0.3, 100.0);
+    let mu = |u: f64| mu_m * (1.0 - (1.0 - beta) * (-n * u).exp());
+    // ∫₀^ū μ_F p dū: the friction work of a monotonic slide.
+    let work = |u: f64| p * mu_m * (u - (1.0 - beta) * (1.0 - (-n * u).exp()) / n);
+    let mut errors = Vec::new();
+    for increments in [40, 80] {
+        let mut d = Driver::new(sliding_rough_joint(), None, 1e-3);
+        let mut slid = 0;
+        for i in 1..=increments {
+            d.increment(0.05 * i as f64 / increments as f64);
+            let s = d.point();
+            assert!(close(-s.stress[1], p, 1e-12));
+            if s.status == ContactStatus::Slip {
+                slid += 1;
+                let ratio = s.stress[0] / p;
+                assert!(
+                    close(ratio, mu(s.accumulated_slip), 1e-12),
+                    "ū = {}: p_T/p = {ratio} vs μ_F = {}",
+                    s.accumulated_slip,
+                    mu(s.accumulated_slip)
+                );
+            }
+        }
+        assert!(slid > increments / 2, "{slid} slipping increments");
+        let s = d.point();
+        errors.push((s.history.dissipation - work(s.accumulated_slip)).abs());
+    }
+    // p_T,{n+1} Δu^p is backward Euler on a hardening curve: first order in the increment,
+    // with error ≈ ½ Δū (μ_F(ū) − μ_F(0)) p ≈ ½ · 6e-4 · 0.21 · 100 ≈ 6e-3 N/mm (0.5 % of the
+    // work) at 80 increments.
+    let ratio = errors[0] / errors[1];
+    assert!((1.8..2.2).contains(&ratio), "errors {errors:?}");
+    assert!(errors[1] < 1e-2 * work(0.05), "errors {errors:?}");
+}
+
+fn archard_driver(max_depth: Option<f64>) -> Driver {
+    let mut keys = vec![
+        ("model", Value::from("archard")),
+        ("coefficient", 1e-6.into()),
+    ];
+    if let Some(m) = max_depth {
+        keys.push(("max_depth", m.into()));
+    }
+    let mut d = Driver::new(linear_coulomb(KN, KT, MU), Some(wear(&keys)), CLOSURE);
+    d.ramp(0.0, DELTA, 4);
+    d
+}
+
+#[test]
+fn a_jump_over_dn_cycles_equals_dn_simulated_cycles_at_constant_pressure() {
+    let (mut jumped, mut simulated) = (archard_driver(None), archard_driver(None));
+    jumped.cycle(DELTA, 5, 7.0).unwrap();
+    for _ in 0..7 {
+        simulated.cycle(DELTA, 5, 1.0).unwrap();
+    }
+    let (a, b) = (jumped.point().history, simulated.point().history);
+    for i in 0..2 {
+        assert!(close(a.wear[i], b.wear[i], ROUND_OFF), "{a:?}\n{b:?}");
+    }
+    assert!(close(a.dissipation, b.dissipation, ROUND_OFF));
+    assert!(close(a.last_cycle_wear[0], b.last_cycle_wear[0], 1e-12));
+    assert!(close(
+        a.last_cycle_dissipation,
+        b.last_cycle_dissipation,
+        ROUND_OFF
+    ));
+    // The trial states follow the committed ones.
+    assert_eq!(
+        jumped.solution.interface_trial,
+        jumped.solution.interface_committed
+    );
+}
+
+#[test]
+fn a_jump_beyond_the_stability_limit_is_refused_and_changes_nothing() {
+    let mut d = archard_driver(None);
+    // Per cycle and surface: k p 4(δ − μp/k_T) = 1e-6 · 100 · 0.28 = 2.8e-5 mm, both surfaces
+    // 5.6e-5 mm; the limit is 0.5 · p/k_N = 5e-3 mm: ΔN − 1 ≤ 89.
+    let per_cycle = 2.0 * 1e-6 * P * 4.0 * (DELTA - MU * P / KT);
+    d.cycle(DELTA, 5, 90.0).unwrap();
+    let jumped = d.solution.interface_committed.clone();
+    start_cycle(&mut d.solution);
+    d.ramp(DELTA, -DELTA, 5);
+    d.ramp(-DELTA, DELTA, 5);
+    let cycle_end = d.solution.interface_committed.clone();
+    let error = end_cycle(&d.model, &mut d.solution, 91.0).unwrap_err();
+    assert_eq!(d.solution.interface_committed, cycle_end);
+    assert_ne!(jumped, cycle_end);
+    match &error {
+        Error::WearJump {
+            contact,
+            contact_index,
+            depth,
+            limit,
+            position,
+            ..
+        } => {
+            assert_eq!((contact.as_str(), *contact_index), ("joint", 0));
+            assert!(close(*depth, 90.0 * per_cycle, 1e-9), "{depth}");
+            assert!(close(*limit, 0.5 * CLOSURE, 1e-12), "{limit}");
+            assert_eq!(position[1], 1.0);
+            assert!((0.5..=2.5).contains(&position[0]));
+        }
+        other => panic!("{other}"),
+    }
+    let message = error.in_analysis_step(1).to_string();
+    for key in [
+        "step[1].cycles_per_jump",
+        "contact[0].wear.jump_limit",
+        "'joint'",
+    ] {
+        assert!(message.contains(key), "{message}");
+    }
+    assert_eq!(
+        Error::WearJump {
+            contact: String::new(),
+            contact_index: 0,
+            step_index: None,
+            position: [0.0; 2],
+            jump_cycles: 2.0,
+            depth: 1.0,
+            limit: 0.5,
+            jump_limit: 0.5
+        }
+        .exit_code(),
+        1
+    );
+}
+
+#[test]
+fn wearing_through_max_depth_stops_with_the_converged_state() {
+    // Load-up and one cycle wear 2 k p (δ − μp/k_T)(1 + 4) = 7e-5 mm in all.
+    let mut d = archard_driver(Some(5e-5));
+    let error = d.cycle(DELTA, 5, 1.0).unwrap_err();
+    let depth = d.point().history.depth();
+    assert!(close(depth, 2.0 * 1e-6 * P * 0.07 * 5.0, 1e-12));
+    match &error {
+        Error::WornThrough {
+            depth: reported,
+            max_depth,
+            ..
+        } => {
+            assert_eq!(*reported, depth);
+            assert_eq!(*max_depth, 5e-5);
+        }
+        other => panic!("{other}"),
+    }
+    // Nothing of the cycle's end was applied: the last-cycle results are those of none.
+    assert_eq!(d.point().history.last_cycle_dissipation, 0.0);
+    assert!(error.to_string().contains("contact[0].wear.max_depth"));
+}
+
+#[test]
+fn a_frictional_run_of_the_model_wears_by_the_energy_law_at_every_point() {
+    // Pressed and pushed back and forth past the friction limit: the slip field is not
+    // uniform, but with the energy law each point's depth is α times its friction work,
+    // whose every increment p_T Δu^p ≥ 0 (Coulomb).
+    let alpha = 1e-6;
+    let wear = wear(&[("model", "energy".into()), ("coefficient", alpha.into())]);
+    let case = case(
+        linear_coulomb(1e4, 1e3, 0.25),
+        Some(wear),
+        &[1.0, 2.0, 0.0, -2.0, 0.0, 2.0],
+    );
+    let model = model(&case);
+    let (solution, _) = run_steps(&model, &settings(&case), |_| Ok(0.0)).expect("converges");
+    let mut worn = 0;
+    for s in &solution.interface_committed {
+        let h = s.history;
+        assert!(h.dissipation >= 0.0);
+        assert!(close(h.wear[0], alpha * h.dissipation, 1e-12), "{h:?}");
+        assert_eq!(h.wear[0], h.wear[1]);
+        worn += usize::from(h.wear[0] > 0.0);
+        // The gap the law saw includes the committed depth of both surfaces.
+        assert!(h.gap_wear <= h.depth());
+    }
+    assert!(worn > solution.interface_committed.len() / 2, "{worn} worn");
+}
+
+#[test]
+fn without_wear_the_history_tracks_dissipation_and_no_depth() {
+    let mut d = Driver::new(linear_coulomb(KN, KT, MU), None, CLOSURE);
+    d.ramp(0.0, DELTA, 3);
+    d.cycle(DELTA, 4, 1.0).unwrap();
+    let h = d.point().history;
+    assert_eq!(h.wear, [0.0; 2]);
+    assert!(close(
+        h.dissipation,
+        MU * P * 5.0 * (DELTA - MU * P / KT),
+        ROUND_OFF
+    ));
+}
+
+/// The error of `wear` on the block-on-base case.
+fn bad(wear: Table) -> Error {
+    block_on_base(
+        70000.0,
+        0.3,
+        &[("wear", wear.into())],
+        linear_coulomb(1e4, 1e3, 0.3),
+    )
+    .pressed_and_pushed(8.0, 0.01, &[1.0])
+    .try_case()
+    .expect_err("bad wear input")
+}
+
+fn key_of(error: &Error) -> &str {
+    match error {
+        Error::InvalidParameter { key, .. } => key,
+        other => panic!("not an invalid parameter: {other}"),
+    }
+}
+
+#[test]
+fn bad_wear_keys_are_named() {
+    let archard = |extra: &[(&str, Value)]| {
+        let mut t = wear(&[("model", "archard".into())]);
+        t.extend(table(extra));
+        t
+    };
+    let cases: Vec<(Table, &str)> = vec![
+        (
+            archard(&[("coefficient", (-1e-8).into())]),
+            "contact[0].wear.coefficient",
+        ),
+        (
+            archard(&[("coefficient_b", (-1e-8).into())]),
+            "contact[0].wear.coefficient_b",
+        ),
+        (
+            archard(&[("coefficient", 0.0.into())]),
+            "contact[0].wear.coefficient",
+        ),
+        (
+            archard(&[("coefficient_a", 0.0.into()), ("coefficient_b", 0.0.into())]),
+            "contact[0].wear.coefficient_a",
+        ),
+        (archard(&[]), "contact[0].wear.coefficient"),
+        (
+            archard(&[("coefficient", 1e-8.into()), ("coefficient_a", 1e-8.into())]),
+            "contact[0].wear.coefficient",
+        ),
+        (
+            archard(&[("coefficient_a", 1e-8.into()), ("surface", "b".into())]),
+            "contact[0].wear.surface",
+        ),
+        (
+            archard(&[("coefficient", 1e-8.into()), ("max_depth", 0.0.into())]),
+            "contact[0].wear.max_depth",
+        ),
+        (
+            archard(&[("coefficient", 1e-8.into()), ("jump_limit", (-0.5).into())]),
+            "contact[0].wear.jump_limit",
+        ),
+        (
+            archard(&[("coefficient", 1e-8.into()), ("jump_limit", 1.5.into())]),
+            "contact[0].wear.jump_limit",
+        ),
+    ];
+    for (wear, expected) in cases {
+        let error = bad(wear.clone());
+        assert_eq!(key_of(&error), expected, "{wear:?}: {error}");
+        assert_eq!(error.exit_code(), 3);
+    }
+    // Values serde refuses: the message names the key and the choices.
+    for (wear, words) in [
+        (
+            archard(&[("coefficient", 1e-8.into()), ("surface", "c".into())]),
+            ["surface", "both"],
+        ),
+        (
+            wear(&[("model", "usui".into()), ("coefficient", 1e-8.into())]),
+            ["model", "archard"],
+        ),
+        (
+            archard(&[("coefficient", 1e-8.into()), ("depth", 1.0.into())]),
+            ["depth", "max_depth"],
+        ),
+    ] {
+        let message = bad(wear).to_string();
+        for w in words {
+            assert!(message.contains(w), "{message}");
+        }
+    }
+}
