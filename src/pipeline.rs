@@ -43,7 +43,7 @@ use crate::output::csv::{CsvTable, write_csv};
 use crate::output::pvd::{PvdEntry, write_pvd};
 use crate::output::restart::{OutputState, RESTART_FILE, Record, RecordWriter, read_record};
 use crate::output::summary::{
-    ContactResultant, Force, ModelSize, Named, Status, StepSummary, Summary,
+    ContactResultant, EnergyMark, Force, ModelSize, Named, Status, StepSummary, Summary,
 };
 use crate::output::vtu::write_vtu;
 use crate::post::interface::{InterfaceOutput, resultants};
@@ -787,6 +787,14 @@ struct HistoryLayout {
 /// Leading columns: step, time, load_factor, then the per-load factors, then these.
 const COUNTERS: [&str; 4] = ["increments", "cutbacks", "iterations", "residual"];
 
+/// Trailing columns: the energy balance of the run so far (N·mm; see the README).
+const ENERGY_COLUMNS: [&str; 4] = [
+    "external_work",
+    "stored_energy",
+    "dissipation",
+    "energy_imbalance",
+];
+
 impl HistoryLayout {
     fn new(case: &Case, model: &Model) -> (Self, Vec<String>) {
         let mut columns: Vec<String> = ["step", "time", "load_factor"].map(String::from).into();
@@ -818,6 +826,7 @@ impl HistoryLayout {
             }
         }
         columns.extend(case.history.iter().map(|q| q.name.clone()));
+        columns.extend(ENERGY_COLUMNS.map(String::from));
         let layout = Self {
             load_factors,
             supports: model.supports.len(),
@@ -847,6 +856,13 @@ impl HistoryLayout {
         row.extend(reactions.iter().flatten());
         row.extend(resultants.iter().flatten());
         row.extend(requested);
+        let energy = &step.solution.energy.total;
+        row.extend([
+            energy.external_work,
+            energy.stored(),
+            energy.dissipation(),
+            energy.imbalance(),
+        ]);
         row
     }
 
@@ -969,11 +985,17 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
     /// indexes. Returns the run to continue.
     fn restore(&mut self, record: Record) -> Result<Resume> {
         let Record { resume, output } = record;
-        let [history]: [Vec<Vec<f64>>; 1] =
+        let [history, energy]: [Vec<Vec<f64>>; 2] =
             output.tables.try_into().map_err(|_| Error::Restart {
                 path: self.out_dir.join(RESTART_FILE),
-                reason: "the record has no history table".into(),
+                reason: "the record has not the history and energy tables".into(),
             })?;
+        let marks: Option<Vec<EnergyMark>> =
+            energy.iter().map(|row| EnergyMark::from_row(row)).collect();
+        self.summary.energy.marks = marks.ok_or_else(|| Error::Restart {
+            path: self.out_dir.join(RESTART_FILE),
+            reason: "its energy rows have the wrong length".into(),
+        })?;
         if history
             .iter()
             .any(|row| row.len() != self.history.columns.len())
@@ -1024,6 +1046,10 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             .map(|(_, f)| [f.x, f.y])
             .collect();
         self.summary.push_step(summary);
+        let total = step.solution.energy.total;
+        if let Some(mark) = EnergyMark::at(&step.frame, step.step, total) {
+            self.summary.energy.push(mark);
+        }
         (self.on_step)(self.model, step)?;
         self.bar.0.inc(1);
         self.bar
@@ -1102,7 +1128,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             return Ok(());
         };
         let output = OutputState {
-            tables: vec![self.history.rows.clone()],
+            tables: vec![self.history.rows.clone(), self.energy_rows()],
             series: self.series.clone(),
         };
         self.records.write(
@@ -1113,6 +1139,12 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             progress.solution,
             &output,
         )
+    }
+
+    /// The energy marks of the summary as rows (the restart record's second table).
+    fn energy_rows(&self) -> Vec<Vec<f64>> {
+        let marks = &self.summary.energy.marks;
+        marks.iter().map(EnergyMark::to_row).collect()
     }
 
     fn write_history(&self) -> Result<()> {

@@ -80,6 +80,7 @@ fn solution() -> Solution {
                 numerical_dissipation: awkward(36),
             },
             previous_force: (40..50).map(awkward).collect(),
+            weights: Default::default(),
         },
     }
 }

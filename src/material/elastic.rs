@@ -66,6 +66,15 @@ impl LinearElastic {
         d
     }
 
+    /// The complementary energy density ½ σ:C⁻¹:σ = [(1 + ν) σ:σ − ν (tr σ)²] / 2E of a
+    /// stress in Voigt order (xx, yy, xy, zz); σ_zz is 0 in plane stress, so one formula
+    /// serves every analysis.
+    pub fn complementary_energy(&self, s: &Voigt) -> f64 {
+        let trace = s[0] + s[1] + s[ZZ];
+        let contracted = s[0] * s[0] + s[1] * s[1] + s[ZZ] * s[ZZ] + 2.0 * s[2] * s[2];
+        ((1.0 + self.nu) * contracted - self.nu * trace * trace) / (2.0 * self.e)
+    }
+
     /// The out-of-plane strain of a plane-stress state with in-plane strains εxx, εyy.
     pub fn plane_stress_zz_strain(&self, exx: f64, eyy: f64) -> f64 {
         -self.nu / (1.0 - self.nu) * (exx + eyy)
@@ -99,6 +108,10 @@ impl Material for LinearElastic {
         )
     }
 
+    fn elastic_energy(&self, state: &PointState) -> f64 {
+        self.complementary_energy(&state.stress)
+    }
+
     fn describe(&self) -> String {
         format!("linear elastic, E = {} MPa, nu = {}", self.e, self.nu)
     }
@@ -125,6 +138,21 @@ mod tests {
         let (s, _) = m.update(&eps, &PointState::default(), OutOfPlane::StrainGiven);
         assert!((s.stress[0] - 200.0).abs() < 1e-9);
         assert!(s.stress[1].abs() < 1e-9 && s.stress[ZZ].abs() < 1e-9);
+    }
+
+    /// ½ σ:ε for a general strain equals the compliance form, in every analysis.
+    #[test]
+    fn elastic_energy_is_half_stress_times_strain() {
+        let m = LinearElastic::new(70_000.0, 0.33).unwrap();
+        let eps = Voigt::new(1.2e-3, -0.4e-3, 0.9e-3, 0.3e-3);
+        for mode in [OutOfPlane::StrainGiven, OutOfPlane::StressFree] {
+            let (s, _) = m.update(&eps, &PointState::default(), mode);
+            let work = 0.5 * s.stress.dot(&s.strain);
+            assert!(
+                (m.elastic_energy(&s) - work).abs() < 1e-12 * work,
+                "{mode:?}"
+            );
+        }
     }
 
     #[test]

@@ -404,6 +404,12 @@ impl Material for J2Plasticity {
         }
     }
 
+    /// The elastic part of the strain alone stores energy; the plastic work σ:dεᵖ (including
+    /// what the hardening locks in) counts as dissipated.
+    fn elastic_energy(&self, state: &PointState) -> f64 {
+        self.elastic.complementary_energy(&state.stress)
+    }
+
     fn describe(&self) -> String {
         format!(
             "J2 plasticity with linear isotropic hardening, E = {} MPa, nu = {}, \
@@ -422,6 +428,22 @@ mod tests {
     }
 
     const MODES: [OutOfPlane; 2] = [OutOfPlane::StrainGiven, OutOfPlane::StressFree];
+
+    /// After yielding, the stored energy is ½ σ:(ε − εᵖ): the elastic strain's alone.
+    #[test]
+    fn elastic_energy_is_that_of_the_elastic_strain() {
+        let m = steel(1_000.0);
+        let eps = Voigt::new(4e-3, -1e-3, 3e-3, 0.0);
+        for mode in MODES {
+            let (s, _) = m.update(&eps, &PointState::default(), mode);
+            assert!(s.equivalent_plastic_strain > 0.0, "{mode:?} yields");
+            let stored = 0.5 * s.stress.dot(&(s.strain - s.plastic_strain));
+            assert!(
+                (m.elastic_energy(&s) - stored).abs() < 1e-10 * stored,
+                "{mode:?}"
+            );
+        }
+    }
 
     #[test]
     fn elastic_range_matches_linear_elastic() {

@@ -60,6 +60,10 @@ pub trait Material: Send + Sync + std::fmt::Debug {
         out_of_plane: OutOfPlane,
     ) -> (PointState, Tangent);
 
+    /// Elastic strain energy per unit volume stored at `state`, ½ σ:C⁻¹:σ (N·mm/mm³ = MPa):
+    /// what the energy balance counts as stored (the rest of the stress work is dissipated).
+    fn elastic_energy(&self, state: &PointState) -> f64;
+
     /// Short description for logs, e.g. "elastic E=210000 nu=0.3".
     fn describe(&self) -> String;
 

@@ -439,6 +439,7 @@ fn encode_energy(e: &mut Encoder, ledger: &EnergyLedger) -> io::Result<()> {
     let EnergyLedger {
         total,
         previous_force,
+        weights: _,
     } = ledger;
     let Energy {
         external_work,
@@ -475,6 +476,7 @@ fn decode_energy(d: &mut Decoder) -> io::Result<EnergyLedger> {
             numerical_dissipation: v[6],
         },
         previous_force: d.floats()?,
+        weights: Default::default(),
     })
 }
 

@@ -14,6 +14,8 @@ use serde::{Serialize, Serializer};
 use super::atomic::write_atomically;
 use crate::Result;
 use crate::model::Model;
+use crate::model::timeline::Frame;
+use crate::solver::energy::Energy;
 
 /// The contents of `summary.json`.
 #[derive(Clone, Debug, Serialize)]
@@ -41,6 +43,8 @@ pub struct Summary {
     pub reactions: Named<Force>,
     /// Relative residual at the end of the last converged step.
     pub final_residual: Option<f64>,
+    /// The energy balance: totals, per analysis step and per load cycle.
+    pub energy: EnergyReport,
 }
 
 /// How a run ended.
@@ -149,6 +153,203 @@ impl<T> Default for Named<T> {
     }
 }
 
+/// The energy totals at the end of a load cycle (a step without cycles is one cycle): the
+/// marks from which `summary.json`'s `"energy"` is made.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnergyMark {
+    /// 1-based analysis step, its name, the simulated cycle within it, and the load cycles
+    /// of the step completed at the mark (counting those a wear jump stands for).
+    pub analysis_step: usize,
+    pub name: String,
+    pub cycle: usize,
+    pub cycles: f64,
+    pub total: Energy,
+}
+
+/// Number of values of [`EnergyMark::to_row`].
+const MARK_VALUES: usize = 10;
+
+impl EnergyMark {
+    /// The mark of an output frame with the run's energy `total`, if the frame ends a
+    /// cycle. A frame the load history has not placed (analysis step 0) is a step of its own.
+    pub fn at(frame: &Frame, step: usize, total: Energy) -> Option<Self> {
+        let (analysis_step, cycle, cycles, end) = if frame.analysis_step == 0 {
+            (step, 1, 1.0, true)
+        } else {
+            (
+                frame.analysis_step,
+                frame.cycle,
+                frame.cycles,
+                frame.cycle_end,
+            )
+        };
+        end.then(|| Self {
+            analysis_step,
+            name: step_name(analysis_step),
+            cycle,
+            cycles,
+            total,
+        })
+    }
+
+    /// The mark as numbers (for a restart record): step, cycle, cycles, then the totals.
+    pub fn to_row(&self) -> Vec<f64> {
+        let t = &self.total;
+        vec![
+            self.analysis_step as f64,
+            self.cycle as f64,
+            self.cycles,
+            t.external_work,
+            t.elastic_energy,
+            t.interface_energy,
+            t.plastic_dissipation,
+            t.friction_dissipation,
+            t.wear_work,
+            t.numerical_dissipation,
+        ]
+    }
+
+    /// The mark of a row of [`Self::to_row`]; `None` if it has the wrong length.
+    pub fn from_row(row: &[f64]) -> Option<Self> {
+        let v: &[f64; MARK_VALUES] = row.try_into().ok()?;
+        let analysis_step = v[0] as usize;
+        Some(Self {
+            analysis_step,
+            name: step_name(analysis_step),
+            cycle: v[1] as usize,
+            cycles: v[2],
+            total: Energy {
+                external_work: v[3],
+                elastic_energy: v[4],
+                interface_energy: v[5],
+                plastic_dissipation: v[6],
+                friction_dissipation: v[7],
+                wear_work: v[8],
+                numerical_dissipation: v[9],
+            },
+        })
+    }
+}
+
+/// The default name of analysis step `n` (`[[step]] name`'s default).
+fn step_name(n: usize) -> String {
+    format!("step-{n}")
+}
+
+/// The energy balance of a run, from the totals at the end of each load cycle. Written as
+/// `{ "total": {...}, "steps": [...], "cycles": [...] }`: the totals, and per step and per
+/// cycle the work and dissipation done in it and the change of the stored energies, each
+/// with its imbalance (absolute and relative to |external work|).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EnergyReport {
+    /// The marks of the converged cycle ends, in order.
+    pub marks: Vec<EnergyMark>,
+}
+
+/// Energy terms with their imbalance, as written.
+#[derive(Serialize)]
+struct Terms {
+    external_work: f64,
+    elastic_energy: f64,
+    interface_energy: f64,
+    plastic_dissipation: f64,
+    friction_dissipation: f64,
+    wear_work: f64,
+    numerical_dissipation: f64,
+    imbalance: f64,
+    relative_imbalance: Option<f64>,
+}
+
+impl From<Energy> for Terms {
+    fn from(e: Energy) -> Self {
+        Self {
+            external_work: e.external_work,
+            elastic_energy: e.elastic_energy,
+            interface_energy: e.interface_energy,
+            plastic_dissipation: e.plastic_dissipation,
+            friction_dissipation: e.friction_dissipation,
+            wear_work: e.wear_work,
+            numerical_dissipation: e.numerical_dissipation,
+            imbalance: e.imbalance(),
+            relative_imbalance: e.relative_imbalance(),
+        }
+    }
+}
+
+#[derive(Serialize)]
+struct StepEnergy<'a> {
+    name: &'a str,
+    analysis_step: usize,
+    #[serde(flatten)]
+    terms: Terms,
+}
+
+#[derive(Serialize)]
+struct CycleEnergy {
+    analysis_step: usize,
+    cycle: usize,
+    cycles: f64,
+    #[serde(flatten)]
+    terms: Terms,
+}
+
+#[derive(Serialize)]
+struct EnergyJson<'a> {
+    total: Terms,
+    steps: Vec<StepEnergy<'a>>,
+    cycles: Vec<CycleEnergy>,
+}
+
+impl EnergyReport {
+    /// Records the end of a cycle.
+    pub fn push(&mut self, mark: EnergyMark) {
+        self.marks.push(mark);
+    }
+
+    /// The totals at the last mark (zero before the first).
+    pub fn total(&self) -> Energy {
+        self.marks.last().map(|m| m.total).unwrap_or_default()
+    }
+
+    fn json(&self) -> EnergyJson<'_> {
+        let mut steps: Vec<StepEnergy> = Vec::new();
+        let mut cycles = Vec::with_capacity(self.marks.len());
+        let (mut cycle_start, mut step_start) = (Energy::default(), Energy::default());
+        for (i, mark) in self.marks.iter().enumerate() {
+            cycles.push(CycleEnergy {
+                analysis_step: mark.analysis_step,
+                cycle: mark.cycle,
+                cycles: mark.cycles,
+                terms: (mark.total - cycle_start).into(),
+            });
+            cycle_start = mark.total;
+            let step_ends = self
+                .marks
+                .get(i + 1)
+                .is_none_or(|next| next.analysis_step != mark.analysis_step);
+            if step_ends {
+                steps.push(StepEnergy {
+                    name: &mark.name,
+                    analysis_step: mark.analysis_step,
+                    terms: (mark.total - step_start).into(),
+                });
+                step_start = mark.total;
+            }
+        }
+        EnergyJson {
+            total: self.total().into(),
+            steps,
+            cycles,
+        }
+    }
+}
+
+impl Serialize for EnergyReport {
+    fn serialize<S: Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
+        self.json().serialize(serializer)
+    }
+}
+
 impl<T: Serialize> Serialize for Named<T> {
     fn serialize<S: Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
         serializer.collect_map(self.0.iter().map(|(k, v)| (k, v)))
@@ -171,6 +372,7 @@ impl Summary {
             seconds: Seconds::default(),
             reactions: Named::default(),
             final_residual: None,
+            energy: EnergyReport::default(),
         }
     }
 
@@ -283,5 +485,70 @@ mod tests {
         assert_eq!(value["steps"][0]["reactions"]["z_support"]["y"], -2.0);
         assert!(value["final_residual"].is_null(), "NaN is written as null");
         assert!(text.find("z_support").unwrap() < text.find("a_support").unwrap());
+    }
+
+    fn energy(work: f64, elastic: f64, friction: f64) -> Energy {
+        Energy {
+            external_work: work,
+            elastic_energy: elastic,
+            friction_dissipation: friction,
+            ..Energy::default()
+        }
+    }
+
+    fn frame(analysis_step: usize, cycle: usize, cycle_end: bool) -> Frame {
+        Frame {
+            analysis_step,
+            cycle,
+            cycles: cycle as f64,
+            step_time: 1.0,
+            cycle_end,
+        }
+    }
+
+    /// Steps and cycles get the differences of the totals at their ends; the stored energy
+    /// its change, so each entry balances on its own.
+    #[test]
+    fn energy_is_split_by_step_and_cycle() {
+        let mut report = EnergyReport::default();
+        let frames = [
+            (frame(1, 1, true), energy(10.0, 10.0, 0.0)),
+            (frame(2, 1, false), energy(12.0, 11.0, 0.5)),
+            (frame(2, 1, true), energy(13.0, 10.0, 3.0)),
+            (frame(2, 2, true), energy(16.0, 10.0, 6.0)),
+        ];
+        for (i, (f, e)) in frames.iter().enumerate() {
+            if let Some(mark) = EnergyMark::at(f, i + 1, *e) {
+                assert_eq!(EnergyMark::from_row(&mark.to_row()), Some(mark.clone()));
+                report.push(mark);
+            }
+        }
+        let v = serde_json::to_value(&report).unwrap();
+        assert_eq!(v["total"]["external_work"], 16.0);
+        assert_eq!(v["total"]["imbalance"], 0.0);
+        assert_eq!(v["steps"].as_array().unwrap().len(), 2);
+        assert_eq!(v["steps"][1]["name"], "step-2");
+        assert_eq!(v["steps"][1]["external_work"], 6.0);
+        assert_eq!(v["steps"][1]["elastic_energy"], 0.0);
+        assert_eq!(v["steps"][1]["friction_dissipation"], 6.0);
+        let cycles = v["cycles"].as_array().unwrap();
+        assert_eq!(cycles.len(), 3);
+        assert_eq!(cycles[2]["cycle"], 2);
+        assert_eq!(cycles[2]["external_work"], 3.0);
+        assert_eq!(cycles[1]["elastic_energy"], 0.0);
+        assert_eq!(cycles[1]["relative_imbalance"], 0.0);
+    }
+
+    /// Output steps of a case whose frames are not placed in a load history count as
+    /// analysis steps of their own.
+    #[test]
+    fn unplaced_frames_are_steps() {
+        let mark = EnergyMark::at(&Frame::default(), 3, energy(1.0, 0.5, 0.0)).unwrap();
+        assert_eq!(
+            (mark.analysis_step, mark.cycle, mark.name.as_str()),
+            (3, 1, "step-3")
+        );
+        let value = serde_json::to_value(EnergyReport { marks: vec![mark] }).unwrap();
+        assert_eq!(value["total"]["relative_imbalance"], 0.5);
     }
 }

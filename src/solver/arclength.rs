@@ -17,6 +17,7 @@
 
 use crate::assembly::{AssemblyInput, GlobalSystem};
 use crate::model::{ArcLength, Model};
+use crate::solver::energy;
 use crate::solver::linear::CholeskySolver;
 use crate::solver::newton::{NewtonLog, NewtonSettings, Problem, norm};
 use crate::solver::stepping::{
@@ -193,11 +194,12 @@ pub fn run_arc_length(
                      {iterations} iterations, ‖Δu‖ {:.3e}",
                     distance(&solution.u, &u_c)
                 );
-                solution.commit();
-                u_c.copy_from_slice(&solution.u);
                 for (f, r) in f_ext.iter_mut().zip(&f_ref_full) {
                     *f = lambda * r;
                 }
+                energy::record(model, &mut solution, &u_c, &f_ext, &system.internal_force);
+                solution.commit();
+                u_c.copy_from_slice(&solution.u);
                 stats.last_residual = *log.residuals.last().unwrap_or(&0.0);
                 let result = StepResult {
                     frame: crate::model::timeline::Frame::default(),

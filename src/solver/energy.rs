@@ -2,9 +2,33 @@
 //! energy, plastic and frictional dissipation, accumulated over the converged increments.
 //! The imbalance of these terms is a convergence check a user can read.
 //!
-//! (Interface defined ahead of its implementation; see [`EnergyLedger::record_increment`].)
+//! Per converged increment from the committed state n to the trial state n+1 (theory in
+//! `docs/theory.md`, "Energy balance"):
+//! - external work += ½ (F_n + F_{n+1})·(u_{n+1} − u_n) over all dofs, F the applied loads at
+//!   free dofs and the reactions (internal forces) at prescribed dofs;
+//! - elastic energy = Σ ½ σ:C⁻¹:σ dV of the bodies (a state function, from the states);
+//! - plastic dissipation += Σ σ_{n+1}:Δεᵖ dV (backward Euler's plastic work);
+//! - friction dissipation += Σ p_T,{n+1} Δu_Tᵖ dA (Buczkowski & Kleiber (1994), Eq. 6);
+//! - wear work += Σ −½ (p_N,n + p_N,{n+1}) Δh dA (p_N ≤ 0: removed material takes energy out);
+//! - numerical dissipation += Σ ½ (σ_n − σ_{n+1}):Δεᵖ dV + Σ ½ (p_T,n − p_T,{n+1}) Δu_Tᵖ dA;
+//! - interface energy += the interfaces' trapezoidal work Σ ½ (p_n + p_{n+1})·Δu_rel dA minus
+//!   their friction, numerical and wear terms (for a linear law without wear: Δ(½ p²/k)).
+//!
+//! Since the internal force is Bᵀσ and the relative displacement B u (small strains), the
+//! trapezoidal work of the internal forces is exactly the sum of these terms; the imbalance
+//! external − Σ is therefore the trapezoidal work of the out-of-balance forces of the
+//! converged states, i.e. of the residual the Newton criteria accepted.
 
+use std::ops::Sub;
+
+use crate::contact::InterfaceState;
+use crate::element::ElementVector;
+use crate::element::continuum::point_kinematics;
+use crate::element::interface6::{InterfacePoint, interface_point, relative_operator};
+use crate::element::quadrature::{MAX_CELL_POINTS, cell_rule};
+use crate::element::set::INTERFACE_POINTS;
 use crate::model::Model;
+use crate::solver::stepping::Solution;
 
 /// Energy totals from the unloaded start (N·mm = mJ; per unit thickness as the forces are).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -25,6 +49,47 @@ pub struct Energy {
     pub numerical_dissipation: f64,
 }
 
+impl Energy {
+    /// Energy stored: elastic energy of the bodies and of the interfaces.
+    pub fn stored(&self) -> f64 {
+        self.elastic_energy + self.interface_energy
+    }
+
+    /// Physical dissipation: plastic, frictional and wear.
+    pub fn dissipation(&self) -> f64 {
+        self.plastic_dissipation + self.friction_dissipation + self.wear_work
+    }
+
+    /// External work minus everything it went into: the work of the out-of-balance forces
+    /// the convergence criteria accepted (0 for exact equilibrium).
+    pub fn imbalance(&self) -> f64 {
+        self.external_work - self.stored() - self.dissipation() - self.numerical_dissipation
+    }
+
+    /// [`Self::imbalance`] relative to |external work|; `None` when no work was done.
+    pub fn relative_imbalance(&self) -> Option<f64> {
+        (self.external_work != 0.0).then(|| self.imbalance() / self.external_work.abs())
+    }
+}
+
+/// The change from `earlier` to `self`: work and dissipation of the interval, and the
+/// change of the stored energies.
+impl Sub for Energy {
+    type Output = Energy;
+
+    fn sub(self, earlier: Energy) -> Energy {
+        Energy {
+            external_work: self.external_work - earlier.external_work,
+            elastic_energy: self.elastic_energy - earlier.elastic_energy,
+            interface_energy: self.interface_energy - earlier.interface_energy,
+            plastic_dissipation: self.plastic_dissipation - earlier.plastic_dissipation,
+            friction_dissipation: self.friction_dissipation - earlier.friction_dissipation,
+            wear_work: self.wear_work - earlier.wear_work,
+            numerical_dissipation: self.numerical_dissipation - earlier.numerical_dissipation,
+        }
+    }
+}
+
 /// The running energy totals and what the next increment's trapezoidal work needs of the
 /// last converged state.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -33,6 +98,68 @@ pub struct EnergyLedger {
     /// Total nodal force (external loads at free dofs, reactions at prescribed dofs) of the
     /// last converged state; empty before the first increment.
     pub previous_force: Vec<f64>,
+    /// The integration weights of the model's points, built at the first increment.
+    pub weights: Weights,
+}
+
+/// The volume dV of every continuum state slot and the geometry (with dA) of every
+/// interface point, from the element kernels' own quadrature. Derived from the model, so it
+/// is not part of a ledger's value: any two compare equal, and a restart record leaves it
+/// to be rebuilt.
+#[derive(Clone, Debug, Default)]
+pub struct Weights {
+    volumes: Vec<f64>,
+    interface: Vec<InterfacePoint>,
+}
+
+impl PartialEq for Weights {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl Weights {
+    /// Builds the weights of `model` unless they are built already.
+    fn ensure(&mut self, model: &Model) {
+        let cells = &model.continuum.cells;
+        let elements = &model.interface.elements;
+        if self.volumes.len() == cells.len() * MAX_CELL_POINTS
+            && self.interface.len() == elements.len() * INTERFACE_POINTS
+        {
+            return;
+        }
+        self.volumes = vec![0.0; cells.len() * MAX_CELL_POINTS];
+        for (cell, volumes) in cells
+            .iter()
+            .zip(self.volumes.chunks_exact_mut(MAX_CELL_POINTS))
+        {
+            for (dv, p) in volumes.iter_mut().zip(cell_rule(cell.kind)) {
+                *dv = point_kinematics(&model.continuum.analysis, cell.kind, &cell.coords, p)
+                    .expect("cell Jacobians are checked when the model is built")
+                    .dvol;
+            }
+        }
+        let analysis = &model.interface.analysis;
+        self.interface = elements
+            .iter()
+            .flat_map(|e| {
+                e.rule
+                    .points()
+                    .iter()
+                    .map(|&(xi, w)| interface_point(analysis, &e.b_coords, xi, w))
+            })
+            .collect();
+    }
+}
+
+/// The interface terms of one increment (N·mm), before they enter the totals.
+#[derive(Clone, Copy, Debug, Default)]
+struct InterfaceWork {
+    /// Trapezoidal work of the contact stresses on the relative displacement.
+    work: f64,
+    friction: f64,
+    numerical: f64,
+    wear: f64,
 }
 
 impl EnergyLedger {
@@ -41,11 +168,143 @@ impl EnergyLedger {
     /// are those of the converged state over all dofs.
     pub fn record_increment(
         &mut self,
-        _model: &Model,
-        _solution: &crate::solver::stepping::Solution,
-        _u_old: &[f64],
-        _external_force: &[f64],
-        _internal_force: &[f64],
+        model: &Model,
+        solution: &Solution,
+        u_old: &[f64],
+        external_force: &[f64],
+        internal_force: &[f64],
     ) {
+        self.weights.ensure(model);
+        self.total.external_work +=
+            self.external_work(model, &solution.u, u_old, external_force, internal_force);
+        self.record_bodies(model, solution);
+        let i = self.interface_work(model, solution, u_old);
+        let t = &mut self.total;
+        t.friction_dissipation += i.friction;
+        t.wear_work += i.wear;
+        t.numerical_dissipation += i.numerical;
+        t.interface_energy += i.work - i.friction - i.numerical - i.wear;
     }
+
+    /// Accounts for wear added to interface point `point` (index into the interface states)
+    /// outside an increment, by a cycle jump of `added_depth` (mm, both surfaces together)
+    /// at the converged `state`: the work −p_N Δh dA the removed material takes out of the
+    /// interface's stored energy moves to the wear work (their sum, and so the balance, is
+    /// unchanged: the jump does no work on the bodies).
+    pub fn record_wear_jump(
+        &mut self,
+        model: &Model,
+        point: usize,
+        state: &InterfaceState,
+        added_depth: f64,
+    ) {
+        self.weights.ensure(model);
+        let work = -state.stress[1] * added_depth * self.weights.interface[point].da;
+        self.total.wear_work += work;
+        self.total.interface_energy -= work;
+    }
+
+    /// The trapezoidal work of the nodal forces F (loads at free dofs, reactions at
+    /// prescribed ones) over the increment; keeps F_{n+1} for the next increment.
+    fn external_work(
+        &mut self,
+        model: &Model,
+        u: &[f64],
+        u_old: &[f64],
+        external_force: &[f64],
+        internal_force: &[f64],
+    ) -> f64 {
+        let n = model.dofs.dof_count();
+        if self.previous_force.len() != n {
+            // The unloaded start: no force.
+            self.previous_force.clear();
+            self.previous_force.resize(n, 0.0);
+        }
+        let mut work = 0.0;
+        for (dof, previous) in self.previous_force.iter_mut().enumerate() {
+            let force = if model.dofs.equation(dof).is_some() {
+                external_force[dof]
+            } else {
+                internal_force[dof]
+            };
+            work += 0.5 * (*previous + force) * (u[dof] - u_old[dof]);
+            *previous = force;
+        }
+        work
+    }
+
+    /// The bodies' stored energy (from the trial states), plastic work and the numerical
+    /// part of the trapezoidal rule on it.
+    fn record_bodies(&mut self, model: &Model, solution: &Solution) {
+        let (mut elastic, mut plastic, mut numerical) = (0.0, 0.0, 0.0);
+        let cells = &model.continuum.cells;
+        let slots = solution
+            .trial
+            .chunks_exact(MAX_CELL_POINTS)
+            .zip(solution.committed.chunks_exact(MAX_CELL_POINTS))
+            .zip(self.weights.volumes.chunks_exact(MAX_CELL_POINTS));
+        for (cell, ((trial, committed), volumes)) in cells.iter().zip(slots) {
+            let material = model.continuum.materials[cell.body as usize].as_ref();
+            let points = cell_rule(cell.kind).len();
+            for ((t, c), &dv) in trial.iter().zip(committed).zip(volumes).take(points) {
+                let plastic_increment = t.plastic_strain - c.plastic_strain;
+                elastic += material.elastic_energy(t) * dv;
+                plastic += t.stress.dot(&plastic_increment) * dv;
+                numerical += 0.5 * (c.stress - t.stress).dot(&plastic_increment) * dv;
+            }
+        }
+        let t = &mut self.total;
+        t.elastic_energy = elastic;
+        t.plastic_dissipation += plastic;
+        t.numerical_dissipation += numerical;
+    }
+
+    /// The interface terms of the increment from `u_old` to `solution.u`.
+    fn interface_work(&self, model: &Model, solution: &Solution, u_old: &[f64]) -> InterfaceWork {
+        let mut sum = InterfaceWork::default();
+        let states = solution
+            .interface_trial
+            .chunks_exact(INTERFACE_POINTS)
+            .zip(solution.interface_committed.chunks_exact(INTERFACE_POINTS))
+            .zip(self.weights.interface.chunks_exact(INTERFACE_POINTS));
+        for (element, ((trial, committed), points)) in model.interface.elements.iter().zip(states) {
+            let mut du = ElementVector::zeros();
+            for (i, &node) in element.nodes.iter().enumerate() {
+                for c in 0..2 {
+                    let dof = 2 * node as usize + c;
+                    du[2 * i + c] = solution.u[dof] - u_old[dof];
+                }
+            }
+            for ((t, c), p) in trial.iter().zip(committed).zip(points) {
+                let jump = relative_operator(p) * du;
+                let mean = [
+                    0.5 * (c.stress[0] + t.stress[0]),
+                    0.5 * (c.stress[1] + t.stress[1]),
+                ];
+                let slip = t.plastic_slip - c.plastic_slip;
+                let wear =
+                    t.history.wear[0] + t.history.wear[1] - c.history.wear[0] - c.history.wear[1];
+                sum.work += (mean[0] * jump[0] + mean[1] * jump[1]) * p.da;
+                sum.friction += t.stress[0] * slip * p.da;
+                sum.numerical += 0.5 * (c.stress[0] - t.stress[0]) * slip * p.da;
+                sum.wear -= mean[1] * wear * p.da;
+            }
+        }
+        sum
+    }
+}
+
+/// Records the converged increment of `solution` (from `u_old`) in its own ledger; see
+/// [`EnergyLedger::record_increment`]. The stepping loops call this just before
+/// committing the trial states.
+pub fn record(
+    model: &Model,
+    solution: &mut Solution,
+    u_old: &[f64],
+    external_force: &[f64],
+    internal_force: &[f64],
+) {
+    let mut ledger = std::mem::take(&mut solution.energy);
+    ledger.record_increment(model, solution, u_old, external_force, internal_force);
+    solution.energy = ledger;
 }

@@ -11,7 +11,7 @@ use crate::error::{Attempt, NoConvergence, ResidualAt};
 use crate::material::PointState;
 use crate::model::Model;
 use crate::model::timeline::Frame;
-use crate::solver::energy::EnergyLedger;
+use crate::solver::energy::{self, EnergyLedger};
 use crate::solver::mechanics::Mechanics;
 use crate::solver::newton::Problem;
 use crate::solver::newton::{ForceAverage, Newton, NewtonLog, NewtonSettings, norm};
@@ -297,6 +297,8 @@ pub fn run_steps_from(
                         model.schedule.value(0, trial_time) - model.schedule.value(0, state.time),
                         distance(&solution.u, &converged_u),
                     );
+                    let internal_force = newton.system().internal_force.as_slice();
+                    energy::record(model, &mut solution, &converged_u, &f_ext, internal_force);
                     solution.commit();
                     state.force_average = newton.force_average();
                     converged_u.copy_from_slice(&solution.u);
