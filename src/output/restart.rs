@@ -17,6 +17,7 @@
 
 use std::io::{self, Read};
 use std::path::{Path, PathBuf};
+use std::sync::mpsc;
 
 use super::Grid;
 use super::atomic::write_atomically;
@@ -81,9 +82,9 @@ impl Content {
 ///
 /// The caller queues a commit's files ([`RecordWriter::queue`],
 /// [`RecordWriter::queue_record`]), then [`RecordWriter::commit`]s them: that waits for the
-/// previous commit's files and hands these to a new thread, so that encoding and writing a
-/// step's files (~10 MB of VTU data and ~10 MB of record for a 60k-unknown model) overlaps the
-/// next increment instead of adding to the run's time. Within a commit the files are written
+/// previous commit's files and hands these to the writer thread, so that encoding and
+/// writing a step's files (~10 MB of VTU data and ~10 MB of record for a 60k-unknown model)
+/// overlaps the next increment instead of adding to the run's time. Within a commit the files are written
 /// in order and the first error stops it, so a step's record and index entries are never on
 /// disk without its files; that error (an [`Error::Io`] naming the file) is returned by the
 /// next `commit` or by [`RecordWriter::finish`], which stops the run.
@@ -96,11 +97,50 @@ impl Content {
 pub struct RecordWriter {
     /// The files of the next commit, in order.
     queued: Vec<(PathBuf, Content)>,
-    /// The commit being written; it hands back the buffer of its record for reuse.
-    pending: Option<std::thread::JoinHandle<Result<Vec<u8>>>>,
+    /// The writer thread, started at the first commit.
+    worker: Option<Worker>,
+    /// Whether a commit is being written (its outcome not yet received).
+    in_flight: bool,
     /// A record buffer to encode into: reusing it spares the page faults of ~10 MB of
     /// fresh memory per record.
     spare: Vec<u8>,
+}
+
+/// The writer thread: commits go to it through one channel, their outcomes (the record's
+/// buffer for reuse, or the error) come back through the other. One thread for the whole
+/// run: spawning one per commit cost up to a millisecond on a busy machine.
+#[derive(Debug)]
+struct Worker {
+    commits: mpsc::Sender<Vec<(PathBuf, Content)>>,
+    outcomes: mpsc::Receiver<Result<Vec<u8>>>,
+    thread: std::thread::JoinHandle<()>,
+}
+
+impl Worker {
+    fn start() -> Self {
+        let (commits, inbox) = mpsc::channel::<Vec<(PathBuf, Content)>>();
+        let (outbox, outcomes) = mpsc::channel();
+        let thread = std::thread::spawn(move || {
+            for files in inbox {
+                if outbox.send(write_in_order(files)).is_err() {
+                    break;
+                }
+            }
+        });
+        Self {
+            commits,
+            outcomes,
+            thread,
+        }
+    }
+
+    /// Ends the thread once it has written what it was sent; passes on its panic.
+    fn stop(self) {
+        drop(self.commits);
+        if let Err(panic) = self.thread.join() {
+            std::panic::resume_unwind(panic);
+        }
+    }
 }
 
 impl RecordWriter {
@@ -128,9 +168,17 @@ impl RecordWriter {
     pub fn commit(&mut self) -> Result<()> {
         self.finish()?;
         let files = std::mem::take(&mut self.queued);
-        if !files.is_empty() {
-            self.pending = Some(std::thread::spawn(move || write_in_order(files)));
+        if files.is_empty() {
+            return Ok(());
         }
+        let worker = self.worker.get_or_insert_with(Worker::start);
+        if worker.commits.send(files).is_err() {
+            // The thread is gone, which only a panic does.
+            if let Some(worker) = self.worker.take() {
+                worker.stop();
+            }
+        }
+        self.in_flight = true;
         Ok(())
     }
 
@@ -155,12 +203,28 @@ impl RecordWriter {
 
     /// Waits for the commit being written and reports its error, if any.
     pub fn finish(&mut self) -> Result<()> {
-        if let Some(handle) = self.pending.take() {
-            let spare = handle
-                .join()
-                .unwrap_or_else(|panic| std::panic::resume_unwind(panic))?;
-            if spare.capacity() > self.spare.capacity() {
-                self.spare = spare;
+        let Some(worker) = self.worker.as_ref().filter(|_| self.in_flight) else {
+            return Ok(());
+        };
+        self.in_flight = false;
+        let start = std::time::Instant::now();
+        let outcome = worker.outcomes.recv();
+        tracing::debug!(
+            seconds = start.elapsed().as_secs_f64(),
+            "waited for the background writer"
+        );
+        match outcome {
+            Ok(outcome) => {
+                let spare = outcome?;
+                if spare.capacity() > self.spare.capacity() {
+                    self.spare = spare;
+                }
+            }
+            // No outcome: the thread panicked.
+            Err(_) => {
+                if let Some(worker) = self.worker.take() {
+                    worker.stop();
+                }
             }
         }
         Ok(())
@@ -184,8 +248,19 @@ impl Drop for RecordWriter {
     /// A run that stops with an error still leaves its last commit complete (files queued
     /// but not committed are dropped: they belong to a step whose commit never came).
     fn drop(&mut self) {
-        if let Err(e) = self.finish() {
+        if !std::thread::panicking()
+            && let Err(e) = self.finish()
+        {
             tracing::warn!("{e}");
+        }
+        // Not `stop`: a panic of the thread must not become a second one while this thread
+        // unwinds.
+        if let Some(Worker {
+            commits, thread, ..
+        }) = self.worker.take()
+        {
+            drop(commits);
+            let _ = thread.join();
         }
     }
 }
