@@ -39,13 +39,14 @@ use crate::element::Analysis;
 use crate::mesh::{Mesh, gmsh, msh};
 use crate::model::{Model, ModelSpec, Schedule};
 use crate::output::atomic::write_text;
-use crate::output::csv::{CsvTable, write_csv};
-use crate::output::pvd::{PvdEntry, write_pvd};
-use crate::output::restart::{OutputState, RESTART_FILE, Record, RecordWriter, read_record};
+use crate::output::csv::CsvTable;
+use crate::output::pvd::PvdEntry;
+use crate::output::restart::{
+    Content, OutputState, RESTART_FILE, Record, RecordWriter, read_record,
+};
 use crate::output::summary::{
     ContactResultant, EnergyMark, Force, ModelSize, Named, Status, StepSummary, Summary,
 };
-use crate::output::vtu::write_vtu;
 use crate::post::interface::{InterfaceOutput, resultants};
 use crate::post::quantities::evaluate;
 use crate::post::{BodyPoints, StepInfo, reactions, step_grids};
@@ -256,7 +257,8 @@ pub fn mesh_case(case: &Case, out_dir: &Path) -> Result<(Mesh, f64)> {
 
 /// Runs `case` on an already loaded `mesh` (from [`load_mesh`], which took `mesh_seconds`),
 /// writing results to `out_dir`, and calls `on_step` with the model and every converged step
-/// after its files are written (e.g. to evaluate quantities in memory; an error stops the run).
+/// once its files are committed to the background writer (e.g. to evaluate quantities in
+/// memory; an error stops the run).
 /// `summary.json` is written whether the run converges or fails. No restart record is kept
 /// (a convergence study's levels are not resumed).
 pub fn run_mesh(
@@ -375,13 +377,12 @@ fn solve(
             None
         }
     };
-    let stats = if model.control.arc_length.is_some() {
+    let mut stats = if model.control.arc_length.is_some() {
         run_steps(&model, &settings, |step| writer.step(step, None))?.1
     } else {
-        let stats = run_steps_from(&model, &settings, resume, &mut writer)?.1;
-        writer.records.finish()?;
-        stats
+        run_steps_from(&model, &settings, resume, &mut writer)?.1
     };
+    stats.output_seconds += writer.finish()?;
     writer.bar.finish();
     Ok(RunSummary {
         out_dir: out_dir.to_path_buf(),
@@ -927,7 +928,11 @@ struct StepWriter<'m, 's, F> {
     summary: &'s mut Summary,
     last_reactions: Vec<[f64; 2]>,
     bar: RunBar,
+    /// Writes the files in the background, in the order they are queued.
     records: RecordWriter,
+    /// Seconds spent on the records of sub-increments since the last step, counted with
+    /// that step's output time.
+    increment_seconds: f64,
     on_step: F,
 }
 
@@ -955,6 +960,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             last_reactions: Vec::new(),
             bar: progress_bar(session.progress, model.schedule.steps()),
             records: RecordWriter::default(),
+            increment_seconds: 0.0,
             on_step,
         }
     }
@@ -977,7 +983,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         };
         let row = self.row(&start, 0.0)?;
         self.history.rows.push(row);
-        self.write_history()
+        self.write_indexes()
     }
 
     /// Takes over the output state of a restart `record`: the history rows, series and
@@ -1029,7 +1035,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         let row = self.write_step_files(step, step.step as f64)?;
         self.history.rows.push(row);
         if let Some(p) = progress {
-            self.write_record(p)?;
+            self.queue_record(p)?;
         }
         self.write_indexes()?;
         let last = self
@@ -1055,11 +1061,11 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         self.bar
             .0
             .set_message(format!("load factor {}", step.load_factor));
-        Ok(start.elapsed().as_secs_f64())
+        Ok(start.elapsed().as_secs_f64() + std::mem::take(&mut self.increment_seconds))
     }
 
-    /// The VTU and CSV files of a state at pseudo-time `time` (each complete or absent; not
-    /// yet listed anywhere); returns its history row.
+    /// Queues the VTU and CSV files of a state at pseudo-time `time` (each complete or
+    /// absent once written; not yet listed anywhere); returns its history row.
     fn write_step_files(&mut self, step: &StepResult, time: f64) -> Result<Vec<f64>> {
         let (mut post, mut vtu) = (0.0, 0.0);
         let start = Instant::now();
@@ -1080,7 +1086,8 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             for (part, (name, grid)) in parts.into_iter().enumerate() {
                 let Some(grid) = grid else { continue };
                 let file = format!("{name}_{:04}.vtu", step.step);
-                write_vtu(&self.out_dir.join(&file), &grid)?;
+                self.records
+                    .queue(self.out_dir.join(&file), Content::Vtu(grid));
                 entries.push(PvdEntry {
                     time,
                     part: part as u32,
@@ -1091,13 +1098,10 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             vtu += t.elapsed().as_secs_f64();
         }
         let tables = self.interface.tables(self.model, states);
-        for (pair, table) in self.model.interface.pairs.iter().zip(&tables) {
-            write_csv(
-                &self
-                    .out_dir
-                    .join(format!("contact_{}_{:04}.csv", pair.name, step.step)),
-                table,
-            )?;
+        for (pair, table) in self.model.interface.pairs.iter().zip(tables) {
+            let file = format!("contact_{}_{:04}.csv", pair.name, step.step);
+            self.records
+                .queue(self.out_dir.join(file), Content::Csv(table));
         }
         let row = self.row(step, time)?;
         self.series.extend(entries);
@@ -1106,7 +1110,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             post,
             vtu,
             rest = start.elapsed().as_secs_f64() - post - vtu,
-            "output seconds (body recovery, VTU files, contact CSV files)"
+            "output seconds (body recovery, VTU files queued, contact tables)"
         );
         Ok(row)
     }
@@ -1122,8 +1126,8 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             .row(step, time, &reactions, &resultants, &requested))
     }
 
-    /// The restart record of a converged increment (when the run keeps them).
-    fn write_record(&mut self, progress: &Progress) -> Result<()> {
+    /// Queues the restart record of a converged increment (when the run keeps them).
+    fn queue_record(&mut self, progress: &Progress) -> Result<()> {
         let Some(case_text) = self.case_text else {
             return Ok(());
         };
@@ -1131,12 +1135,10 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             tables: vec![self.history.rows.clone(), self.energy_rows()],
             series: self.series.clone(),
         };
-        self.records.write(
+        self.records.queue_record(
             &self.out_dir.join(RESTART_FILE),
             case_text,
-            &progress.state,
-            progress.stats,
-            progress.solution,
+            progress,
             &output,
         )
     }
@@ -1147,18 +1149,37 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         marks.iter().map(EnergyMark::to_row).collect()
     }
 
-    fn write_history(&self) -> Result<()> {
-        write_csv(&self.out_dir.join("history.csv"), &self.history)
+    /// Writes the restart record of a converged sub-increment (in the background).
+    fn write_record(&mut self, progress: &Progress) -> Result<()> {
+        let start = Instant::now();
+        self.queue_record(progress)?;
+        self.records.commit()?;
+        self.increment_seconds += start.elapsed().as_secs_f64();
+        Ok(())
     }
 
-    /// `history.csv`, then `results.pvd`: the series is the last file written for a step,
-    /// so it lists only steps whose other files are complete.
-    fn write_indexes(&self) -> Result<()> {
-        self.write_history()?;
+    /// Queues `history.csv`, then `results.pvd`, after the step's files and record, and
+    /// commits them: the series is the last file written for a step, so it lists only steps
+    /// whose other files are complete.
+    fn write_indexes(&mut self) -> Result<()> {
+        self.records.queue(
+            self.out_dir.join("history.csv"),
+            Content::Csv(self.history.clone()),
+        );
         if self.vtu && !self.series.is_empty() {
-            write_pvd(&self.out_dir.join("results.pvd"), &self.series)?;
+            self.records.queue(
+                self.out_dir.join("results.pvd"),
+                Content::Pvd(self.series.clone()),
+            );
         }
-        Ok(())
+        self.records.commit()
+    }
+
+    /// Waits for the files being written; returns the seconds waited.
+    fn finish(&mut self) -> Result<f64> {
+        let start = Instant::now();
+        self.records.finish()?;
+        Ok(start.elapsed().as_secs_f64() + std::mem::take(&mut self.increment_seconds))
     }
 }
 
