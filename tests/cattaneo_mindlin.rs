@@ -526,3 +526,70 @@ fn refining_the_mesh_does_not_increase_the_errors() {
         coarse[4]
     );
 }
+
+/// The contact table of step `k` as written by a run: (arc length, p_T, u_T^p) per node.
+fn contact_table(out: &Path, k: usize) -> Vec<[f64; 3]> {
+    let path = out.join(format!("contact_contact_{k:04}.csv"));
+    let mut reader = csv::Reader::from_path(&path).unwrap();
+    let header = reader.headers().unwrap().clone();
+    let column = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let columns = [
+        column("arc_length"),
+        column("contact_shear_stress"),
+        column("signed_plastic_slip"),
+    ];
+    reader
+        .records()
+        .map(|r| {
+            let r = r.unwrap();
+            columns.map(|c| r[c].parse().unwrap())
+        })
+        .collect()
+}
+
+/// The dissipation per cycle from the files a run writes today: Σ over steps and nodes of
+/// p_T (Δu_T^p) weighted by Simpson's rule along each quadratic element of the contact tables
+/// (nodes in curve order: corner, mid, corner, …). This validates the reference comparison on
+/// the per-frame tables, independently of the cycle outputs still to come.
+#[test]
+fn dissipation_from_the_contact_tables_matches_the_analytic_value() {
+    let case = Case::from_file(&data("cattaneo_mindlin.toml")).unwrap();
+    let setup = Setup::new(&case);
+    let out = tempfile::tempdir().unwrap();
+    asperity::pipeline::run(&case, out.path(), false).expect("the case runs");
+    let (start, _, end) = setup.cycle();
+    let mut w_csv = 0.0;
+    let mut before = contact_table(out.path(), start - 1);
+    for k in start..=end {
+        let after = contact_table(out.path(), k);
+        let density: Vec<f64> = before
+            .iter()
+            .zip(&after)
+            .map(|(b, a)| a[1] * (a[2] - b[2]))
+            .collect();
+        for (e, d) in after
+            .windows(3)
+            .step_by(2)
+            .zip(density.windows(3).step_by(2))
+        {
+            let length = e[2][0] - e[0][0];
+            w_csv += length / 6.0 * (d[0] + 4.0 * d[1] + d[2]);
+        }
+        before = after;
+    }
+    let w = setup.cycle_dissipation();
+    let (_, trough, _) = setup.cycle();
+    let w_states = dissipation(run(), start, trough) + dissipation(run(), trough + 1, end);
+    println!(
+        "dissipation per cycle: analytic {w:.5e}, contact tables {w_csv:.5e} ({:+.2} %), \
+         integration points {w_states:.5e}",
+        100.0 * (w_csv / w - 1.0)
+    );
+    assert!((w_csv / w - 1.0).abs() < 0.05, "{w_csv} against {w}");
+    // The tables hold the Newton–Cotes points' values at the nodes (averaged between the
+    // two elements at a corner): the same sum up to that averaging.
+    assert!(
+        (w_csv / w_states - 1.0).abs() < 1e-2,
+        "{w_csv} against {w_states}"
+    );
+}
