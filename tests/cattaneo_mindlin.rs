@@ -1,5 +1,5 @@
 //! Cattaneo–Mindlin partial slip of a plane-strain cylinder on a flat (Johnson, *Contact
-//! Mechanics*, 1985, §7.1–7.2; Hills & Nowell, *Mechanics of Fretting Fatigue*, 1994, ch. 2),
+//! Mechanics*, 1985, §7.1–7.2; Hills & Nowell, *Mechanics of Fretting Fatigue*, 1994),
 //! against the closed forms of docs/fretting.md: the Hertz half-width and peak pressure, the
 //! stick half-width c/a = √(1 − Q/μP), the shear traction of Cattaneo's superposition under
 //! monotonic loading and of Mindlin–Deresiewicz's under unloading and reloading, and the
@@ -121,7 +121,7 @@ impl Setup {
 
     /// The analytic shear traction at step `k` and position `x`, with the stick half-width:
     /// Cattaneo's under the first loading; after a reversal at Q_r, Mindlin–Deresiewicz's
-    /// superposition (Eq. F.6): the state at Q_r minus a Cattaneo distribution with 2μ that
+    /// superposition (Eq. F.7): the state at Q_r minus a Cattaneo distribution with 2μ that
     /// carries Q_r − Q.
     fn traction(&self, step: usize, x: f64) -> (f64, f64) {
         let (reversal, current) = (self.reversal(step), self.shear(step));
@@ -136,7 +136,7 @@ impl Setup {
     }
 
     /// The analytic frictional dissipation of one full cycle ±Q* per unit length (N·mm/mm),
-    /// docs/fretting.md Eq. (F.9): W = 32 μ²P²/(π²E*) I(c/a).
+    /// docs/fretting.md Eq. (F.8): W = 32 μ²P²/(π²E*) I(c/a).
     fn cycle_dissipation(&self) -> f64 {
         let k = self.stick_half_width(self.q_star, self.mu) / self.hertz().0;
         let pi = std::f64::consts::PI;
@@ -144,7 +144,7 @@ impl Setup {
     }
 }
 
-/// I(k) = ∫_k^1 √(1 − ξ²) [ξ√(ξ² − k²) − k² arcosh(ξ/k)] dξ (Eq. F.9) by the substitution
+/// I(k) = ∫_k^1 √(1 − ξ²) [ξ√(ξ² − k²) − k² arcosh(ξ/k)] dξ (Eq. F.8) by the substitution
 /// ξ = (1 + k)/2 − (1 − k)/2 cos φ, which makes the integrand smooth on [0, π] (both end
 /// singularities are square roots), and Simpson's rule.
 fn dissipation_integral(k: f64) -> f64 {
@@ -260,8 +260,8 @@ fn half_length(frame: &[Point], which: impl Fn(ContactStatus) -> bool) -> f64 {
 /// analytic contact |x| < a: the largest away from the zone boundaries (more than one element
 /// from |x| = a and from the stick-zone edges, where the exact traction has an infinite
 /// gradient, a square root that quadratic elements resolve only to O(√(h/c)) at the nearest
-/// nodes: 0.07 μp0 measured), and the root mean
-/// square over the whole contact, boundaries included (weighted by the points' lengths).
+/// nodes: up to 0.079 μp0 measured), and the root mean square over the whole contact,
+/// boundaries included (weighted by the points' lengths).
 fn traction_error(run: &Run, step: usize) -> TractionError {
     let s = &run.setup;
     let (a, p0) = s.hertz();
@@ -319,7 +319,7 @@ fn dissipation(run: &Run, first: usize, last: usize) -> f64 {
 #[test]
 fn the_analytic_references_have_their_limits() {
     // I(0) = ∫ ξ²√(1 − ξ²) = π/16 (gross slip), and I ≈ π d³/6 with d = 1 − k for a thin
-    // slip zone (docs/fretting.md, Eq. F.10).
+    // slip zone (docs/fretting.md, Eq. F.9).
     let pi = std::f64::consts::PI;
     assert!((dissipation_integral(1e-12) / (pi / 16.0) - 1.0).abs() < 1e-6);
     let d = 1e-3;
