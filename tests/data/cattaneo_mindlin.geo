@@ -10,8 +10,7 @@
 // loaded; the halves carry the couple that cancels the moment of the shear load about the
 // contact, see docs/fretting.md).
 // Mesh: triangles, element size hc = 2w/n along the contact and inside a disc of radius w
-// about it, growing linearly to lc far away (both scaled by the size factor -clscale, while
-// n is a parameter: refine with n and the size factor together).
+// about it, growing linearly to lc far away; refine with n and the size factor together.
 DefineConstant[ R = 200, L = 200, D = 200, w = 1.2, n = 48, lc = 25, growth = 0.25 ];
 Geometry.AutoCoherence = 0;   // the two faces touch at the origin with distinct nodes
 hc = 2 * w / n;
@@ -45,9 +44,13 @@ Curve Loop(2) = {2000:2000 + n - 1, 21, 22, 23, 24};
 Plane Surface(2) = {2};
 
 // Size: hc within w of the origin, growing by `growth` per unit distance beyond (at most lc).
+// gmsh multiplies the field by the size factor f (-clscale); hc is divided by it so that the
+// elements near the contact match the contact faces' (2w/n, set by n alone), while the growth
+// rate and the far size scale with f: n = 96 with f = 0.5 halves every element of n = 48.
+f = Mesh.MeshSizeFactor;
 Field[1] = Distance; Field[1].PointsList = {1000 + n / 2, 2000 + n / 2};
 Field[2] = MathEval;
-Field[2].F = Sprintf("Min(%g, %g + %g * Max(F1 - %g, 0))", lc, hc, growth, w);
+Field[2].F = Sprintf("Min(%g, %g + %g * Max(F1 - %g, 0))", lc, hc / f, growth, w);
 Background Field = 2;
 Mesh.MeshSizeExtendFromBoundary = 0;
 Mesh.MeshSizeFromPoints = 0;
