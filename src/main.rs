@@ -258,11 +258,30 @@ fn init_threads(threads: Option<u16>) -> asperity::Result<()> {
         })
 }
 
+/// `println!` for the command's results on standard output: when the reader has gone (a
+/// closed pipe, as in `asperity mesh-info m.msh | head -1`), the command ends quietly, as
+/// Unix tools do, instead of panicking.
+macro_rules! say {
+    ($($arg:tt)*) => {
+        write_stdout(format_args!($($arg)*))
+    };
+}
+
+fn write_stdout(text: std::fmt::Arguments) {
+    if let Err(e) = writeln!(std::io::stdout().lock(), "{text}") {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        eprintln!("error: cannot write to standard output: {e}");
+        std::process::exit(4);
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let log_file = init_logging(&cli);
     if let Err(e) = init_threads(cli.threads) {
-        eprintln!("error: {e}");
+        esay!("error: {e}");
         return ExitCode::from(e.exit_code());
     }
     if let Command::Converge { .. } = cli.command {
@@ -271,7 +290,7 @@ fn main() -> ExitCode {
             // A study that cannot run keeps its documented 2 (README "Exit codes") until its
             // callers move to the shared codes of `Error::exit_code`.
             Err(e) => {
-                eprintln!("error: {e}");
+                esay!("error: {e}");
                 ExitCode::from(2)
             }
         };
@@ -281,7 +300,7 @@ fn main() -> ExitCode {
             Ok(true) => ExitCode::SUCCESS,
             Ok(false) => ExitCode::FAILURE,
             Err(e) => {
-                eprintln!("error: {e}");
+                esay!("error: {e}");
                 ExitCode::from(e.exit_code())
             }
         };
@@ -290,7 +309,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         // README "Exit codes": one mapping for every subcommand, in the library.
         Err(e) => {
-            eprintln!("error: {e}");
+            esay!("error: {e}");
             ExitCode::from(e.exit_code())
         }
     }
@@ -322,10 +341,10 @@ fn converge_command(command: Command) -> asperity::Result<ExitCode> {
         plot: !no_plot,
     };
     let report = study::run(&parsed, &options)?;
-    println!("{report}");
+    say!("{report}");
     let failures = report.failures();
     for line in &failures {
-        eprintln!("FAILED {line}");
+        esay!("FAILED {line}");
     }
     Ok(if failures.is_empty() {
         ExitCode::SUCCESS
@@ -347,8 +366,8 @@ fn fit_or_sweep(command: Command) -> asperity::Result<bool> {
             let result = asperity::fit::Fit::from_file(&file)?.run()?;
             let out = out.unwrap_or_else(|| default_out("fit", &file));
             let plots = asperity::fit::write(&result, &out, !no_plot)?;
-            println!("{result}");
-            println!(
+            say!("{result}");
+            say!(
                 "results: {} (fit.json, curves.csv, law.toml); plots: {plots}",
                 out.display()
             );
@@ -368,7 +387,7 @@ fn sweep_command(action: SweepAction) -> asperity::Result<bool> {
                 PathBuf::from("out/sweep").join(file.file_stem().unwrap_or_default())
             });
             let manifest = sweep::plan(&file, &study, &exe)?;
-            println!(
+            say!(
                 "planned {} runs of {} in {} (manifest.json, jobs.txt, array.sbatch)",
                 manifest.runs.len(),
                 manifest.base.display(),
@@ -383,7 +402,7 @@ fn sweep_command(action: SweepAction) -> asperity::Result<bool> {
             ..
         } => {
             if !sweep::run_task(&study, k, retry_failed)? {
-                println!("run {k}: done before, skipped");
+                say!("run {k}: done before, skipped");
             }
             Ok(true)
         }
@@ -396,7 +415,7 @@ fn sweep_command(action: SweepAction) -> asperity::Result<bool> {
             let jobs =
                 jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
             let (ran, failed) = sweep::run_local(&study, jobs, &exe, retry_failed)?;
-            println!(
+            say!(
                 "ran {} runs ({} failed: {failed:?}); `asperity sweep collect {}` gathers them",
                 ran.len(),
                 failed.len(),
@@ -407,9 +426,9 @@ fn sweep_command(action: SweepAction) -> asperity::Result<bool> {
         SweepAction::Collect { study, no_plot } => {
             let c = sweep::collect(&study, !no_plot)?;
             for (id, status, error) in &c.failures {
-                eprintln!("run {id}: {status}: {error}");
+                esay!("run {id}: {status}: {error}");
             }
-            println!(
+            say!(
                 "collected {} runs ({} not converged) into {}; plots: {}",
                 c.runs,
                 c.failures.len(),
@@ -456,20 +475,20 @@ fn execute(command: Command, log_file: &LogFile) -> asperity::Result<()> {
             let summary = pipeline::run_with(&parsed, &out_dir, &options, |dir| {
                 log_file.open(dir, resume)
             })?;
-            println!("{summary}");
+            say!("{summary}");
         }
         Command::Converge { .. } => unreachable!("handled by converge_command"),
         Command::Fit { .. } | Command::Sweep { .. } => unreachable!("handled by fit_or_sweep"),
         Command::MeshInfo { file } => {
             let mesh = msh::read_msh(&file)?;
-            println!("{}", msh::describe(&mesh));
+            say!("{}", msh::describe(&mesh));
         }
-        Command::Check { case } => println!("{}", check(&case)?),
+        Command::Check { case } => say!("{}", check(&case)?),
         Command::Init { dir } => {
             for path in asperity::init::write_templates(&dir)? {
-                println!("wrote {}", path.display());
+                say!("wrote {}", path.display());
             }
-            println!(
+            say!(
                 "run it with: asperity run {}",
                 dir.join(asperity::init::TEMPLATES[0].0).display()
             );
@@ -477,7 +496,7 @@ fn execute(command: Command, log_file: &LogFile) -> asperity::Result<()> {
         Command::Schema => {
             let schema = schemars::schema_for!(Case);
             let text = serde_json::to_string_pretty(&schema).expect("a schema is valid JSON");
-            println!("{text}");
+            say!("{text}");
         }
     }
     Ok(())
