@@ -80,7 +80,7 @@ impl StepPlan {
 
     /// Load cycles completed when simulated cycle `cycle` ends.
     pub fn cycles_done(&self, cycle: usize) -> usize {
-        (cycle * self.cycles_per_jump).min(self.cycles)
+        cycle.saturating_mul(self.cycles_per_jump).min(self.cycles)
     }
 }
 
