@@ -381,3 +381,56 @@ fn add_line_load(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The `[steps]` amplitude as it was evaluated before analysis steps existed: knot
+    /// `factors[j − 1]` at τ = j, linear in between, clamped.
+    fn linear_in_steps(factors: &[f64], time: f64) -> f64 {
+        let knot = |j: usize| if j == 0 { 0.0 } else { factors[j - 1] };
+        let time = time.clamp(0.0, factors.len() as f64);
+        let j = (time.ceil() as usize).max(1);
+        let theta = time - (j - 1) as f64;
+        knot(j - 1) + theta * (knot(j) - knot(j - 1))
+    }
+
+    #[test]
+    fn a_steps_schedule_evaluates_bit_for_bit_as_the_linear_factors() {
+        let factors = [0.1, 0.7, 1.0 / 3.0, -0.2, 0.0];
+        let s = Schedule::new(factors.to_vec());
+        for k in 0..=600 {
+            let time = -0.5 + k as f64 / 97.0;
+            let (a, b) = (s.value(0, time), linear_in_steps(&factors, time));
+            assert_eq!(a.to_bits(), b.to_bits(), "τ = {time}");
+        }
+        assert_eq!(s.load_factor(3), 1.0 / 3.0);
+        // No breakpoint lies inside a step of a [steps] schedule: sub-increments are halves.
+        assert_eq!(s.next_time(1.0, 0.5, 2.0), 1.5);
+        assert_eq!(s.next_time(1.5, 1.0, 2.0), 2.0);
+    }
+
+    #[test]
+    fn sub_increments_end_on_the_breakpoints_of_every_cycle() {
+        // One step of 2 increments per cycle, 3 cycles; breakpoints at step time 0.3 and 0.8
+        // (u = 0.6 and 1.6).
+        let timeline = Timeline::new(vec![StepPlan::new("s".into(), 2, 3, 1)]);
+        let mut s = Schedule::with_steps(timeline);
+        let table = Table::new(vec![0.0, 0.6, 1.6, 2.0], vec![0.0, 1.0, -1.0, 0.0]);
+        s.add(&History::Own {
+            column: "factor_load_x".into(),
+            tables: vec![table],
+        });
+        // Second cycle (τ from 2 to 4): the first increment ends on the breakpoint 2.6.
+        assert_eq!(s.next_time(2.0, 1.0, 3.0), 2.6);
+        assert_eq!(s.next_time(2.6, 2.0, 3.0), 3.0);
+        assert!((s.next_time(3.0, 1.0, 4.0) - 3.6).abs() < 1e-15);
+        // The values at the breakpoints (up to the round-off of τ − cycle start), and the
+        // ramps between them.
+        assert!((s.value(1, 2.6) - 1.0).abs() < 1e-15);
+        assert!((s.value(1, 4.8) - (1.0 - 2.0 * 0.2)).abs() < 1e-15);
+        assert_eq!(s.value(1, 6.0), 0.0);
+        assert_eq!(s.load_factor(3), 0.5);
+    }
+}
