@@ -1,8 +1,12 @@
-//! Incremental loading: the load factors of the case are applied one after another; each
+//! Incremental loading: the output increments of the case's load history (the frames of its
+//! analysis steps and cycles, [`crate::model::timeline`]) are applied one after another; each
 //! increment is solved by Newton-Raphson and its integration-point states are committed only
 //! once it has converged. An increment that fails is halved and retried from the last
-//! converged state, up to `max_cutbacks` times; sub-increments are solved silently and only
-//! the scheduled steps are handed to the output.
+//! converged state, up to `max_cutbacks` times, and a sub-increment also ends on a breakpoint
+//! of an amplitude ([`crate::model::Schedule::next_time`]); sub-increments are solved silently
+//! and only the scheduled increments are handed to the output. The load cycles' hooks
+//! ([`crate::solver::cycles`]) run before the first increment of every step and cycle and
+//! after the commit of its last one.
 
 use crate::assembly::{AssemblyInput, GlobalSystem};
 use crate::contact::{ContactStatus, InterfaceState};
