@@ -281,7 +281,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let log_file = init_logging(&cli);
     if let Err(e) = init_threads(cli.threads) {
-        esay!("error: {e}");
+        eprintln!("error: {e}");
         return ExitCode::from(e.exit_code());
     }
     if let Command::Converge { .. } = cli.command {
@@ -290,7 +290,7 @@ fn main() -> ExitCode {
             // A study that cannot run keeps its documented 2 (README "Exit codes") until its
             // callers move to the shared codes of `Error::exit_code`.
             Err(e) => {
-                esay!("error: {e}");
+                eprintln!("error: {e}");
                 ExitCode::from(2)
             }
         };
@@ -300,7 +300,7 @@ fn main() -> ExitCode {
             Ok(true) => ExitCode::SUCCESS,
             Ok(false) => ExitCode::FAILURE,
             Err(e) => {
-                esay!("error: {e}");
+                eprintln!("error: {e}");
                 ExitCode::from(e.exit_code())
             }
         };
@@ -309,7 +309,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         // README "Exit codes": one mapping for every subcommand, in the library.
         Err(e) => {
-            esay!("error: {e}");
+            eprintln!("error: {e}");
             ExitCode::from(e.exit_code())
         }
     }
@@ -344,7 +344,7 @@ fn converge_command(command: Command) -> asperity::Result<ExitCode> {
     say!("{report}");
     let failures = report.failures();
     for line in &failures {
-        esay!("FAILED {line}");
+        eprintln!("FAILED {line}");
     }
     Ok(if failures.is_empty() {
         ExitCode::SUCCESS
@@ -426,7 +426,7 @@ fn sweep_command(action: SweepAction) -> asperity::Result<bool> {
         SweepAction::Collect { study, no_plot } => {
             let c = sweep::collect(&study, !no_plot)?;
             for (id, status, error) in &c.failures {
-                esay!("run {id}: {status}: {error}");
+                eprintln!("run {id}: {status}: {error}");
             }
             say!(
                 "collected {} runs ({} not converged) into {}; plots: {}",

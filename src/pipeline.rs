@@ -34,7 +34,7 @@ use std::time::Instant;
 
 use indicatif::ProgressBar;
 
-use crate::config::{Case, LinearSolverKind, SolverSpec};
+use crate::config::{Case, CycleFrames, LinearSolverKind, SolverSpec};
 use crate::element::Analysis;
 use crate::mesh::{Mesh, gmsh, msh};
 use crate::model::{Model, ModelSpec, Schedule};
@@ -320,16 +320,19 @@ fn run_session(
     let out_dir = session.out_dir;
     let mut summary = Summary::new(&case.path);
     summary.seconds.mesh = mesh_seconds;
+    let steps = analysis_steps(&spec.schedule);
     let result = solve(case, spec, mesh, session, &mut summary, on_step);
     summary.seconds.total = mesh_seconds + start.elapsed().as_secs_f64();
     match &result {
         Ok(run) => {
             complete_summary(&mut summary, run);
-            summary.write(&out_dir.join("summary.json"))?;
+            write_summary(&summary, &steps, out_dir)?;
         }
         Err(e) => {
             summary.fail(e);
-            write_summary_after_failure(&summary, out_dir);
+            if let Err(e) = write_summary(&summary, &steps, out_dir) {
+                tracing::warn!("{e}");
+            }
         }
     }
     result
@@ -701,10 +704,64 @@ fn complete_summary(summary: &mut Summary, run: &RunSummary) {
     summary.final_residual = Some(s.last_residual);
 }
 
+/// One analysis step in `summary.json` (`"analysis_steps"`): a `[steps]` schedule is one
+/// step of its steps' increments.
+#[derive(Clone, Debug, serde::Serialize)]
+struct AnalysisStepSummary {
+    name: String,
+    /// Its first output frame (1-based step number of `history.csv` and the step files).
+    first_frame: usize,
+    /// Output frames (increments × simulated cycles).
+    frames: usize,
+    /// Load cycles it stands for.
+    cycles: usize,
+    simulated_cycles: usize,
+    cycles_per_jump: usize,
+}
+
+/// The analysis steps of a schedule as `summary.json` lists them.
+fn analysis_steps(schedule: &Schedule) -> Vec<AnalysisStepSummary> {
+    let steps = schedule.timeline().steps().iter();
+    steps
+        .map(|s| AnalysisStepSummary {
+            name: s.name.clone(),
+            first_frame: s.first + 1,
+            frames: s.frames(),
+            cycles: s.cycles,
+            simulated_cycles: s.simulated(),
+            cycles_per_jump: s.cycles_per_jump,
+        })
+        .collect()
+}
+
+/// `summary.json`: the run's [`Summary`] followed by its analysis steps.
+#[derive(serde::Serialize)]
+struct SummaryFile<'a> {
+    #[serde(flatten)]
+    summary: &'a Summary,
+    analysis_steps: &'a [AnalysisStepSummary],
+}
+
+/// Writes `out_dir/summary.json` (atomically).
+fn write_summary(
+    summary: &Summary,
+    analysis_steps: &[AnalysisStepSummary],
+    out_dir: &Path,
+) -> Result<()> {
+    let path = out_dir.join("summary.json");
+    let file = SummaryFile {
+        summary,
+        analysis_steps,
+    };
+    let json = serde_json::to_string_pretty(&file)
+        .map_err(|e| Error::io(&path, std::io::Error::other(e)))?;
+    write_text(&path, &(json + "\n"))
+}
+
 /// Writes the summary of a failed run; a failure to write it is logged, since the run's own
 /// error is the one to report.
 fn write_summary_after_failure(summary: &Summary, out_dir: &Path) {
-    if let Err(e) = summary.write(&out_dir.join("summary.json")) {
+    if let Err(e) = write_summary(summary, &[], out_dir) {
         tracing::warn!("{e}");
     }
 }
@@ -779,8 +836,8 @@ fn progress_bar(enabled: bool, steps: usize) -> RunBar {
 /// The columns of `history.csv` before the reactions: where each value of a row is, so that
 /// the summary's step records can be read back from the rows a restart record keeps.
 struct HistoryLayout {
-    /// Per-load factors: the `factors` of each support and load that has its own.
-    load_factors: Vec<Schedule>,
+    /// Per-load factors: the amplitude of each support and load that has its own history.
+    load_factors: Vec<usize>,
     supports: usize,
     pairs: usize,
 }
@@ -788,6 +845,9 @@ struct HistoryLayout {
 /// Leading columns: step, time, load_factor, then the per-load factors, then these.
 const COUNTERS: [&str; 4] = ["increments", "cutbacks", "iterations", "residual"];
 
+/// Trailing columns: where the frame lies in the load history
+/// ([`crate::model::timeline::Frame`]).
+const FRAME_COLUMNS: [&str; 4] = ["analysis_step", "cycle", "cycles", "step_time"];
 /// Trailing columns: the energy balance of the run so far (N·mm; see the README).
 const ENERGY_COLUMNS: [&str; 4] = [
     "external_work",
@@ -800,16 +860,9 @@ impl HistoryLayout {
     fn new(case: &Case, model: &Model) -> (Self, Vec<String>) {
         let mut columns: Vec<String> = ["step", "time", "load_factor"].map(String::from).into();
         let mut load_factors = Vec::new();
-        let own = case
-            .supports
-            .iter()
-            .map(|s| ("support", &s.group, &s.factors))
-            .chain(case.loads.iter().map(|l| ("load", &l.group, &l.factors)));
-        for (role, group, factors) in own {
-            if let Some(f) = factors {
-                columns.push(format!("factor_{role}_{group}"));
-                load_factors.push(Schedule::new(f.clone()));
-            }
+        for (column, amplitude) in model.schedule.columns() {
+            columns.push(column.clone());
+            load_factors.push(*amplitude);
         }
         columns.extend(COUNTERS.map(String::from));
         for s in &model.supports {
@@ -827,6 +880,7 @@ impl HistoryLayout {
             }
         }
         columns.extend(case.history.iter().map(|q| q.name.clone()));
+        columns.extend(FRAME_COLUMNS.map(String::from));
         columns.extend(ENERGY_COLUMNS.map(String::from));
         let layout = Self {
             load_factors,
@@ -839,24 +893,30 @@ impl HistoryLayout {
     /// The row of a state at pseudo-time `time`.
     fn row(
         &self,
+        schedule: &Schedule,
         step: &StepResult,
         time: f64,
-        reactions: &[[f64; 2]],
-        resultants: &[[f64; 4]],
-        requested: &[f64],
+        [reactions, resultants, requested]: [&[f64]; 3],
     ) -> Vec<f64> {
         let residual = *step.newton.residuals.last().unwrap_or(&0.0);
         let mut row = vec![step.step as f64, time, step.load_factor];
-        row.extend(self.load_factors.iter().map(|f| f.value(0, time)));
+        row.extend(self.load_factors.iter().map(|&k| schedule.value(k, time)));
         row.extend([
             step.increments as f64,
             step.cutbacks as f64,
             step.newton.iterations as f64,
             residual,
         ]);
-        row.extend(reactions.iter().flatten());
-        row.extend(resultants.iter().flatten());
+        row.extend(reactions);
+        row.extend(resultants);
         row.extend(requested);
+        let f = &step.frame;
+        row.extend([
+            f.analysis_step as f64,
+            f.cycle as f64,
+            f.cycles,
+            f.step_time,
+        ]);
         let energy = &step.solution.energy.total;
         row.extend([
             energy.external_work,
@@ -920,6 +980,8 @@ struct StepWriter<'m, 's, F> {
     interface: InterfaceOutput,
     out_dir: PathBuf,
     vtu: bool,
+    /// Field output at every frame of a cyclic step (`[output] cycle_frames = "all"`).
+    all_frames: bool,
     /// The case's text when restart records are kept.
     case_text: Option<&'m str>,
     layout: HistoryLayout,
@@ -952,6 +1014,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             interface: InterfaceOutput::new(model),
             out_dir: session.out_dir.to_path_buf(),
             vtu: case.output.vtu,
+            all_frames: case.output.cycle_frames == CycleFrames::All,
             case_text: session.restart.map(|r| r.case_text.as_str()),
             layout,
             series: Vec::new(),
@@ -1032,7 +1095,8 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
     /// failed step, `progress` `None`), then the restart record, then the indexes.
     fn step(&mut self, step: &StepResult, progress: Option<&Progress>) -> Result<f64> {
         let start = Instant::now();
-        let row = self.write_step_files(step, step.step as f64)?;
+        let fields = self.all_frames || self.model.schedule.timeline().is_end_frame(step.step);
+        let row = self.write_step_files(step, step.step as f64, fields)?;
         self.history.rows.push(row);
         if let Some(p) = progress {
             self.queue_record(p)?;
@@ -1058,20 +1122,37 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         }
         (self.on_step)(self.model, step)?;
         self.bar.0.inc(1);
-        self.bar
-            .0
-            .set_message(format!("load factor {}", step.load_factor));
+        self.bar.0.set_message(self.progress_message(step));
         Ok(start.elapsed().as_secs_f64() + std::mem::take(&mut self.increment_seconds))
     }
 
-    /// Queues the VTU and CSV files of a state at pseudo-time `time` (each complete or
-    /// absent once written; not yet listed anywhere); returns its history row.
-    fn write_step_files(&mut self, step: &StepResult, time: f64) -> Result<Vec<f64>> {
+    /// The progress bar's message: the load factor, and in a case of several analysis steps
+    /// or cycles the step's name and the cycle.
+    fn progress_message(&self, step: &StepResult) -> String {
+        let timeline = self.model.schedule.timeline();
+        let f = &step.frame;
+        match timeline.steps().get(f.analysis_step.wrapping_sub(1)) {
+            Some(plan) if timeline.steps().len() > 1 || plan.is_cyclic() => format!(
+                "{} cycle {}/{} ({} of {} cycles)",
+                plan.name,
+                f.cycle,
+                plan.simulated(),
+                f.cycles,
+                plan.cycles
+            ),
+            _ => format!("load factor {}", step.load_factor),
+        }
+    }
+
+    /// Queues the files of a state at pseudo-time `time` (each complete or absent once
+    /// written; not yet listed anywhere): with `fields` its VTU and contact CSV files;
+    /// returns its history row.
+    fn write_step_files(&mut self, step: &StepResult, time: f64, fields: bool) -> Result<Vec<f64>> {
         let (mut post, mut vtu) = (0.0, 0.0);
         let start = Instant::now();
         let states = &step.solution.interface_committed;
         let mut entries = Vec::new();
-        if self.vtu {
+        if self.vtu && fields {
             let info = StepInfo {
                 step: step.step,
                 time,
@@ -1097,7 +1178,11 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             }
             vtu += t.elapsed().as_secs_f64();
         }
-        let tables = self.interface.tables(self.model, states);
+        let tables = if fields {
+            self.interface.tables(self.model, states)
+        } else {
+            Vec::new()
+        };
         for (pair, table) in self.model.interface.pairs.iter().zip(tables) {
             let file = format!("contact_{}_{:04}.csv", pair.name, step.step);
             self.records
@@ -1121,9 +1206,12 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         let reactions = reactions(model, step.internal_force, step.external_force);
         let resultants = resultants(model, &step.solution.interface_committed);
         let requested = evaluate(&self.case.history, model, step)?;
-        Ok(self
-            .layout
-            .row(step, time, &reactions, &resultants, &requested))
+        let values = [
+            reactions.as_flattened(),
+            resultants.as_flattened(),
+            &requested,
+        ];
+        Ok(self.layout.row(&model.schedule, step, time, values))
     }
 
     /// Queues the restart record of a converged increment (when the run keeps them).
@@ -1195,7 +1283,7 @@ impl<F: FnMut(&Model, &StepResult) -> Result<()>> Observer for StepWriter<'_, '_
     /// The last converged sub-increment of a failed step: its files and index entries at
     /// its fractional pseudo-time (no restart record: a resumed run retries the step).
     fn partial_step(&mut self, step: &StepResult, time: f64) -> Result<()> {
-        let row = self.write_step_files(step, time)?;
+        let row = self.write_step_files(step, time, true)?;
         self.history.rows.push(row);
         self.write_indexes()
     }

@@ -884,3 +884,209 @@ fn shipped_case_files_pass_the_checks() {
         }
     }
 }
+
+/// [`CASE`] with `[[step]]` tables (and whatever else `extra` holds) appended; its load is
+/// called `top` after its group.
+fn with_steps(extra: &str) -> String {
+    format!("{CASE}{extra}\n")
+}
+
+/// `[[step]]`, `[[amplitude]]` and load names: each defect names its case-file key.
+#[test]
+fn load_history_errors_name_their_key() {
+    use Expected::*;
+    let amplitude = |time: &str, value: &str| {
+        format!("[[amplitude]]\nname = \"a\"\ntime = {time}\nvalue = {value}\n")
+    };
+    let cases: Vec<(&str, String, Expected)> = vec![
+        (
+            "unknown load",
+            with_steps("[[step]]\nloads = { topp = 1.0 }"),
+            Invalid("step[0].loads.topp"),
+        ),
+        (
+            "unknown support",
+            with_steps("[[step]]\nloads = { top = 1.0 }\nsupports = { botom = 0.0 }"),
+            Invalid("step[0].supports.botom"),
+        ),
+        (
+            "unknown amplitude",
+            with_steps("[[step]]\nloads = { top = \"wave\" }"),
+            Invalid("step[0].loads.top"),
+        ),
+        (
+            "amplitude times not increasing",
+            with_steps(&format!(
+                "{}[[step]]\nloads = {{ top = \"a\" }}",
+                amplitude("[0.0, 0.5, 0.5, 1.0]", "[0.0, 1.0, 1.0, 0.0]")
+            )),
+            Invalid("amplitude[0].time"),
+        ),
+        (
+            "amplitude times not from 0 to 1",
+            with_steps(&format!(
+                "{}[[step]]\nloads = {{ top = \"a\" }}",
+                amplitude("[0.0, 0.5]", "[0.0, 1.0]")
+            )),
+            Invalid("amplitude[0].time"),
+        ),
+        (
+            "amplitude lengths differ",
+            with_steps(&format!(
+                "{}[[step]]\nloads = {{ top = \"a\" }}",
+                amplitude("[0.0, 1.0]", "[0.0, 1.0, 2.0]")
+            )),
+            Invalid("amplitude[0].value"),
+        ),
+        (
+            "amplitude value NaN",
+            with_steps(&format!(
+                "{}[[step]]\nloads = {{ top = \"a\" }}",
+                amplitude("[0.0, 1.0]", "[0.0, nan]")
+            )),
+            Invalid("amplitude[0].value"),
+        ),
+        (
+            "inline amplitude starting after 0",
+            with_steps("[[step]]\nloads = { top = { time = [0.1, 1.0], value = [0.0, 1.0] } }"),
+            Invalid("step[0].loads.top.time"),
+        ),
+        (
+            "ramp target NaN",
+            with_steps("[[step]]\nloads = { top = nan }"),
+            Invalid("step[0].loads.top"),
+        ),
+        (
+            "amplitude jumps from the previous step's end value",
+            with_steps(
+                "[[step]]\nloads = { top = 1.0 }\n[[step]]\nloads = { top = { time = [0.0, 1.0], value = [0.5, 1.0] } }",
+            ),
+            Invalid("step[1].loads.top"),
+        ),
+        (
+            "cyclic amplitude not ending where it starts",
+            with_steps(
+                "[[step]]\ncycles = 3\nloads = { top = { time = [0.0, 1.0], value = [0.0, 1.0] } }",
+            ),
+            Invalid("step[0].loads.top"),
+        ),
+        (
+            "cyclic step without an amplitude",
+            with_steps("[[step]]\ncycles = 3\nloads = { top = 1.0 }"),
+            Invalid("step[0].cycles"),
+        ),
+        (
+            "ramp in a cyclic step",
+            with_steps(
+                "[[step]]\nloads = { top = 1.0 }\n[[step]]\ncycles = 2\nloads = { top = 2.0 }\nsupports = { bottom = { time = [0.0, 1.0], value = [0.0, 0.0] } }",
+            ),
+            Invalid("step[1].loads.top"),
+        ),
+        (
+            "[steps] with [[step]]",
+            with_steps("[[step]]\nloads = { top = 1.0 }\n[steps]\ncount = 2"),
+            Invalid("steps"),
+        ),
+        (
+            "arc length with [[step]]",
+            with_steps("[[step]]\nloads = { top = 1.0 }\n[steps]\ncontrol = \"arc_length\""),
+            Invalid("steps.control"),
+        ),
+        (
+            "per-load factors with [[step]]",
+            case_edit("pressure = 1.0", "pressure = 1.0\nfactors = [1.0]")
+                + "[[step]]\nloads = { top = 1.0 }\n",
+            Invalid("load[0].factors"),
+        ),
+        (
+            "load named in no step",
+            with_steps("[[step]]\nsupports = { bottom = 0.0 }"),
+            Invalid("load[0]"),
+        ),
+        (
+            "non-zero support named in no step",
+            with_steps(
+                "[[support]]\nname = \"lift\"\ngroup = \"top\"\nux = 0.01\n[[step]]\nloads = { top = 1.0 }",
+            ),
+            Invalid("support[1]"),
+        ),
+        (
+            "cycles = 0",
+            with_steps("[[step]]\ncycles = 0\nloads = { top = 1.0 }"),
+            Invalid("step[0].cycles"),
+        ),
+        (
+            "increments = 0",
+            with_steps("[[step]]\nincrements = 0\nloads = { top = 1.0 }"),
+            Invalid("step[0].increments"),
+        ),
+        (
+            "cycles_per_jump = 0",
+            with_steps(
+                "[[step]]\ncycles = 4\ncycles_per_jump = 0\nloads = { top = { time = [0.0, 0.5, 1.0], value = [0.0, 1.0, 0.0] } }",
+            ),
+            Invalid("step[0].cycles_per_jump"),
+        ),
+        (
+            "cycles_per_jump above cycles",
+            with_steps(
+                "[[step]]\ncycles = 4\ncycles_per_jump = 5\nloads = { top = { time = [0.0, 0.5, 1.0], value = [0.0, 1.0, 0.0] } }",
+            ),
+            Invalid("step[0].cycles_per_jump"),
+        ),
+        (
+            "too many simulated increments",
+            with_steps(
+                "[[step]]\ncycles = 1000000\nloads = { top = { time = [0.0, 0.5, 1.0], value = [0.0, 1.0, 0.0] } }",
+            ),
+            Invalid("step[0].increments"),
+        ),
+        (
+            "two loads of one name",
+            with_steps(
+                "[[load]]\ngroup = \"top\"\ntraction = [1.0, 0.0]\n[[step]]\nloads = { top = 1.0 }",
+            ),
+            Invalid("load[1].name"),
+        ),
+        (
+            "two steps of one name",
+            with_steps(
+                "[[step]]\nname = \"s\"\nloads = { top = 1.0 }\n[[step]]\nname = \"s\"\nloads = { top = 0.0 }",
+            ),
+            Invalid("step[1].name"),
+        ),
+        (
+            "unsafe step name",
+            with_steps("[[step]]\nname = \"a/../b\"\nloads = { top = 1.0 }"),
+            Invalid("step[0].name"),
+        ),
+        (
+            "amplitude without [[step]]",
+            with_steps(&amplitude("[0.0, 1.0]", "[0.0, 1.0]")),
+            Invalid("amplitude[0]"),
+        ),
+        (
+            "load history of the wrong type",
+            with_steps("[[step]]\nloads = { top = true }"),
+            Case,
+        ),
+        (
+            "unknown step key",
+            with_steps("[[step]]\ncycle = 3\nloads = { top = 1.0 }"),
+            Case,
+        ),
+    ];
+    let count = cases.len();
+    for (label, case, expected) in cases {
+        bad_case(label, &case, expected);
+    }
+    assert!(count >= 25);
+    // The same case with a valid history runs.
+    let (result, _dir) = run(
+        &with_steps(
+            "[[step]]\nincrements = 2\nloads = { top = 1.0 }\n[[step]]\ncycles = 2\nloads = { top = { time = [0.0, 0.5, 1.0], value = [1.0, -1.0, 1.0] } }",
+        ),
+        Some(MESH.as_bytes()),
+    );
+    result.unwrap();
+}

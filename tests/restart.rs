@@ -288,3 +288,115 @@ fn resume_continues_only_the_same_case() {
     assert_eq!(code, Some(0), "{text}");
     assert!(fresh.join("bodies_0003.vtu").is_file());
 }
+
+/// A frictional pair pressed in one step, then sheared back and forth in a cyclic step whose
+/// five cycles are simulated as three (2 + 2 + 1 by cycle jumping).
+const MULTI_STEP: &str = "[analysis]
+type = \"plane_strain\"
+[[body]]
+group = \"lower\"
+material = { E = 1000.0, nu = 0.3 }
+[[body]]
+group = \"upper\"
+material = { E = 1000.0, nu = 0.3 }
+[[support]]
+group = \"base\"
+ux = 0.0
+uy = 0.0
+[[support]]
+name = \"press\"
+group = \"lid\"
+uy = -0.01
+[[support]]
+name = \"shear\"
+group = \"lid\"
+ux = 0.03
+[[contact]]
+name = \"joint\"
+side_a = \"lower_top\"
+side_b = \"upper_bottom\"
+law = { type = \"linear_coulomb\", normal_stiffness = 1e4, tangential_stiffness = 1e4, friction = 0.2 }
+[[step]]
+name = \"press\"
+increments = 2
+supports = { press = 1.0 }
+[[step]]
+name = \"fret\"
+cycles = 5
+cycles_per_jump = 2
+increments = 4
+supports = { shear = { time = [0.0, 0.25, 0.75, 1.0], value = [0.0, 1.0, -1.0, 0.0] } }
+";
+
+/// Every frame of a run (step number and the bits of the displacements and interface
+/// stresses), and the state to resume from after each.
+#[derive(Default)]
+struct Frames {
+    frames: Vec<(usize, Vec<u64>)>,
+    resumes: Vec<asperity::solver::stepping::Resume>,
+    slipping: bool,
+}
+
+impl asperity::solver::stepping::Observer for Frames {
+    fn step(
+        &mut self,
+        step: &asperity::solver::stepping::StepResult,
+        progress: &asperity::solver::stepping::Progress,
+    ) -> asperity::Result<f64> {
+        let s = step.solution;
+        let mut values = bits(&s.u);
+        for p in &s.interface_committed {
+            values.extend(bits(&p.stress));
+            self.slipping |= p.status == ContactStatus::Slip;
+        }
+        self.frames.push((step.step, values));
+        self.resumes.push(asperity::solver::stepping::Resume {
+            state: progress.state,
+            stats: progress.stats.clone(),
+            solution: progress.solution.clone(),
+        });
+        Ok(0.0)
+    }
+}
+
+#[test]
+fn a_multi_step_cyclic_run_resumed_from_any_frame_is_bit_identical() {
+    use asperity::model::{Model, ModelSpec};
+    use asperity::solver::stepping::run_steps_from;
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/contact_pair.msh");
+    let text = format!(
+        "[mesh]\nfile = {:?}\n{MULTI_STEP}",
+        fixture.display().to_string()
+    );
+    let case = asperity::config::Case::from_toml(&text, Path::new("case.toml")).unwrap();
+    let settings = asperity::pipeline::newton_settings(&case.solver);
+    let model = Model::build(
+        asperity::mesh::msh::read_msh(&fixture).unwrap(),
+        ModelSpec::new(&case).unwrap(),
+    )
+    .unwrap();
+    let mut reference = Frames::default();
+    run_steps_from(&model, &settings, None, &mut reference).unwrap();
+    assert_eq!(reference.frames.len(), 2 + 3 * 4);
+    assert!(reference.slipping, "the case must slip to test anything");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("restart.bin");
+    for (k, resume) in reference.resumes.iter().enumerate() {
+        // Through the record, as `--resume` reads it.
+        let mut writer = RecordWriter::default();
+        let output = OutputState::default();
+        let (state, stats, solution) = (&resume.state, &resume.stats, &resume.solution);
+        writer
+            .write(&path, &text, state, stats, solution, &output)
+            .unwrap();
+        writer.finish().unwrap();
+        let record = read_record(&path, &text, &Solution::new(&model)).unwrap();
+        let mut resumed = Frames::default();
+        run_steps_from(&model, &settings, Some(record.resume), &mut resumed).unwrap();
+        assert!(
+            resumed.frames == reference.frames[k + 1..],
+            "resumed after frame {} differs",
+            k + 1
+        );
+    }
+}

@@ -22,10 +22,12 @@ pub mod history;
 mod names;
 mod quantity;
 pub mod wear;
+mod steps;
 
 pub use check::{MAX_CUTBACKS, MAX_ITERATIONS, MAX_STEPS, MAX_TOLERANCE};
 pub use names::{MAX_NAME_LEN, check_name};
 pub use quantity::{Component, QuantityKind, QuantitySpec, Statistic, parse_quantity};
+pub use steps::{AmplitudeSpec, InlineAmplitude, Leg, Motion, Role, StepSpec, Target};
 
 /// A parsed case file.
 #[derive(Clone, Debug, Deserialize, JsonSchema)]
@@ -43,8 +45,15 @@ pub struct Case {
     /// Contact pairs carried by interface elements.
     #[serde(default, rename = "contact")]
     pub contacts: Vec<ContactSpec>,
+    /// The simple load schedule (exclusive with `[[step]]`).
     #[serde(default)]
     pub steps: Steps,
+    /// Analysis steps in sequence (`[[step]]`, exclusive with `[steps]`).
+    #[serde(default, rename = "step")]
+    pub analysis_steps: Vec<StepSpec>,
+    /// Named amplitudes the steps refer to (`[[amplitude]]`).
+    #[serde(default, rename = "amplitude")]
+    pub amplitudes: Vec<AmplitudeSpec>,
     #[serde(default)]
     pub solver: SolverSpec,
     #[serde(default)]
@@ -156,6 +165,8 @@ pub struct MaterialSpec {
     "^uz$": {"description": "alias of uy: z displacement", "type": ["number", "null"]}
 }))]
 pub struct SupportSpec {
+    /// Name the `[[step]]` tables use (default: the group); unique among supports.
+    pub name: Option<String>,
     /// Name of a physical curve or physical point.
     pub group: String,
     /// x (or r) displacement.
@@ -172,6 +183,8 @@ pub struct SupportSpec {
 #[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LoadSpec {
+    /// Name the `[[step]]` tables use (default: the group); unique among loads.
+    pub name: Option<String>,
     /// Name of a physical curve (pressure, traction) or physical point (force).
     pub group: String,
     /// Normal pressure in MPa on a curve, positive pushing into the body.
@@ -185,6 +198,25 @@ pub struct LoadSpec {
     pub force: Option<[f64; 2]>,
     /// This load's own history: one factor per step (default: the `[steps]` factors).
     pub factors: Option<Vec<f64>>,
+}
+
+impl SupportSpec {
+    /// The support's name: `name`, else its group.
+    pub fn name(&self) -> &str {
+        self.name.as_deref().unwrap_or(&self.group)
+    }
+
+    /// Whether it prescribes a non-zero value (so that its history matters).
+    pub fn is_nonzero(&self) -> bool {
+        [self.ux, self.uy].iter().flatten().any(|&v| v != 0.0)
+    }
+}
+
+impl LoadSpec {
+    /// The load's name: `name`, else its group.
+    pub fn name(&self) -> &str {
+        self.name.as_deref().unwrap_or(&self.group)
+    }
 }
 
 /// A contact pair: which curves face each other, how their nodes are paired, the interface
@@ -609,6 +641,22 @@ pub struct OutputSpec {
     /// Write VTU/PVD field output (on by default). CSV tables are always written.
     #[serde(default = "yes")]
     pub vtu: bool,
+    /// Which frames of a cyclic step get field output (VTU, contact CSV): `"ends"`
+    /// (default) or `"all"`. `history.csv` always has every frame.
+    #[serde(default)]
+    pub cycle_frames: CycleFrames,
+}
+
+/// The frames of a cyclic step that get field output (`[output] cycle_frames`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum CycleFrames {
+    /// Every increment of the first and the last simulated cycle, and the last increment of
+    /// every other cycle.
+    #[default]
+    Ends,
+    /// Every increment.
+    All,
 }
 
 fn yes() -> bool {
@@ -620,6 +668,7 @@ impl Default for OutputSpec {
         Self {
             dir: None,
             vtu: true,
+            cycle_frames: CycleFrames::Ends,
         }
     }
 }
@@ -641,6 +690,7 @@ impl Case {
         case.base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         case.validate()?;
         case.check_analysis_keys(text)?;
+        case.check_history_form(text)?;
         Ok(case)
     }
 
@@ -805,6 +855,7 @@ impl Case {
             (None, Some(0)) => return Err(self.invalid("steps.count", 0, "must be at least 1")),
             _ => {}
         }
+        self.check_analysis_steps()?;
         let steps = self.steps.len();
         let own = self.supports.iter().map(|s| &s.factors).enumerate();
         let own = own

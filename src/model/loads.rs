@@ -1,6 +1,7 @@
-//! Loads: the load histories (amplitudes) and the consistent nodal forces of pressures,
-//! tractions and point forces.
+//! Loads: the load histories (amplitudes over the analysis steps) and the consistent nodal
+//! forces of pressures, tractions and point forces.
 
+use super::timeline::{StepPlan, Timeline};
 use super::{LineLoad, Load, LoadKind, Model, boundary_group};
 use crate::element::Analysis;
 use crate::element::quadrature::GAUSS3;
@@ -11,52 +12,224 @@ use crate::mesh::Mesh;
 use crate::mesh::topology::EdgeIndex;
 use crate::{Error, Result};
 
-/// Load histories ("amplitudes"): amplitude 0 is the case's `[steps]` schedule, and every
-/// support or load with its own `factors` adds one. An amplitude is piecewise linear in the
-/// pseudo-time τ ∈ [0, steps]: 0 at τ = 0 and `factors[j − 1]` at τ = j, so that a step cut
-/// back into sub-increments moves every load along its own straight line.
-#[derive(Clone, Debug)]
-pub struct Schedule {
-    amplitudes: Vec<Vec<f64>>,
+/// A piecewise-linear multiplier over the local time u ∈ [u₀, u_last] of one step (or one
+/// cycle of it, see [`super::timeline`]): through the knots (u_i, v_i), constant beyond
+/// them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table {
+    u: Vec<f64>,
+    v: Vec<f64>,
 }
 
+impl Table {
+    /// Knots `u` (strictly increasing, at least one) and values `v` of the same length.
+    pub fn new(u: Vec<f64>, v: Vec<f64>) -> Self {
+        debug_assert!(!u.is_empty() && u.len() == v.len());
+        Self { u, v }
+    }
+
+    /// A constant value over `increments`.
+    pub fn constant(value: f64, increments: usize) -> Self {
+        Self::ramp(value, value, increments)
+    }
+
+    /// From `from` at u = 0 linearly to `to` at u = `increments`.
+    pub fn ramp(from: f64, to: f64, increments: usize) -> Self {
+        Self::new(vec![0.0, increments as f64], vec![from, to])
+    }
+
+    /// The value at local time `u`. A knot belongs to the segment that ends there (as a
+    /// step's end belongs to the step), so at u = u_i the value is v_{i−1} + 1·(v_i − v_{i−1}).
+    pub fn value(&self, u: f64) -> f64 {
+        if self.u.len() == 1 {
+            return self.v[0];
+        }
+        let (u0, last) = (self.u[0], self.u[self.u.len() - 1]);
+        let u = u.clamp(u0, last);
+        let i = self
+            .u
+            .partition_point(|&x| x < u)
+            .clamp(1, self.u.len() - 1);
+        let theta = (u - self.u[i - 1]) / (self.u[i] - self.u[i - 1]);
+        self.v[i - 1] + theta * (self.v[i] - self.v[i - 1])
+    }
+
+    /// The first knot strictly between `from` and `to` (more than `eps` inside), if any.
+    fn knot_between(&self, from: f64, to: f64, eps: f64) -> Option<f64> {
+        let i = self.u.partition_point(|&x| x <= from + eps);
+        self.u.get(i).copied().filter(|&x| x < to - eps)
+    }
+}
+
+/// The history of one load or support as the case gives it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum History {
+    /// The global load factor of `[steps]` (a zero support of `[[step]]`).
+    Global,
+    /// Its own multiplier: one table per analysis step, and the `history.csv` column that
+    /// shows it (`factor_<role>_<name>`).
+    Own { column: String, tables: Vec<Table> },
+}
+
+/// Load histories ("amplitudes") over the case's [`Timeline`]: amplitude 0 is the global load
+/// factor of a `[steps]` schedule (zero with `[[step]]`, where nothing follows it), and every
+/// support or load with its own history adds one. Each amplitude is piecewise linear in the
+/// local time of every step (repeated in each cycle of a cyclic step) and is evaluated
+/// exactly at any pseudo-time, so that an increment cut back into sub-increments moves every
+/// load along its own amplitude, and the stepping can end sub-increments at the amplitudes'
+/// breakpoints ([`Schedule::next_time`]).
+#[derive(Clone, Debug)]
+pub struct Schedule {
+    timeline: Timeline,
+    /// Per amplitude, one table per step.
+    amplitudes: Vec<Vec<Table>>,
+    /// The `[steps]` load factors (exact at the end of each step); `None` with `[[step]]`,
+    /// whose load factor is the total analysis time.
+    factors: Option<Vec<f64>>,
+    /// `history.csv` columns of the own histories: (column, amplitude).
+    columns: Vec<(String, usize)>,
+}
+
+/// Breakpoints closer than this (in output increments) to a sub-increment's start or end do
+/// not end a sub-increment.
+const KNOT_TOLERANCE: f64 = 1e-9;
+
 impl Schedule {
-    /// Schedule with the global factors only.
+    /// The `[steps]` schedule: one step of `factors.len()` increments, the global factor 0
+    /// at τ = 0 and `factors[j − 1]` at τ = j.
     pub fn new(factors: Vec<f64>) -> Self {
+        let n = factors.len();
+        let timeline = Timeline::new(vec![StepPlan::new("step-1".into(), n, 1, 1)]);
+        let global = factor_table(&factors);
         Self {
-            amplitudes: vec![factors],
+            timeline,
+            amplitudes: vec![vec![global]],
+            factors: Some(factors),
+            columns: Vec::new(),
         }
     }
 
-    /// Adds an amplitude (or returns 0, the global one, for `None`).
-    pub(super) fn add(&mut self, factors: &Option<Vec<f64>>) -> usize {
-        match factors {
-            Some(f) => {
-                self.amplitudes.push(f.clone());
-                self.amplitudes.len() - 1
+    /// The schedule of `[[step]]` analysis steps (amplitudes are added with [`Self::add`]).
+    pub fn with_steps(timeline: Timeline) -> Self {
+        let zero = timeline
+            .steps()
+            .iter()
+            .map(|s| Table::constant(0.0, s.increments))
+            .collect();
+        Self {
+            timeline,
+            amplitudes: vec![zero],
+            factors: None,
+            columns: Vec::new(),
+        }
+    }
+
+    /// Adds a history's amplitude and returns its index (0, the global one, for
+    /// [`History::Global`]).
+    pub(super) fn add(&mut self, history: &History) -> usize {
+        match history {
+            History::Own { column, tables } => {
+                self.amplitudes.push(tables.clone());
+                let k = self.amplitudes.len() - 1;
+                self.columns.push((column.clone(), k));
+                k
             }
-            None => 0,
+            History::Global => 0,
         }
     }
 
-    /// Number of steps.
-    pub fn steps(&self) -> usize {
-        self.amplitudes[0].len()
+    /// The analysis steps and cycles.
+    pub fn timeline(&self) -> &Timeline {
+        &self.timeline
     }
 
-    /// The global load factor at the end of step `step` (1-based).
+    /// Number of output increments (frames) over all steps and simulated cycles.
+    pub fn steps(&self) -> usize {
+        self.timeline.frames()
+    }
+
+    /// The `history.csv` columns of the loads and supports with their own history, with
+    /// their amplitude.
+    pub fn columns(&self) -> &[(String, usize)] {
+        &self.columns
+    }
+
+    /// The load factor at the end of output increment `step` (1-based): the `[steps]`
+    /// factor, or the total analysis time with `[[step]]`.
     pub fn load_factor(&self, step: usize) -> f64 {
-        self.amplitudes[0][step - 1]
+        match &self.factors {
+            Some(f) => f[step - 1],
+            None => self.timeline.analysis_time(step as f64),
+        }
+    }
+
+    /// The load factor at pseudo-time `time` (as [`Self::load_factor`]).
+    pub fn load_factor_at(&self, time: f64) -> f64 {
+        match &self.factors {
+            Some(_) => self.value(0, time),
+            None => self.timeline.analysis_time(time),
+        }
     }
 
     /// Value of amplitude `k` at pseudo-time `time`.
     pub fn value(&self, k: usize, time: f64) -> f64 {
-        let a = &self.amplitudes[k];
-        let knot = |j: usize| if j == 0 { 0.0 } else { a[j - 1] };
-        let time = time.clamp(0.0, a.len() as f64);
-        let j = (time.ceil() as usize).max(1);
-        let theta = time - (j - 1) as f64;
-        knot(j - 1) + theta * (knot(j) - knot(j - 1))
+        let p = self.timeline.locate(time);
+        self.amplitudes[k][p.step].value(p.u)
+    }
+
+    /// How much the load level changes from pseudo-time `from` to `to` (for the secant
+    /// stiffness of the collapse check): the change of the global factor with `[steps]`,
+    /// the Euclidean norm of the change of every own multiplier with `[[step]]`.
+    pub fn load_change(&self, from: f64, to: f64) -> f64 {
+        if self.factors.is_some() {
+            return self.value(0, to) - self.value(0, from);
+        }
+        let (a, b) = (self.timeline.locate(from), self.timeline.locate(to));
+        self.amplitudes[1..]
+            .iter()
+            .map(|tables| {
+                let d = tables[b.step].value(b.u) - tables[a.step].value(a.u);
+                d * d
+            })
+            .sum::<f64>()
+            .sqrt()
+    }
+
+    /// The end of the next sub-increment from pseudo-time `time` towards `target` (the end
+    /// of output increment `target`) with size `size`: `target` when within 1e-12 of it,
+    /// else the first breakpoint of an amplitude inside the interval when there is one (so
+    /// that no peak or reversal of a load is cut off), else `time + size`.
+    pub fn next_time(&self, time: f64, size: f64, target: f64) -> f64 {
+        let end = if time + size >= target - 1e-12 {
+            target
+        } else {
+            time + size
+        };
+        let p = self.timeline.locate(target);
+        let base = target - p.u;
+        let (from, to) = (time - base, end - base);
+        self.amplitudes
+            .iter()
+            .filter_map(|tables| tables[p.step].knot_between(from, to, KNOT_TOLERANCE))
+            .reduce(f64::min)
+            .map_or(end, |u| base + u)
+    }
+}
+
+/// The `[steps]` table of factors: 0 at u = 0, `factors[j − 1]` at u = j.
+fn factor_table(factors: &[f64]) -> Table {
+    let u = (0..=factors.len()).map(|j| j as f64).collect();
+    let v = std::iter::once(0.0)
+        .chain(factors.iter().copied())
+        .collect();
+    Table::new(u, v)
+}
+
+/// A load's or support's own `[steps]` factors as a history showing in column `column`.
+pub fn factors_history(column: String, factors: &[f64]) -> History {
+    History::Own {
+        column,
+        tables: vec![factor_table(factors)],
     }
 }
 
@@ -78,7 +251,7 @@ impl Model {
 }
 
 /// The external nodal forces of the loads at load factor 1: (dof, force, amplitude), load
-/// after load (adding their own histories to `schedule`, in order).
+/// after load (adding their histories to `schedule`, in order).
 pub(super) fn nodal_loads(
     mesh: &Mesh,
     analysis: Analysis,
@@ -206,5 +379,58 @@ fn add_line_load(
             load[2 * nodes[i] as usize] += n[i] * t[0] * m;
             load[2 * nodes[i] as usize + 1] += n[i] * t[1] * m;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The `[steps]` amplitude as it was evaluated before analysis steps existed: knot
+    /// `factors[j − 1]` at τ = j, linear in between, clamped.
+    fn linear_in_steps(factors: &[f64], time: f64) -> f64 {
+        let knot = |j: usize| if j == 0 { 0.0 } else { factors[j - 1] };
+        let time = time.clamp(0.0, factors.len() as f64);
+        let j = (time.ceil() as usize).max(1);
+        let theta = time - (j - 1) as f64;
+        knot(j - 1) + theta * (knot(j) - knot(j - 1))
+    }
+
+    #[test]
+    fn a_steps_schedule_evaluates_bit_for_bit_as_the_linear_factors() {
+        let factors = [0.1, 0.7, 1.0 / 3.0, -0.2, 0.0];
+        let s = Schedule::new(factors.to_vec());
+        for k in 0..=600 {
+            let time = -0.5 + k as f64 / 97.0;
+            let (a, b) = (s.value(0, time), linear_in_steps(&factors, time));
+            assert_eq!(a.to_bits(), b.to_bits(), "τ = {time}");
+        }
+        assert_eq!(s.load_factor(3), 1.0 / 3.0);
+        // No breakpoint lies inside a step of a [steps] schedule: sub-increments are halves.
+        assert_eq!(s.next_time(1.0, 0.5, 2.0), 1.5);
+        assert_eq!(s.next_time(1.5, 1.0, 2.0), 2.0);
+    }
+
+    #[test]
+    fn sub_increments_end_on_the_breakpoints_of_every_cycle() {
+        // One step of 2 increments per cycle, 3 cycles; breakpoints at step time 0.3 and 0.8
+        // (u = 0.6 and 1.6).
+        let timeline = Timeline::new(vec![StepPlan::new("s".into(), 2, 3, 1)]);
+        let mut s = Schedule::with_steps(timeline);
+        let table = Table::new(vec![0.0, 0.6, 1.6, 2.0], vec![0.0, 1.0, -1.0, 0.0]);
+        s.add(&History::Own {
+            column: "factor_load_x".into(),
+            tables: vec![table],
+        });
+        // Second cycle (τ from 2 to 4): the first increment ends on the breakpoint 2.6.
+        assert_eq!(s.next_time(2.0, 1.0, 3.0), 2.6);
+        assert_eq!(s.next_time(2.6, 2.0, 3.0), 3.0);
+        assert!((s.next_time(3.0, 1.0, 4.0) - 3.6).abs() < 1e-15);
+        // The values at the breakpoints (up to the round-off of τ − cycle start), and the
+        // ramps between them.
+        assert!((s.value(1, 2.6) - 1.0).abs() < 1e-15);
+        assert!((s.value(1, 4.8) - (1.0 - 2.0 * 0.2)).abs() < 1e-15);
+        assert_eq!(s.value(1, 6.0), 0.0);
+        assert_eq!(s.load_factor(3), 0.5);
     }
 }

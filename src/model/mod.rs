@@ -11,7 +11,7 @@ mod spec;
 pub mod timeline;
 
 pub use constraints::{AXIS_SUPPORT, Support};
-pub use loads::Schedule;
+pub use loads::{History, Schedule, Table};
 pub use spec::{
     ArcLength, Body, Contact, Control, LineLoad, Load, LoadKind, ModelSpec, Prescribed,
     load_factors,
@@ -69,7 +69,7 @@ impl Model {
             supports,
             loads,
             contacts,
-            factors,
+            mut schedule,
             control,
         } = spec;
         // Interfaces first: splitting a conforming curve re-points body B's cells.
@@ -78,7 +78,6 @@ impl Model {
         let in_body = nodes_in_bodies(&continuum, mesh.nodes.len());
         let scale = model_scale(&mesh);
         let interface = build_interface(&mesh, analysis, contacts, topologies, scale)?;
-        let mut schedule = Schedule::new(factors);
         let Constraints {
             supports,
             prescribed,

@@ -4,9 +4,11 @@
 //! checked before any mesh exists; [`Model::build`](super::Model::build) consumes the spec.
 
 use crate::config::wear::{WearLawKind, WearSpec};
+use super::loads::{History, Schedule, Table, factors_history};
+use super::timeline::{StepPlan, Timeline};
 use crate::config::{
     AnalysisSpec, Case, ContactAlgorithmKind, ControlKind, Faces, FormulationKind, IntegrationKind,
-    LawSpec, MaterialSpec, PairingKind, Steps,
+    LawSpec, Leg, MaterialSpec, Motion, PairingKind, Role, Steps,
 };
 use crate::contact::linear::LinearCoulomb;
 use crate::contact::rough::RoughJoint;
@@ -31,8 +33,9 @@ pub struct ModelSpec {
     pub supports: Vec<Prescribed>,
     pub loads: Vec<Load>,
     pub contacts: Vec<Contact>,
-    /// The global load factor at the end of each step.
-    pub factors: Vec<f64>,
+    /// The analysis steps and the global load factor (the supports' and loads' own
+    /// histories are added when the model is built).
+    pub schedule: Schedule,
     /// How the steps are controlled and when a converged increment is implausible.
     pub control: Control,
 }
@@ -94,8 +97,9 @@ pub struct Prescribed {
     pub group: String,
     /// (u_x, u_y); `None` leaves the component free.
     pub values: [Option<f64>; 2],
-    /// The support's own load factor per step, if it has its own history.
-    pub factors: Option<Vec<f64>>,
+    /// The support's history: the global factor, or its own (`factors` of `[steps]`, its
+    /// `[[step]]` tables).
+    pub factors: History,
 }
 
 /// A load at load factor 1.
@@ -103,8 +107,9 @@ pub struct Prescribed {
 pub struct Load {
     pub group: String,
     pub kind: LoadKind,
-    /// The load's own factor per step, if it has its own history.
-    pub factors: Option<Vec<f64>>,
+    /// The load's history: the global factor, or its own (`factors` of `[steps]`, its
+    /// `[[step]]` tables).
+    pub factors: History,
 }
 
 /// What a load applies.
@@ -222,7 +227,7 @@ impl ModelSpec {
             .map(|s| Prescribed {
                 group: s.group.clone(),
                 values: [s.ux, s.uy],
-                factors: s.factors.clone(),
+                factors: history(case, Role::Support, s.name(), s.factors.as_deref()),
             })
             .collect();
         let loads: Vec<Load> = case
@@ -243,7 +248,7 @@ impl ModelSpec {
                 Ok(Load {
                     group: l.group.clone(),
                     kind,
-                    factors: l.factors.clone(),
+                    factors: history(case, Role::Load, l.name(), l.factors.as_deref()),
                 })
             })
             .collect::<Result<_>>()?;
@@ -272,7 +277,7 @@ impl ModelSpec {
                 .bodies
                 .iter()
                 .any(|b| b.material.yield_stress.is_some()),
-            arc_length: arc_length(case, &supports, &loads)?,
+            arc_length: arc_length(case, &supports)?,
         };
         Ok(Self {
             analysis: case.analysis.into(),
@@ -280,15 +285,63 @@ impl ModelSpec {
             supports,
             loads,
             contacts,
-            factors: load_factors(&case.steps),
+            schedule: schedule(case),
             control,
         })
     }
 }
 
+/// The analysis steps of `case` with the global load factor: the `[steps]` factors, or the
+/// `[[step]]` steps (cycles per jump defaulting by whether a contact wears).
+fn schedule(case: &Case) -> Schedule {
+    if !case.has_analysis_steps() {
+        return Schedule::new(load_factors(&case.steps));
+    }
+    let wear = case.has_wear();
+    let steps =
+        case.analysis_steps.iter().enumerate().map(|(i, s)| {
+            StepPlan::new(s.name(i), s.increments, s.cycles, s.cycles_per_jump(wear))
+        });
+    Schedule::with_steps(Timeline::new(steps.collect()))
+}
+
+/// The history of the support or load `name`: its own `[steps]` factors if given, else the
+/// global factor; with `[[step]]` a table per step, from its motions through the steps (the
+/// global, zero, amplitude for a support that no step names: it holds its zero value).
+fn history(case: &Case, role: Role, name: &str, factors: Option<&[f64]>) -> History {
+    let column = format!("factor_{}_{name}", role.name());
+    if !case.has_analysis_steps() {
+        return factors.map_or(History::Global, |f| factors_history(column, f));
+    }
+    let legs = case.legs(role, name);
+    if legs.iter().all(|l| l.motion == Motion::Hold) {
+        return History::Global;
+    }
+    let tables = case
+        .analysis_steps
+        .iter()
+        .zip(&legs)
+        .map(|(step, leg)| leg_table(leg, step.increments))
+        .collect();
+    History::Own { column, tables }
+}
+
+/// The table of one motion over a step (or cycle) of `increments` output increments: local
+/// time u = step time × increments.
+fn leg_table(leg: &Leg, increments: usize) -> Table {
+    match leg.motion {
+        Motion::Hold | Motion::Table(None) => Table::constant(leg.start, increments),
+        Motion::Ramp(to) => Table::ramp(leg.start, to, increments),
+        Motion::Table(Some((time, value))) => {
+            let n = increments as f64;
+            Table::new(time.iter().map(|t| t * n).collect(), value.to_vec())
+        }
+    }
+}
+
 /// The arc-length settings of `[steps]`, checked, when `control = "arc_length"`: the loads
 /// must all follow the global load factor and no support may prescribe a non-zero value.
-fn arc_length(case: &Case, supports: &[Prescribed], loads: &[Load]) -> Result<Option<ArcLength>> {
+fn arc_length(case: &Case, supports: &[Prescribed]) -> Result<Option<ArcLength>> {
     let steps = &case.steps;
     if steps.control != ControlKind::ArcLength {
         return Ok(None);
@@ -308,7 +361,7 @@ fn arc_length(case: &Case, supports: &[Prescribed], loads: &[Load]) -> Result<Op
             ),
         ));
     }
-    if let Some(l) = loads.iter().find(|l| l.factors.is_some()) {
+    if let Some(l) = case.loads.iter().find(|l| l.factors.is_some()) {
         return Err(case.invalid(
             control,
             "\"arc_length\"",
@@ -506,7 +559,8 @@ mod tests {
             ..Steps::default()
         };
         assert_eq!(load_factors(&s), vec![0.25, 0.5, 0.75, 1.0]);
-        assert_eq!(spec(CASE).unwrap().factors, vec![1.0]);
+        let schedule = spec(CASE).unwrap().schedule;
+        assert_eq!((schedule.steps(), schedule.load_factor(1)), (1, 1.0));
     }
 
     #[test]

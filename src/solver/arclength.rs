@@ -16,6 +16,7 @@
 //! the plateau of the limit load); the largest λ reached is logged.
 
 use crate::assembly::{AssemblyInput, GlobalSystem};
+use crate::model::timeline::Frame;
 use crate::model::{ArcLength, Model};
 use crate::solver::energy;
 use crate::solver::linear::CholeskySolver;
@@ -201,8 +202,16 @@ pub fn run_arc_length(
                 solution.commit();
                 u_c.copy_from_slice(&solution.u);
                 stats.last_residual = *log.residuals.last().unwrap_or(&0.0);
+                // One analysis step, its time the load factor's progress to its bound.
+                let frame = Frame {
+                    analysis_step: 1,
+                    cycle: 1,
+                    cycles: 1.0,
+                    step_time: (lambda / arc.max_load_factor).clamp(0.0, 1.0),
+                    cycle_end: false,
+                };
                 let result = StepResult {
-                    frame: crate::model::timeline::Frame::default(),
+                    frame,
                     step,
                     load_factor: lambda,
                     newton: log,

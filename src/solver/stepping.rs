@@ -1,8 +1,12 @@
-//! Incremental loading: the load factors of the case are applied one after another; each
+//! Incremental loading: the output increments of the case's load history (the frames of its
+//! analysis steps and cycles, [`crate::model::timeline`]) are applied one after another; each
 //! increment is solved by Newton-Raphson and its integration-point states are committed only
 //! once it has converged. An increment that fails is halved and retried from the last
-//! converged state, up to `max_cutbacks` times; sub-increments are solved silently and only
-//! the scheduled steps are handed to the output.
+//! converged state, up to `max_cutbacks` times, and a sub-increment also ends on a breakpoint
+//! of an amplitude ([`crate::model::Schedule::next_time`]); sub-increments are solved silently
+//! and only the scheduled increments are handed to the output. The load cycles' hooks
+//! ([`crate::solver::cycles`]) run before the first increment of every step and cycle and
+//! after the commit of its last one.
 
 use crate::assembly::{AssemblyInput, GlobalSystem};
 use crate::contact::{ContactStatus, InterfaceState};
@@ -11,6 +15,7 @@ use crate::error::{Attempt, NoConvergence, ResidualAt};
 use crate::material::PointState;
 use crate::model::Model;
 use crate::model::timeline::Frame;
+use crate::solver::cycles;
 use crate::solver::energy::{self, EnergyLedger};
 use crate::solver::mechanics::Mechanics;
 use crate::solver::newton::Problem;
@@ -267,19 +272,20 @@ pub fn run_steps_from(
     let mut converged_u = solution.u.clone();
     let mut f_ext = vec![0.0; model.dofs.dof_count()];
     let constant_tangent = !model.control.plastic && model.interface.elements.is_empty();
-    while state.step <= model.schedule.steps() {
+    let schedule = &model.schedule;
+    while state.step <= schedule.steps() {
         let step = state.step;
         // Every log line of the step (Newton iterations, cut-backs, its output) names it.
         let _span = tracing::info_span!("step", step).entered();
         let target = step as f64;
         let step_start = (step - 1) as f64;
+        // A record written within this increment was made after the cycle had started.
+        if state.time == step_start && schedule.timeline().starts_cycle(step) {
+            cycles::start_cycle(&mut solution);
+        }
         let mut attempts: Vec<Attempt> = Vec::new();
         let log = loop {
-            let trial_time = if state.time + state.size >= target - 1e-12 {
-                target
-            } else {
-                state.time + state.size
-            };
+            let trial_time = schedule.next_time(state.time, state.size, target);
             model.apply_prescribed(trial_time, &mut solution.u);
             model.external_force(trial_time, &mut f_ext);
             let (u, mut problem) = solution.split(model);
@@ -294,7 +300,7 @@ pub fn run_steps_from(
                     state.iterations += log.iterations;
                     state.increments += 1;
                     state.stiffness.record(
-                        model.schedule.value(0, trial_time) - model.schedule.value(0, state.time),
+                        schedule.load_change(state.time, trial_time),
                         distance(&solution.u, &converged_u),
                     );
                     let internal_force = newton.system().internal_force.as_slice();
@@ -320,7 +326,7 @@ pub fn run_steps_from(
                     let singular = matches!(&outcome, Err(Error::Linear(_)));
                     attempts.push(Attempt {
                         time: trial_time,
-                        load_factor: model.schedule.value(0, trial_time),
+                        load_factor: schedule.load_factor_at(trial_time),
                         iterations: outcome.as_ref().map_or(0, |log| log.iterations),
                         residuals: outcome
                             .as_ref()
@@ -339,9 +345,9 @@ pub fn run_steps_from(
                             newton.system().internal_force.as_slice(),
                             NoConvergence {
                                 step,
-                                load_factor: model.schedule.load_factor(step),
+                                load_factor: schedule.load_factor(step),
                                 converged_time: state.time,
-                                converged_load_factor: model.schedule.value(0, state.time),
+                                converged_load_factor: schedule.load_factor_at(state.time),
                                 cutbacks: state.cutbacks,
                                 attempts,
                                 ..NoConvergence::default()
@@ -370,14 +376,20 @@ pub fn run_steps_from(
                 }
             }
         };
+        // The cycle's last increment is committed: store its results and jump its wear
+        // before anything is recorded, so that every record is a state to continue from.
+        let cycle_end = schedule
+            .timeline()
+            .ends_cycle(step)
+            .map(|jump| cycles::end_cycle(model, &mut solution, jump as f64));
         let internal_force = &newton.system().internal_force;
         state.force_floor = state.force_floor.max(1e-3 * norm(internal_force));
         stats.steps += 1;
         stats.last_residual = *log.residuals.last().unwrap_or(&0.0);
         let result = StepResult {
-            frame: crate::model::timeline::Frame::default(),
+            frame: schedule.timeline().frame(target),
             step,
-            load_factor: model.schedule.load_factor(step),
+            load_factor: schedule.load_factor(step),
             newton: NewtonLog {
                 iterations: state.iterations,
                 ..log
@@ -388,6 +400,12 @@ pub fn run_steps_from(
             internal_force,
             external_force: &f_ext,
         };
+        if let Some(Err(e)) = cycle_end {
+            // The increment converged: its files are kept, without a restart record (a
+            // resumed run meets the same error instead of continuing past it).
+            observer.partial_step(&result, target)?;
+            return Err(e);
+        }
         let done = state.next_step(step);
         let progress = Progress {
             state: done,
@@ -403,12 +421,17 @@ pub fn run_steps_from(
     Ok((solution, stats))
 }
 
-/// The INFO line of a converged increment (one per increment, for batch logs).
+/// The INFO line of a converged increment (one per increment, for batch logs), naming its
+/// analysis step and cycle.
 fn log_increment(model: &Model, state: &LoopState, log: &NewtonLog) {
+    let timeline = model.schedule.timeline();
+    let frame = timeline.frame(state.time);
     tracing::info!(
         step = state.step,
+        analysis_step = timeline.steps()[frame.analysis_step - 1].name.as_str(),
+        cycle = frame.cycle,
         time = state.time,
-        load_factor = model.schedule.value(0, state.time),
+        load_factor = model.schedule.load_factor_at(state.time),
         iterations = log.iterations,
         residual = *log.residuals.last().unwrap_or(&0.0),
         cutbacks = state.cutbacks,
@@ -443,9 +466,9 @@ fn report_partial(
     let mut external = vec![0.0; model.dofs.dof_count()];
     model.external_force(state.time, &mut external);
     let result = StepResult {
-        frame: crate::model::timeline::Frame::default(),
+        frame: model.schedule.timeline().frame(state.time),
         step: state.step,
-        load_factor: model.schedule.value(0, state.time),
+        load_factor: model.schedule.load_factor_at(state.time),
         newton: NewtonLog {
             iterations: state.iterations,
             ..NewtonLog::default()
