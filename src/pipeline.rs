@@ -46,6 +46,7 @@ use crate::output::summary::{
     ContactResultant, Force, ModelSize, Named, Status, StepSummary, Summary,
 };
 use crate::output::vtu::write_vtu;
+use crate::post::fretting::{FrettingTables, is_fretting_file};
 use crate::post::interface::{InterfaceOutput, resultants};
 use crate::post::quantities::evaluate;
 use crate::post::{BodyPoints, StepInfo, reactions, step_grids};
@@ -437,7 +438,10 @@ const RUN_FILES: [&str; 6] = [
 /// (`bodies_NNNN.vtu`, `interface_NNNN.vtu`, `contact_<pair>_NNNN.csv`), or the hidden
 /// temporary file of one of these that a killed run left (`.NAME.XXXXXX.tmp`).
 pub fn is_run_file(name: &str) -> bool {
-    step_of_file(name).is_some() || RUN_FILES.contains(&name) || temporary_of(name).is_some()
+    step_of_file(name).is_some()
+        || RUN_FILES.contains(&name)
+        || is_fretting_file(name)
+        || temporary_of(name).is_some()
 }
 
 /// The step number of a step's file name.
@@ -908,6 +912,7 @@ struct StepWriter<'m, 's, F> {
     layout: HistoryLayout,
     series: Vec<PvdEntry>,
     history: CsvTable,
+    fretting: FrettingTables,
     summary: &'s mut Summary,
     last_reactions: Vec<[f64; 2]>,
     bar: RunBar,
@@ -935,6 +940,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             layout,
             series: Vec::new(),
             history: CsvTable::new(columns),
+            fretting: FrettingTables::new(model),
             summary,
             last_reactions: Vec::new(),
             bar: progress_bar(session.progress, model.schedule.steps()),
@@ -969,10 +975,16 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
     /// indexes. Returns the run to continue.
     fn restore(&mut self, record: Record) -> Result<Resume> {
         let Record { resume, output } = record;
-        let [history]: [Vec<Vec<f64>>; 1] =
-            output.tables.try_into().map_err(|_| Error::Restart {
+        let mut tables = output.tables.into_iter();
+        let history = tables.next().ok_or_else(|| Error::Restart {
+            path: self.out_dir.join(RESTART_FILE),
+            reason: "the record has no history table".into(),
+        })?;
+        self.fretting
+            .restore(tables.collect())
+            .ok_or_else(|| Error::Restart {
                 path: self.out_dir.join(RESTART_FILE),
-                reason: "the record has no history table".into(),
+                reason: "its fretting tables do not match the case's contact pairs".into(),
             })?;
         if history
             .iter()
@@ -1037,7 +1049,6 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
     fn write_step_files(&mut self, step: &StepResult, time: f64) -> Result<Vec<f64>> {
         let (mut post, mut vtu) = (0.0, 0.0);
         let start = Instant::now();
-        let states = &step.solution.interface_committed;
         let mut entries = Vec::new();
         if self.vtu {
             let info = StepInfo {
@@ -1064,7 +1075,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             }
             vtu += t.elapsed().as_secs_f64();
         }
-        let tables = self.interface.tables(self.model, states);
+        let tables = self.interface.fretting_tables(self.model, step.solution);
         for (pair, table) in self.model.interface.pairs.iter().zip(&tables) {
             write_csv(
                 &self
@@ -1073,6 +1084,8 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
                 table,
             )?;
         }
+        self.fretting
+            .record(self.model, &self.interface, step, time);
         let row = self.row(step, time)?;
         self.series.extend(entries);
         tracing::debug!(
@@ -1101,8 +1114,10 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         let Some(case_text) = self.case_text else {
             return Ok(());
         };
+        let mut tables = vec![self.history.rows.clone()];
+        tables.extend(self.fretting.rows());
         let output = OutputState {
-            tables: vec![self.history.rows.clone()],
+            tables,
             series: self.series.clone(),
         };
         self.records.write(
@@ -1122,6 +1137,9 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
     /// `history.csv`, then `results.pvd`: the series is the last file written for a step,
     /// so it lists only steps whose other files are complete.
     fn write_indexes(&self) -> Result<()> {
+        for (file, table) in self.fretting.files(self.model) {
+            write_csv(&self.out_dir.join(file), &table)?;
+        }
         self.write_history()?;
         if self.vtu && !self.series.is_empty() {
             write_pvd(&self.out_dir.join("results.pvd"), &self.series)?;
