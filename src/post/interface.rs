@@ -162,8 +162,9 @@ impl InterfaceOutput {
                 }
             }
         }
+        // Elements sharing a node follow the curve in one direction, so the sum is not 0.
         for t in pairs.iter_mut().flat_map(|p| p.tangent.iter_mut()) {
-            let norm = t[0].hypot(t[1]);
+            let norm = t[0].hypot(t[1]).max(f64::MIN_POSITIVE);
             *t = [t[0] / norm, t[1] / norm];
         }
         let extrapolation = [
