@@ -751,3 +751,75 @@ fn without_wear_the_model_has_no_fretting_files() {
     let d = Driver::new(linear_coulomb(KN, KT, MU), None, CLOSURE);
     assert!(FrettingTables::new(&d.model).files(&d.model).is_empty());
 }
+
+/// The block on the base pressed by 8 MPa and pushed back and forth by its top edge
+/// (u_x = 0.01 mm × factor, factors 0 → 2 in 10 steps, then cycles 2 → −2 → 2 in 40 steps
+/// each), solved step by step with the cycle hooks around each cycle, as the stepping loop
+/// calls them. Over the second cycle the state repeats (Coulomb friction at a pressure that
+/// returns with the load), so the work of the push over the cycle — the area of the
+/// hysteresis loop of the push force against the push — is dissipated by friction: it must
+/// equal ∫ (dissipation of the cycle) dA. The loop area is the trapezoidal sum of the
+/// reaction over the increments, first order at the stick–slip kinks (4e-4 here with 40
+/// increments a half-cycle), hence 2e-3.
+#[test]
+fn the_friction_work_of_a_cycle_is_the_area_of_its_hysteresis_loop() {
+    use asperity::post::reactions;
+    use asperity::solver::newton::{Newton, norm};
+    let half = 40;
+    let mut factors: Vec<f64> = (1..=10).map(|i| 0.2 * i as f64).collect();
+    for _ in 0..2 {
+        factors.extend((1..=half).map(|i| 2.0 - 4.0 * i as f64 / half as f64));
+        factors.extend((1..=half).map(|i| -2.0 + 4.0 * i as f64 / half as f64));
+    }
+    let case = case(linear_coulomb(1e4, 1e3, 0.25), None, &factors);
+    let model = model(&case);
+    let mut newton = Newton::new(settings(&case), &model.dofs, &model.pattern).unwrap();
+    let mut solution = Solution::new(&model);
+    let mut f_ext = vec![0.0; model.dofs.dof_count()];
+    let mut force_floor: f64 = 0.0;
+    let mut push = vec![0.0];
+    let mut force = vec![0.0];
+    for step in 1..=factors.len() {
+        let first_of_cycle = step > 10 && (step - 11) % (2 * half) == 0;
+        if first_of_cycle {
+            start_cycle(&mut solution);
+        }
+        let time = step as f64;
+        model.apply_prescribed(time, &mut solution.u);
+        model.external_force(time, &mut f_ext);
+        let (u, mut problem) = solution.split(&model);
+        let log = newton
+            .solve_increment(&mut problem, u, &f_ext, force_floor)
+            .unwrap();
+        assert!(log.converged, "step {step}");
+        solution.commit();
+        let internal = &newton.system().internal_force;
+        force_floor = force_floor.max(1e-3 * norm(internal));
+        if step > 10 && (step - 10) % (2 * half) == 0 {
+            end_cycle(&model, &mut solution, 1.0).unwrap();
+        }
+        // Supports in case order: ground, block_top.
+        force.push(reactions(&model, internal, &f_ext)[1][0]);
+        push.push(0.01 * factors[step - 1]);
+    }
+    let start = 10 + 2 * half;
+    let area: f64 = (start..push.len() - 1)
+        .map(|n| 0.5 * (force[n] + force[n + 1]) * (push[n + 1] - push[n]))
+        .sum();
+    let mut dissipated = 0.0;
+    let set = &model.interface;
+    for (e, element) in set.elements.iter().enumerate() {
+        for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
+            let da = interface_point(&set.analysis, &element.b_coords, xi, w).da;
+            dissipated += solution.interface_committed[e * INTERFACE_POINTS + g]
+                .history
+                .last_cycle_dissipation
+                * da;
+        }
+    }
+    assert!(dissipated > 0.0);
+    assert!(
+        close(area, dissipated, 2e-3),
+        "loop area {area} vs friction work {dissipated}"
+    );
+}
