@@ -47,6 +47,7 @@ use crate::output::restart::{
 use crate::output::summary::{
     ContactResultant, EnergyMark, Force, ModelSize, Named, Status, StepSummary, Summary,
 };
+use crate::post::fretting::{FrettingTables, is_fretting_file};
 use crate::post::interface::{InterfaceOutput, resultants};
 use crate::post::quantities::evaluate;
 use crate::post::{BodyPoints, StepInfo, reactions, step_grids};
@@ -441,7 +442,10 @@ const RUN_FILES: [&str; 6] = [
 /// (`bodies_NNNN.vtu`, `interface_NNNN.vtu`, `contact_<pair>_NNNN.csv`), or the hidden
 /// temporary file of one of these that a killed run left (`.NAME.XXXXXX.tmp`).
 pub fn is_run_file(name: &str) -> bool {
-    step_of_file(name).is_some() || RUN_FILES.contains(&name) || temporary_of(name).is_some()
+    step_of_file(name).is_some()
+        || RUN_FILES.contains(&name)
+        || is_fretting_file(name)
+        || temporary_of(name).is_some()
 }
 
 /// The step number of a step's file name.
@@ -987,6 +991,7 @@ struct StepWriter<'m, 's, F> {
     layout: HistoryLayout,
     series: Vec<PvdEntry>,
     history: CsvTable,
+    fretting: FrettingTables,
     summary: &'s mut Summary,
     last_reactions: Vec<[f64; 2]>,
     bar: RunBar,
@@ -1019,6 +1024,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             layout,
             series: Vec::new(),
             history: CsvTable::new(columns),
+            fretting: FrettingTables::new(model),
             summary,
             last_reactions: Vec::new(),
             bar: progress_bar(session.progress, model.schedule.steps()),
@@ -1054,10 +1060,18 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
     /// indexes. Returns the run to continue.
     fn restore(&mut self, record: Record) -> Result<Resume> {
         let Record { resume, output } = record;
-        let [history, energy]: [Vec<Vec<f64>>; 2] =
-            output.tables.try_into().map_err(|_| Error::Restart {
+        let mut tables = output.tables.into_iter();
+        let missing = |what: &str| Error::Restart {
+            path: self.out_dir.join(RESTART_FILE),
+            reason: format!("the record has no {what} table"),
+        };
+        let history = tables.next().ok_or_else(|| missing("history"))?;
+        let energy = tables.next().ok_or_else(|| missing("energy"))?;
+        self.fretting
+            .restore(tables.collect())
+            .ok_or_else(|| Error::Restart {
                 path: self.out_dir.join(RESTART_FILE),
-                reason: "the record has not the history and energy tables".into(),
+                reason: "its fretting tables do not match the case's contact pairs".into(),
             })?;
         let marks: Option<Vec<EnergyMark>> =
             energy.iter().map(|row| EnergyMark::from_row(row)).collect();
@@ -1150,7 +1164,6 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
     fn write_step_files(&mut self, step: &StepResult, time: f64, fields: bool) -> Result<Vec<f64>> {
         let (mut post, mut vtu) = (0.0, 0.0);
         let start = Instant::now();
-        let states = &step.solution.interface_committed;
         let mut entries = Vec::new();
         if self.vtu && fields {
             let info = StepInfo {
@@ -1179,7 +1192,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             vtu += t.elapsed().as_secs_f64();
         }
         let tables = if fields {
-            self.interface.tables(self.model, states)
+            self.interface.fretting_tables(self.model, step.solution)
         } else {
             Vec::new()
         };
@@ -1188,6 +1201,8 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             self.records
                 .queue(self.out_dir.join(file), Content::Csv(table));
         }
+        self.fretting
+            .record(self.model, &self.interface, step, time);
         let row = self.row(step, time)?;
         self.series.extend(entries);
         tracing::debug!(
@@ -1219,8 +1234,10 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         let Some(case_text) = self.case_text else {
             return Ok(());
         };
+        let mut tables = vec![self.history.rows.clone(), self.energy_rows()];
+        tables.extend(self.fretting.rows());
         let output = OutputState {
-            tables: vec![self.history.rows.clone(), self.energy_rows()],
+            tables,
             series: self.series.clone(),
         };
         self.records.queue_record(
@@ -1250,6 +1267,10 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
     /// commits them: the series is the last file written for a step, so it lists only steps
     /// whose other files are complete.
     fn write_indexes(&mut self) -> Result<()> {
+        for (file, table) in self.fretting.files(self.model) {
+            self.records
+                .queue(self.out_dir.join(file), Content::Table(table));
+        }
         self.records.queue(
             self.out_dir.join("history.csv"),
             Content::Csv(self.history.clone()),

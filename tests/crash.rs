@@ -154,6 +154,13 @@ fn series_steps(pvd: &str, dir: &Path) -> Vec<usize> {
     steps
 }
 
+/// The per-contact fretting tables, which like `history.csv` grow by a row per frame
+/// (`hysteresis_<pair>.csv`) or per cycle (`cycles.csv`, `wear_<pair>.csv`).
+fn is_growing_table(name: &str) -> bool {
+    name == "cycles.csv"
+        || (name.ends_with(".csv") && (name.starts_with("hysteresis_") || name.starts_with("wear_")))
+}
+
 /// What a killed run must have left in `dir`, against the uninterrupted run in `reference`.
 /// Returns the number of steps the killed run had completed.
 fn check_killed(dir: &Path, reference: &Path) -> usize {
@@ -185,6 +192,14 @@ fn check_killed(dir: &Path, reference: &Path) -> usize {
                     assert_eq!(line, all[i], "results.pvd entry {i}");
                 }
                 assert!(text.ends_with("</VTKFile>\n"), "results.pvd incomplete");
+            }
+            // Tables growing by a row per frame or cycle: prefixes, like history.csv.
+            table if is_growing_table(table) => {
+                let text = read(path);
+                assert!(
+                    reference_text().starts_with(&text),
+                    "{name} is not a prefix of the full run's:\n{text}"
+                );
             }
             // Records of the run itself (times, log lines with timestamps), not results.
             "run.json" | "summary.json" | "restart.bin" | "log.txt" => {}

@@ -13,7 +13,12 @@ use asperity::element::interface6::interface_point;
 use asperity::element::set::{ElementSet, INTERFACE_POINTS};
 use asperity::element::{ElementInput, ElementOutput, ElementVector};
 use asperity::model::Model;
+use asperity::model::timeline::Frame;
+use asperity::post::fretting::{CYCLES, FrettingTables, HYSTERESIS, WEAR};
+use asperity::post::interface::{FRETTING, InterfaceOutput};
 use asperity::solver::cycles::{end_cycle, start_cycle};
+use asperity::solver::newton::NewtonLog;
+use asperity::solver::stepping::StepResult;
 use asperity::solver::stepping::{Solution, run_steps};
 use common::{
     add_curve_group, block_on_base, linear_coulomb, merge, settings, sliding_rough_joint, table,
@@ -62,16 +67,20 @@ struct Driver {
     model: Model,
     solution: Solution,
     closure: f64,
+    /// Factor of the tangential displacement of each element (1 by default).
+    scales: Vec<f64>,
 }
 
 impl Driver {
     fn new(law: Table, wear: Option<Table>, closure: f64) -> Self {
         let model = model(&case(law, wear, &[1.0]));
         let solution = Solution::new(&model);
+        let scales = vec![1.0; model.interface.len()];
         Self {
             model,
             solution,
             closure,
+            scales,
         }
     }
 
@@ -85,7 +94,7 @@ impl Driver {
             assert!(committed.iter().all(|s| s.history == committed[0].history));
             let mut u = ElementVector::zeros();
             for i in 3..6 {
-                u[2 * i] = u_t;
+                u[2 * i] = u_t * self.scales[e];
                 u[2 * i + 1] = -self.closure - depth;
             }
             let input = ElementInput {
@@ -496,4 +505,321 @@ fn bad_wear_keys_are_named() {
             assert!(message.contains(w), "{message}");
         }
     }
+}
+
+/// The fretting values of the interface output at every node of the pair.
+fn nodal_fretting(d: &Driver) -> Vec<[f64; 9]> {
+    InterfaceOutput::new(&d.model).fretting(&d.model, &d.solution)[0].clone()
+}
+
+fn column(name: &str) -> usize {
+    FRETTING.iter().position(|c| *c == name).unwrap()
+}
+
+#[test]
+fn gross_slip_everywhere_gives_the_ruiz_parameters_of_the_cycle() {
+    let mut d = Driver::new(linear_coulomb(KN, KT, MU), None, CLOSURE);
+    d.ramp(0.0, DELTA, 3);
+    d.cycle(DELTA, 4, 1.0).unwrap();
+    // A uniform stress in the bodies, σ_xx = 50 MPa along the contact (t = +x): σ_T = 50.
+    for s in &mut d.solution.committed {
+        s.stress[0] = 50.0;
+    }
+    let slip = DELTA - MU * P / KT;
+    let nodes = nodal_fretting(&d);
+    assert_eq!(nodes.len(), 9);
+    for v in &nodes {
+        assert_eq!(v[column("regime")], 2.0);
+        assert!(close(v[column("slip_amplitude")], slip, ROUND_OFF));
+        let f2 = MU * P * slip;
+        assert!(close(v[column("ruiz_f2")], f2, ROUND_OFF), "{v:?}");
+        assert!(close(v[column("ruiz_f3")], 50.0 * f2, ROUND_OFF), "{v:?}");
+        assert!(close(
+            v[column("cycle_dissipation")],
+            4.0 * MU * P * slip,
+            ROUND_OFF
+        ));
+    }
+    // A compressive surface stress gives no F3.
+    for s in &mut d.solution.committed {
+        s.stress[0] = -50.0;
+    }
+    assert!(
+        nodal_fretting(&d)
+            .iter()
+            .all(|v| v[column("ruiz_f3")] == 0.0)
+    );
+}
+
+#[test]
+fn a_sticking_element_makes_the_others_partial_slip() {
+    let mut d = Driver::new(linear_coulomb(KN, KT, MU), None, CLOSURE);
+    // The first element moves a tenth as far: 0.01 mm < μp/k_T = 0.03 mm, it sticks.
+    d.scales[0] = 0.1;
+    d.ramp(0.0, DELTA, 3);
+    d.cycle(DELTA, 4, 1.0).unwrap();
+    let regimes: Vec<f64> = nodal_fretting(&d)
+        .iter()
+        .map(|v| v[column("regime")])
+        .collect();
+    // Nodes in curve order: the first element's three nodes stick (its end node shared
+    // with the second element shows the more advanced regime), the rest slip partially.
+    assert_eq!(regimes[..2], [0.0, 0.0]);
+    assert!(regimes[2..].iter().all(|&r| r == 1.0), "{regimes:?}");
+}
+
+/// A frame of the driver's state.
+fn frame_of<'a>(d: &'a Driver, frame: Frame, zero: &'a [f64]) -> StepResult<'a> {
+    StepResult {
+        step: 1,
+        load_factor: 1.0,
+        frame,
+        newton: NewtonLog::default(),
+        increments: 1,
+        cutbacks: 0,
+        solution: &d.solution,
+        internal_force: zero,
+        external_force: zero,
+    }
+}
+
+#[test]
+fn hysteresis_cycle_and_wear_tables_hold_the_pair_integrals() {
+    let k = 1e-6;
+    let wear = wear(&[("model", "archard".into()), ("coefficient", k.into())]);
+    let mut d = Driver::new(linear_coulomb(KN, KT, MU), Some(wear), CLOSURE);
+    let interface = InterfaceOutput::new(&d.model);
+    let mut tables = FrettingTables::new(&d.model);
+    let zero = vec![0.0; d.model.dofs.dof_count()];
+    d.ramp(0.0, DELTA, 3);
+    let frame = |cycle_end| Frame {
+        analysis_step: 2,
+        cycle: 1,
+        cycles: 1000.0,
+        step_time: 1.0,
+        cycle_end,
+    };
+    tables.record(
+        &d.model,
+        &interface,
+        &frame_of(&d, frame(false), &zero),
+        1.0,
+    );
+    d.cycle(DELTA, 4, 1.0).unwrap();
+    tables.record(&d.model, &interface, &frame_of(&d, frame(true), &zero), 2.0);
+    let files = tables.files(&d.model);
+    let names: Vec<&str> = files.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(
+        names,
+        ["hysteresis_joint.csv", "cycles.csv", "wear_joint.csv"]
+    );
+    let number = |cell: &asperity::output::csv::Cell| match cell {
+        asperity::output::csv::Cell::Number(v) => *v,
+        other => panic!("{other:?}"),
+    };
+    // At u_T = δ after slipping forward: p_T = μp over the whole contact.
+    let hysteresis = &files[0].1;
+    assert_eq!(hysteresis.columns, HYSTERESIS);
+    assert_eq!(hysteresis.rows.len(), 2);
+    let row: Vec<f64> = hysteresis.rows[1].iter().map(number).collect();
+    assert_eq!(row[..5], [2.0, 2.0, 1.0, 1000.0, 1.0]);
+    assert!(close(row[5], MU * P * AREA, ROUND_OFF));
+    assert!(close(row[6], P * AREA, ROUND_OFF));
+    assert!(close(row[7], DELTA, ROUND_OFF));
+    // One cycle row: the closed-form dissipation and the worn volume of a uniform depth.
+    let slip = DELTA - MU * P / KT;
+    let depth = 2.0 * k * P * 5.0 * slip;
+    let cycles = &files[1].1;
+    assert_eq!(cycles.columns, CYCLES);
+    assert_eq!(cycles.rows.len(), 1);
+    assert_eq!(
+        cycles.rows[0][3],
+        asperity::output::csv::Cell::Text("joint".into())
+    );
+    let values = [4, 5, 6].map(|i| number(&cycles.rows[0][i]));
+    assert!(close(values[0], 4.0 * MU * P * AREA * slip, ROUND_OFF));
+    assert!(close(values[1], depth * AREA, ROUND_OFF));
+    assert!(close(values[2], depth, ROUND_OFF));
+    // The profile along side A: 9 nodes from s = 0 to the contact length.
+    let profile = &files[2].1;
+    assert_eq!(profile.columns, WEAR);
+    assert_eq!(profile.rows.len(), 9);
+    let last: Vec<f64> = profile.rows[8].iter().map(number).collect();
+    assert!(close(last[1], AREA, ROUND_OFF));
+    assert!(close(last[6], depth, ROUND_OFF));
+    // The restart record's rows give the same tables back; rows of another model do not.
+    let mut restored = FrettingTables::new(&d.model);
+    assert_eq!(restored.restore(tables.rows()), Some(()));
+    assert_eq!(restored, tables);
+    let mut rows = tables.rows();
+    rows.pop();
+    assert_eq!(restored.restore(rows), None);
+}
+
+#[test]
+fn a_run_with_contact_writes_its_hysteresis_and_resumes_it_unchanged() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = dir.path().join("case.toml");
+    std::fs::write(
+        &case,
+        format!(
+            r#"[mesh]
+file = "{}"
+[analysis]
+type = "plane_strain"
+[[body]]
+group = "lower"
+material = {{ E = 1000.0, nu = 0.3 }}
+[[body]]
+group = "upper"
+material = {{ E = 1000.0, nu = 0.3 }}
+[[support]]
+group = "base"
+ux = 0.0
+uy = 0.0
+[[support]]
+group = "lid"
+ux = 0.2
+factors = [0.5, 1.0, 0.0, -1.0]
+[[load]]
+group = "lid"
+pressure = 10.0
+factors = [1.0, 1.0, 1.0, 1.0]
+[[contact]]
+name = "joint"
+side_a = "lower_top"
+side_b = "upper_bottom"
+law = {{ type = "linear_coulomb", normal_stiffness = 1e4, tangential_stiffness = 1e4, friction = 0.3 }}
+wear = {{ model = "energy", coefficient = 1e-6 }}
+[steps]
+count = 4
+"#,
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("tests/fixtures/contact_pair.msh")
+                .display()
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let run = |extra: &[&str]| {
+        let status = std::process::Command::new(env!("CARGO_BIN_EXE_asperity"))
+            .arg("run")
+            .arg(&case)
+            .arg("--out")
+            .arg(&out)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(status.status.success(), "{status:?}");
+    };
+    run(&[]);
+    let text = std::fs::read_to_string(out.join("hysteresis_joint.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next().unwrap(), HYSTERESIS.join(","));
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 4);
+    for row in &rows {
+        // The lid pressure (10 MPa on 2 mm) is carried by the contact alone.
+        assert!(close(row[6], 20.0, 1e-6), "{row:?}");
+        // Friction cannot exceed μ times the normal force.
+        assert!(row[5].abs() <= 0.3 * row[6] * (1.0 + 1e-9));
+    }
+    for file in ["cycles.csv", "wear_joint.csv"] {
+        assert!(out.join(file).is_file(), "{file}");
+    }
+    let before: Vec<Vec<u8>> = ["hysteresis_joint.csv", "cycles.csv", "wear_joint.csv"]
+        .iter()
+        .map(|f| std::fs::read(out.join(f)).unwrap())
+        .collect();
+    run(&["--resume"]);
+    for (f, bytes) in ["hysteresis_joint.csv", "cycles.csv", "wear_joint.csv"]
+        .iter()
+        .zip(before)
+    {
+        assert_eq!(std::fs::read(out.join(f)).unwrap(), bytes, "{f}");
+    }
+    // The contact table carries the fretting columns.
+    let contact = std::fs::read_to_string(out.join("contact_joint_0004.csv")).unwrap();
+    let header = contact.lines().next().unwrap();
+    assert!(header.ends_with(&FRETTING.join(",")), "{header}");
+}
+
+#[test]
+fn without_wear_the_model_has_no_fretting_files() {
+    let d = Driver::new(linear_coulomb(KN, KT, MU), None, CLOSURE);
+    assert!(FrettingTables::new(&d.model).files(&d.model).is_empty());
+}
+
+/// The block on the base pressed by 8 MPa and pushed back and forth by its top edge
+/// (u_x = 0.01 mm × factor, factors 0 → 2 in 10 steps, then cycles 2 → −2 → 2 in 40 steps
+/// each), solved step by step with the cycle hooks around each cycle, as the stepping loop
+/// calls them. Over the second cycle the state repeats (Coulomb friction at a pressure that
+/// returns with the load), so the work of the push over the cycle — the area of the
+/// hysteresis loop of the push force against the push — is dissipated by friction: it must
+/// equal ∫ (dissipation of the cycle) dA. The loop area is the trapezoidal sum of the
+/// reaction over the increments, first order at the stick–slip kinks (4e-4 here with 40
+/// increments a half-cycle), hence 2e-3.
+#[test]
+fn the_friction_work_of_a_cycle_is_the_area_of_its_hysteresis_loop() {
+    use asperity::post::reactions;
+    use asperity::solver::newton::{Newton, norm};
+    let half = 40;
+    let mut factors: Vec<f64> = (1..=10).map(|i| 0.2 * i as f64).collect();
+    for _ in 0..2 {
+        factors.extend((1..=half).map(|i| 2.0 - 4.0 * i as f64 / half as f64));
+        factors.extend((1..=half).map(|i| -2.0 + 4.0 * i as f64 / half as f64));
+    }
+    let case = case(linear_coulomb(1e4, 1e3, 0.25), None, &factors);
+    let model = model(&case);
+    let mut newton = Newton::new(settings(&case), &model.dofs, &model.pattern).unwrap();
+    let mut solution = Solution::new(&model);
+    let mut f_ext = vec![0.0; model.dofs.dof_count()];
+    let mut force_floor: f64 = 0.0;
+    let mut push = vec![0.0];
+    let mut force = vec![0.0];
+    for step in 1..=factors.len() {
+        let first_of_cycle = step > 10 && (step - 11) % (2 * half) == 0;
+        if first_of_cycle {
+            start_cycle(&mut solution);
+        }
+        let time = step as f64;
+        model.apply_prescribed(time, &mut solution.u);
+        model.external_force(time, &mut f_ext);
+        let (u, mut problem) = solution.split(&model);
+        let log = newton
+            .solve_increment(&mut problem, u, &f_ext, force_floor)
+            .unwrap();
+        assert!(log.converged, "step {step}");
+        solution.commit();
+        let internal = &newton.system().internal_force;
+        force_floor = force_floor.max(1e-3 * norm(internal));
+        if step > 10 && (step - 10) % (2 * half) == 0 {
+            end_cycle(&model, &mut solution, 1.0).unwrap();
+        }
+        // Supports in case order: ground, block_top.
+        force.push(reactions(&model, internal, &f_ext)[1][0]);
+        push.push(0.01 * factors[step - 1]);
+    }
+    let start = 10 + 2 * half;
+    let area: f64 = (start..push.len() - 1)
+        .map(|n| 0.5 * (force[n] + force[n + 1]) * (push[n + 1] - push[n]))
+        .sum();
+    let mut dissipated = 0.0;
+    let set = &model.interface;
+    for (e, element) in set.elements.iter().enumerate() {
+        for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
+            let da = interface_point(&set.analysis, &element.b_coords, xi, w).da;
+            dissipated += solution.interface_committed[e * INTERFACE_POINTS + g]
+                .history
+                .last_cycle_dissipation
+                * da;
+        }
+    }
+    assert!(dissipated > 0.0);
+    assert!(
+        close(area, dissipated, 2e-3),
+        "loop area {area} vs friction work {dissipated}"
+    );
 }

@@ -110,8 +110,8 @@ pub fn relative_operator(p: &InterfacePoint) -> nalgebra::SMatrix<f64, 2, 16> {
 /// Tangent and internal force of one interface element for nodal displacements `input.u`
 /// (dofs of [a0, a1, a_mid, b0, b1, b_mid]), updating the trial states from the committed
 /// ones, with their fretting and wear history ([`crate::contact::PointHistory`]); the law
-/// sees the gap opened by the committed wear. The tangent is the one of `input.algorithm` (the consistent one, Buczkowski &
-/// Kleiber (1994), Eq. 21, for Newton).
+/// sees the gap opened by the committed wear. The tangent is the one of `input.algorithm`
+/// (the consistent one, Buczkowski & Kleiber (1994), Eq. 21, for Newton).
 pub fn evaluate_interface(
     analysis: &Analysis,
     element: &InterfaceElement,

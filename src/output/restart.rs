@@ -21,7 +21,7 @@ use std::sync::mpsc;
 
 use super::Grid;
 use super::atomic::write_atomically;
-use super::csv::{CsvTable, write_csv};
+use super::csv::{Cell, CsvTable, write_csv};
 use super::pvd::{PvdEntry, write_pvd};
 use super::vtu::write_vtu;
 use crate::contact::{ContactStatus, InterfaceState, PointHistory};
@@ -59,6 +59,8 @@ pub struct Record {
 pub enum Content {
     Vtu(Grid),
     Csv(CsvTable),
+    /// A table with text or empty cells.
+    Table(CsvTable<Cell>),
     Pvd(Vec<PvdEntry>),
     /// A restart record, already encoded (by [`RecordWriter::queue_record`]).
     Record(Vec<u8>),
@@ -69,6 +71,7 @@ impl Content {
         match self {
             Content::Vtu(grid) => write_vtu(path, grid),
             Content::Csv(table) => write_csv(path, table),
+            Content::Table(table) => write_csv(path, table),
             Content::Pvd(entries) => write_pvd(path, entries),
             Content::Record(bytes) => write_atomically(path, |w| w.write_all(bytes)),
         }

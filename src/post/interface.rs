@@ -4,6 +4,11 @@
 //! Integration-point values are mapped to the element's nodes by the exact quadratic fit
 //! through the three points (for Newton-Cotes the points are the nodes themselves), then
 //! averaged over the elements sharing a node.
+//!
+//! Fretting results ([`FRETTING`]) come from each point's cyclic history
+//! ([`PointHistory`](crate::contact::PointHistory)): dissipation, the last completed
+//! cycle's dissipation and slip amplitude, the fretting regime, the Ruiz parameters and the
+//! wear depths.
 
 use nalgebra::Matrix3;
 
@@ -16,6 +21,8 @@ use crate::mesh::topology::directed_chains;
 use crate::model::Model;
 use crate::output::csv::CsvTable;
 use crate::output::{Field, FieldValues, Grid};
+use crate::post::{BodyPoints, nodal_values};
+use crate::solver::stepping::Solution;
 
 /// Names of the scalar point fields, in the order of [`NodalContact::values`].
 pub const FIELDS: [&str; 10] = [
@@ -75,6 +82,13 @@ struct PairNodes {
     nodes: Vec<u32>,
     /// Arc length at each node.
     arc: Vec<f64>,
+    /// Unit tangent of side B at each node (mean over the elements sharing it).
+    tangent: Vec<[f64; 2]>,
+    /// Body output points of each node and of its side-A partner (for the surface-parallel
+    /// stress of either body).
+    body_points: Vec<Vec<usize>>,
+    /// The side-A node paired with each node.
+    partner: Vec<u32>,
 }
 
 /// Output of all contact pairs of a model.
@@ -85,6 +99,8 @@ pub struct InterfaceOutput {
     slot: std::collections::HashMap<u32, usize>,
     /// Point-to-node map of each element's rule: node value = Σ_g E[(i, g)] value_g.
     extrapolation: [Matrix3<f64>; 2],
+    /// The bodies' output points, whose recovered stresses give σ_T for `ruiz_f3`.
+    body_points: BodyPoints,
 }
 
 impl InterfaceOutput {
@@ -118,7 +134,38 @@ impl InterfaceOutput {
             for (k, &n) in chain.iter().enumerate() {
                 slot.insert(n, k);
             }
-            pairs.push(PairNodes { nodes: chain, arc });
+            let count = chain.len();
+            pairs.push(PairNodes {
+                nodes: chain,
+                arc,
+                tangent: vec![[0.0; 2]; count],
+                body_points: vec![Vec::new(); count],
+                partner: vec![0; count],
+            });
+        }
+        let body_points = BodyPoints::new(model);
+        for element in &model.interface.elements {
+            let pair = &mut pairs[element.pair as usize];
+            for (k, xi) in [-1.0, 1.0, 0.0].into_iter().enumerate() {
+                let at = slot[&element.nodes[3 + k]];
+                pair.partner[at] = element.nodes[k];
+                let t = interface_point(&model.analysis, &element.b_coords, xi, 1.0).tangent;
+                pair.tangent[at] = [pair.tangent[at][0] + t[0], pair.tangent[at][1] + t[1]];
+                for node in [element.nodes[k], element.nodes[3 + k]] {
+                    for b in 0..model.bodies.len() as u32 {
+                        if let Some(p) = body_points.find(b, node)
+                            && !pair.body_points[at].contains(&p)
+                        {
+                            pair.body_points[at].push(p);
+                        }
+                    }
+                }
+            }
+        }
+        // Elements sharing a node follow the curve in one direction, so the sum is not 0.
+        for t in pairs.iter_mut().flat_map(|p| p.tangent.iter_mut()) {
+            let norm = t[0].hypot(t[1]).max(f64::MIN_POSITIVE);
+            *t = [t[0] / norm, t[1] / norm];
         }
         let extrapolation = [
             crate::element::interface6::InterfaceRule::NewtonCotes,
@@ -133,6 +180,7 @@ impl InterfaceOutput {
             pairs,
             slot,
             extrapolation,
+            body_points,
         }
     }
 
@@ -155,15 +203,7 @@ impl InterfaceOutput {
                 for (f, v) in target.values.iter_mut().enumerate() {
                     *v += (0..3).map(|g| ex[(i, g)] * values[g][f]).sum::<f64>();
                 }
-                // Status of the point nearest to node i.
-                let nearest = (0..3)
-                    .min_by(|&a, &b| {
-                        let xi = [-1.0, 1.0, 0.0][i];
-                        let pa = element.rule.points()[a].0;
-                        let pb = element.rule.points()[b].0;
-                        (pa - xi).abs().total_cmp(&(pb - xi).abs())
-                    })
-                    .expect("three points");
+                let nearest = nearest_point(element, i);
                 target.status = target.status.max(points[nearest].status as i32);
                 count[p][k] += 1;
             }
@@ -317,6 +357,203 @@ impl InterfaceOutput {
                     .collect(),
             })
             .collect()
+    }
+}
+
+/// The integration point of `element` nearest to its side-B node `i` (0, 1, 2: b0, b1, mid):
+/// whose status (or regime) the node shows.
+fn nearest_point(element: &InterfaceElement, i: usize) -> usize {
+    let xi = [-1.0, 1.0, 0.0][i];
+    let points = element.rule.points();
+    (0..3)
+        .min_by(|&a, &b| {
+            (points[a].0 - xi)
+                .abs()
+                .total_cmp(&(points[b].0 - xi).abs())
+        })
+        .expect("three points")
+}
+
+/// Names of the fretting point fields (interface CSV columns after `contact_status`, VTU
+/// point data), in the order of [`InterfaceOutput::fretting`]'s values: accumulated
+/// dissipation ∫ p_T du_T^p (N/mm), its last completed cycle's part, slip amplitude of that
+/// cycle (mm), regime (0 stick, 1 partial slip, 2 gross slip), the Ruiz parameters F2 = τ_max
+/// δ (N/mm) and F3 = max(σ_T, 0) F2 (N²/mm³), and the wear depths h_A, h_B, h_A + h_B (mm).
+pub const FRETTING: [&str; 9] = [
+    "dissipation",
+    "cycle_dissipation",
+    "slip_amplitude",
+    "regime",
+    "ruiz_f2",
+    "ruiz_f3",
+    "wear_a",
+    "wear_b",
+    "wear_depth",
+];
+
+/// Index of `regime` and of `ruiz_f2`, `ruiz_f3` in [`FRETTING`].
+const REGIME: usize = 3;
+const F2: usize = 4;
+const F3: usize = 5;
+
+/// The fretting regime of each pair's points in the last completed cycle (Vingsbo &
+/// Söderberg, Wear 126 (1988) 131, fretting maps): 0 stick (no slip in the cycle), 1 partial
+/// slip (slipped, while some closed point of the pair stuck through the cycle), 2 gross slip
+/// (slipped, and no closed point of the pair stuck).
+pub fn regimes(model: &Model, states: &[InterfaceState]) -> Vec<u8> {
+    let mut sticks = vec![false; model.interface.pairs.len()];
+    for (e, element) in model.interface.elements.iter().enumerate() {
+        let points = &states[e * INTERFACE_POINTS..(e + 1) * INTERFACE_POINTS];
+        sticks[element.pair as usize] |= points
+            .iter()
+            .any(|s| s.status != ContactStatus::Open && s.history.last_cycle_slip_amplitude == 0.0);
+    }
+    states
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            let pair = model.interface.elements[k / INTERFACE_POINTS].pair as usize;
+            match (s.history.last_cycle_slip_amplitude > 0.0, sticks[pair]) {
+                (false, _) => 0,
+                (true, true) => 1,
+                (true, false) => 2,
+            }
+        })
+        .collect()
+}
+
+/// The fretting values of a point in [`FRETTING`] order, `ruiz_f3` (which needs the bodies'
+/// stress) zero.
+fn point_fretting(s: &InterfaceState, regime: u8) -> [f64; 9] {
+    let h = &s.history;
+    [
+        h.dissipation,
+        h.last_cycle_dissipation,
+        h.last_cycle_slip_amplitude,
+        f64::from(regime),
+        h.last_cycle_max_shear * h.last_cycle_slip_amplitude,
+        0.0,
+        h.wear[0],
+        h.wear[1],
+        h.depth(),
+    ]
+}
+
+impl InterfaceOutput {
+    /// The fretting values ([`FRETTING`]) at the side-B nodes of every pair (in curve order):
+    /// extrapolated like [`Self::nodal`] (and clamped at 0, where extrapolation can
+    /// undershoot), the regime of the nearest point (the most advanced of the elements
+    /// sharing the node), and `ruiz_f3` from the larger surface-parallel normal stress
+    /// σ_T = t·σ·t of the two bodies at the node, recovered from the bodies' integration
+    /// points (Ruiz, Boddington & Chen, Exp. Mech. 24 (1984) 208; Nowell & Hills, Wear 136
+    /// (1990) 329).
+    pub fn fretting(&self, model: &Model, solution: &Solution) -> Vec<Vec<[f64; 9]>> {
+        let states = &solution.interface_committed;
+        let regime = regimes(model, states);
+        let mut out: Vec<Vec<[f64; 9]>> = self
+            .pairs
+            .iter()
+            .map(|p| vec![[0.0; 9]; p.nodes.len()])
+            .collect();
+        let mut count: Vec<Vec<u32>> = self.pairs.iter().map(|p| vec![0; p.nodes.len()]).collect();
+        for (e, element) in model.interface.elements.iter().enumerate() {
+            let p = element.pair as usize;
+            let at = e * INTERFACE_POINTS;
+            let values: [[f64; 9]; 3] =
+                std::array::from_fn(|g| point_fretting(&states[at + g], regime[at + g]));
+            let ex = &self.extrapolation[element.rule as usize];
+            for i in 0..3 {
+                let k = self.slot[&element.nodes[3 + i]];
+                let target = &mut out[p][k];
+                for (f, v) in target.iter_mut().enumerate() {
+                    if f != REGIME {
+                        *v += (0..3).map(|g| ex[(i, g)] * values[g][f]).sum::<f64>();
+                    }
+                }
+                target[REGIME] = target[REGIME].max(values[nearest_point(element, i)][REGIME]);
+                count[p][k] += 1;
+            }
+        }
+        for (pair, counts) in out.iter_mut().zip(&count) {
+            for (node, &c) in pair.iter_mut().zip(counts) {
+                for (f, v) in node.iter_mut().enumerate() {
+                    if f != REGIME {
+                        *v = (*v / c.max(1) as f64).max(0.0);
+                    }
+                }
+            }
+        }
+        // F3 needs the stress recovery only once a cycle has slipped somewhere.
+        if out.iter().flatten().any(|v| v[F2] > 0.0) {
+            let stresses = nodal_values(model, &self.body_points, &solution.committed);
+            for (pair, values) in self.pairs.iter().zip(&mut out) {
+                for ((v, t), points) in values.iter_mut().zip(&pair.tangent).zip(&pair.body_points)
+                {
+                    let sigma_t = points
+                        .iter()
+                        .map(|&b| {
+                            let s = &stresses[b].stress;
+                            t[0] * t[0] * s[0] + t[1] * t[1] * s[1] + 2.0 * t[0] * t[1] * s[2]
+                        })
+                        .fold(0.0, f64::max);
+                    v[F3] = sigma_t * v[F2];
+                }
+            }
+        }
+        out
+    }
+
+    /// The wear-depth profile of pair `pair` along its side A: per node (in curve order) the
+    /// arc length along side A, the side-A position and the nodal depths h_A, h_B and
+    /// h_A + h_B.
+    pub fn wear_profile(&self, model: &Model, solution: &Solution, pair: usize) -> Vec<[f64; 6]> {
+        let fretting = self.fretting(model, solution);
+        let nodes = &self.pairs[pair];
+        let mut s = 0.0;
+        let mut last: Option<[f64; 2]> = None;
+        nodes
+            .partner
+            .iter()
+            .zip(&fretting[pair])
+            .map(|(&a, v)| {
+                let x = model.mesh.nodes[a as usize];
+                if let Some(l) = last {
+                    s += (x[0] - l[0]).hypot(x[1] - l[1]);
+                }
+                last = Some(x);
+                [s, x[0], x[1], v[6], v[7], v[8]]
+            })
+            .collect()
+    }
+
+    /// [`Self::tables`] with the fretting columns ([`FRETTING`]) appended: the contact CSV
+    /// files of a run.
+    pub fn fretting_tables(&self, model: &Model, solution: &Solution) -> Vec<CsvTable> {
+        let mut tables = self.tables(model, &solution.interface_committed);
+        let fretting = self.fretting(model, solution);
+        for (table, values) in tables.iter_mut().zip(&fretting) {
+            table.columns.extend(FRETTING.iter().map(|s| s.to_string()));
+            for (row, v) in table.rows.iter_mut().zip(values) {
+                row.extend(v);
+            }
+        }
+        tables
+    }
+
+    /// Adds the fretting point data ([`FRETTING`]; `regime` as integers) to the interface
+    /// `grid` of [`Self::grid`].
+    pub fn add_fretting(&self, grid: &mut Grid, model: &Model, solution: &Solution) {
+        let fretting = self.fretting(model, solution);
+        let all: Vec<&[f64; 9]> = fretting.iter().flatten().collect();
+        for (f, name) in FRETTING.iter().enumerate() {
+            let values = all.iter().map(|v| v[f]);
+            let values = if f == REGIME {
+                FieldValues::I32(values.map(|r| r as i32).collect())
+            } else {
+                FieldValues::F64(values.collect())
+            };
+            grid.point_data.push(Field::new(name, 1, values));
+        }
     }
 }
 

@@ -22,6 +22,7 @@ use crate::output::{Field, FieldValues, Grid, tensor_component_names, vtk_cell_t
 use crate::solver::stepping::StepResult;
 use interface::InterfaceOutput;
 
+pub mod fretting;
 pub mod interface;
 pub mod quantities;
 
@@ -76,6 +77,12 @@ impl BodyPoints {
     /// Output point of node `n` in body `b`.
     pub fn point(&self, b: u32, n: u32) -> usize {
         self.index[b as usize][n as usize] as usize
+    }
+
+    /// Output point of node `n` in body `b`, if the body has the node.
+    pub fn find(&self, b: u32, n: u32) -> Option<usize> {
+        let p = self.index[b as usize][n as usize];
+        (p != u32::MAX).then_some(p as usize)
     }
 }
 
@@ -268,6 +275,7 @@ pub fn step_grids(
     bodies.field_data.extend(info.field_data());
     let interface = (!model.interface.elements.is_empty()).then(|| {
         let mut grid = interface.grid(model, &solution.interface_committed);
+        interface.add_fretting(&mut grid, model, solution);
         grid.point_data.push(nodal_vector(
             "displacement",
             &interface.nodes(),

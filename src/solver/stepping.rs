@@ -381,7 +381,12 @@ pub fn run_steps_from(
         let cycle_end = schedule
             .timeline()
             .ends_cycle(step)
-            .map(|jump| cycles::end_cycle(model, &mut solution, jump as f64));
+            .map(|jump| {
+                cycles::end_cycle(model, &mut solution, jump as f64).map_err(|e| {
+                    let analysis_step = schedule.timeline().frame(target).analysis_step;
+                    e.in_analysis_step(analysis_step - 1)
+                })
+            });
         let internal_force = &newton.system().internal_force;
         state.force_floor = state.force_floor.max(1e-3 * norm(internal_force));
         stats.steps += 1;

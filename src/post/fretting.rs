@@ -1,0 +1,232 @@
+//! The per-contact fretting tables of a run: the hysteresis loop of each pair (one row per
+//! output frame), the results of every simulated load cycle (one row per cycle and pair), and
+//! the wear-depth profile of each pair that wears at every cycle end. They are kept as rows of
+//! numbers (the restart record stores them like `history.csv`'s rows) and turned into CSV
+//! tables for `hysteresis_<pair>.csv`, `cycles.csv` and `wear_<pair>.csv`, written for the
+//! models where some pair wears.
+
+use crate::contact::{ContactStatus, InterfaceState};
+use crate::element::interface6::interface_point;
+use crate::element::set::INTERFACE_POINTS;
+use crate::model::Model;
+use crate::output::csv::{Cell, CsvTable};
+use crate::post::interface::InterfaceOutput;
+use crate::solver::stepping::StepResult;
+
+/// The cycle table's file name.
+pub const CYCLES_FILE: &str = "cycles.csv";
+
+/// The hysteresis table's file name of pair `pair`.
+pub fn hysteresis_file(pair: &str) -> String {
+    format!("hysteresis_{pair}.csv")
+}
+
+/// The wear-profile table's file name of pair `pair`.
+pub fn wear_file(pair: &str) -> String {
+    format!("wear_{pair}.csv")
+}
+
+/// Whether `name` is one of the fretting tables' files.
+pub fn is_fretting_file(name: &str) -> bool {
+    name == CYCLES_FILE
+        || ["hysteresis_", "wear_"].iter().any(|p| {
+            name.strip_prefix(p)
+                .is_some_and(|r| r.len() > 4 && r.ends_with(".csv"))
+        })
+}
+
+/// Columns of `hysteresis_<pair>.csv`: the frame (pseudo-time of the output), where it lies
+/// in the load history, the pair's tangential force ∫ p_T dA and normal force ∫ |p_N| dA (N,
+/// totals over the circle in axisymmetry) and the area-weighted mean tangential relative
+/// displacement u_T of its closed points (mm).
+pub const HYSTERESIS: [&str; 8] = [
+    "frame",
+    "analysis_step",
+    "cycle",
+    "cycles",
+    "step_time",
+    "tangential_force",
+    "normal_force",
+    "relative_slip",
+];
+
+/// Columns of `cycles.csv`: per simulated cycle and pair, the friction work of the cycle
+/// ∫ (dissipation of the cycle) dA (N·mm), the worn volume ∫ (h_A + h_B) dA (mm³, with 2πr in
+/// axisymmetry) and the largest depth (mm) after the cycle (and its jump).
+pub const CYCLES: [&str; 7] = [
+    "analysis_step",
+    "cycle",
+    "cycles",
+    "contact",
+    "dissipation",
+    "worn_volume",
+    "max_wear_depth",
+];
+
+/// Columns of `wear_<pair>.csv`: the profile along side A at each cycle end.
+pub const WEAR: [&str; 7] = ["cycles", "s", "x", "y", "wear_a", "wear_b", "wear_depth"];
+
+/// Index of `contact` in [`CYCLES`] (kept as the pair's index in the rows).
+const CONTACT: usize = 3;
+
+/// Integrals over one pair's points.
+#[derive(Clone, Copy, Debug, Default)]
+struct PairSums {
+    tangential_force: f64,
+    normal_force: f64,
+    closed_area: f64,
+    slip_area: f64,
+    cycle_dissipation: f64,
+    worn_volume: f64,
+    max_depth: f64,
+}
+
+fn pair_sums(model: &Model, states: &[InterfaceState]) -> Vec<PairSums> {
+    let mut out = vec![PairSums::default(); model.interface.pairs.len()];
+    for (e, element) in model.interface.elements.iter().enumerate() {
+        let sums = &mut out[element.pair as usize];
+        for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
+            let da = interface_point(&model.analysis, &element.b_coords, xi, w).da;
+            let s = &states[e * INTERFACE_POINTS + g];
+            sums.tangential_force += s.stress[0] * da;
+            sums.normal_force -= s.stress[1] * da;
+            if s.status != ContactStatus::Open {
+                sums.closed_area += da;
+                sums.slip_area += s.relative[0] * da;
+            }
+            sums.cycle_dissipation += s.history.last_cycle_dissipation * da;
+            sums.worn_volume += s.history.depth() * da;
+            sums.max_depth = sums.max_depth.max(s.history.depth());
+        }
+    }
+    out
+}
+
+/// The fretting tables of a run, as rows of numbers.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FrettingTables {
+    /// Rows of [`HYSTERESIS`] per pair.
+    hysteresis: Vec<Vec<Vec<f64>>>,
+    /// Rows of [`CYCLES`] (the contact as its pair index).
+    cycles: Vec<Vec<f64>>,
+    /// Rows of [`WEAR`] per pair (empty for pairs that do not wear).
+    wear: Vec<Vec<Vec<f64>>>,
+}
+
+impl FrettingTables {
+    /// Empty tables for the pairs of `model`.
+    pub fn new(model: &Model) -> Self {
+        let pairs = model.interface.pairs.len();
+        Self {
+            hysteresis: vec![Vec::new(); pairs],
+            cycles: Vec::new(),
+            wear: vec![Vec::new(); pairs],
+        }
+    }
+
+    /// Adds the rows of output frame `step` at pseudo-time `time`: a hysteresis row per
+    /// pair, and at the end of a cycle (`step.frame.cycle_end`) a cycle row per pair and the
+    /// wear profile of each pair that wears.
+    pub fn record(
+        &mut self,
+        model: &Model,
+        interface: &InterfaceOutput,
+        step: &StepResult,
+        time: f64,
+    ) {
+        let frame = step.frame;
+        let sums = pair_sums(model, &step.solution.interface_committed);
+        let position = [frame.analysis_step as f64, frame.cycle as f64, frame.cycles];
+        for (rows, s) in self.hysteresis.iter_mut().zip(&sums) {
+            let slip = if s.closed_area > 0.0 {
+                s.slip_area / s.closed_area
+            } else {
+                0.0
+            };
+            let mut row = vec![time];
+            row.extend(position);
+            row.extend([frame.step_time, s.tangential_force, s.normal_force, slip]);
+            rows.push(row);
+        }
+        if !frame.cycle_end {
+            return;
+        }
+        for (p, s) in sums.iter().enumerate() {
+            let mut row = position.to_vec();
+            row.extend([p as f64, s.cycle_dissipation, s.worn_volume, s.max_depth]);
+            self.cycles.push(row);
+        }
+        for (p, pair) in model.interface.pairs.iter().enumerate() {
+            if pair.wear().is_none() {
+                continue;
+            }
+            let profile = interface.wear_profile(model, step.solution, p);
+            self.wear[p].extend(profile.into_iter().map(|v| {
+                let mut row = vec![frame.cycles];
+                row.extend(v);
+                row
+            }));
+        }
+    }
+
+    /// The rows for a restart record: the hysteresis tables, the cycle table, the wear
+    /// tables.
+    pub fn rows(&self) -> Vec<Vec<Vec<f64>>> {
+        let mut out = self.hysteresis.clone();
+        out.push(self.cycles.clone());
+        out.extend(self.wear.iter().cloned());
+        out
+    }
+
+    /// Takes over the rows of a restart record ([`Self::rows`]); `None` (nothing changed)
+    /// when they do not fit the model's pairs and the tables' columns.
+    pub fn restore(&mut self, mut rows: Vec<Vec<Vec<f64>>>) -> Option<()> {
+        let pairs = self.hysteresis.len();
+        if rows.len() != 2 * pairs + 1 {
+            return None;
+        }
+        let wear = rows.split_off(pairs + 1);
+        let cycles = rows.pop()?;
+        let fits = |table: &[Vec<f64>], width: usize| table.iter().all(|r| r.len() == width);
+        let ok = rows.iter().all(|t| fits(t, HYSTERESIS.len()))
+            && fits(&cycles, CYCLES.len())
+            && cycles.iter().all(|r| (r[CONTACT] as usize) < pairs)
+            && wear.iter().all(|t| fits(t, WEAR.len()));
+        ok.then(|| {
+            self.hysteresis = rows;
+            self.cycles = cycles;
+            self.wear = wear;
+        })
+    }
+
+    /// The tables' files: (file name, table) of every pair of `model`; a wear table only for
+    /// a pair that wears.
+    pub fn files(&self, model: &Model) -> Vec<(String, CsvTable<Cell>)> {
+        let table = |columns: &[&str], rows: &[Vec<f64>]| CsvTable {
+            columns: columns.iter().map(|c| c.to_string()).collect(),
+            rows: rows
+                .iter()
+                .map(|r| r.iter().map(|&v| Cell::Number(v)).collect())
+                .collect(),
+        };
+        let pairs = &model.interface.pairs;
+        let mut out: Vec<(String, CsvTable<Cell>)> = pairs
+            .iter()
+            .zip(&self.hysteresis)
+            .map(|(p, rows)| (hysteresis_file(&p.name), table(&HYSTERESIS, rows)))
+            .collect();
+        if !pairs.is_empty() {
+            let mut cycles = table(&CYCLES, &self.cycles);
+            for (row, numbers) in cycles.rows.iter_mut().zip(&self.cycles) {
+                row[CONTACT] = Cell::Text(pairs[numbers[CONTACT] as usize].name.clone());
+            }
+            out.push((CYCLES_FILE.to_string(), cycles));
+        }
+        for (p, rows) in pairs.iter().zip(&self.wear) {
+            if p.wear().is_some() {
+                out.push((wear_file(&p.name), table(&WEAR, rows)));
+            }
+        }
+        out
+    }
+}
