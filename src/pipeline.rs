@@ -1028,6 +1028,11 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         let start = Instant::now();
         let row = self.write_step_files(step, step.step as f64)?;
         self.history.rows.push(row);
+        // Before the restart record, which keeps the marks for a resumed run's summary.
+        let total = step.solution.energy.total;
+        if let Some(mark) = EnergyMark::at(&step.frame, step.step, total) {
+            self.summary.energy.push(mark);
+        }
         if let Some(p) = progress {
             self.write_record(p)?;
         }
@@ -1046,10 +1051,6 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             .map(|(_, f)| [f.x, f.y])
             .collect();
         self.summary.push_step(summary);
-        let total = step.solution.energy.total;
-        if let Some(mark) = EnergyMark::at(&step.frame, step.step, total) {
-            self.summary.energy.push(mark);
-        }
         (self.on_step)(self.model, step)?;
         self.bar.0.inc(1);
         self.bar

@@ -69,6 +69,39 @@ fn elastic_bar_stores_the_work_of_its_load() {
     }
 }
 
+/// The arc-length loop records its increments too: the bar of
+/// [`elastic_bar_stores_the_work_of_its_load`] followed by arc length to beyond its
+/// reference load ends with the Clapeyron work ½ F u of the load factor it reached.
+#[test]
+fn arc_length_increments_are_recorded() {
+    let (l, h, t, sigma) = (4.0, 1.0, 2.5, 120.0);
+    let case = CaseBuilder::plane_stress(t)
+        .body("body", elastic(E, NU))
+        .support("s0", &[("ux", 0.0)])
+        .support("origin", &[("uy", 0.0)])
+        .traction("s1", [sigma, 0.0])
+        .set("steps", "control", "arc_length")
+        .set("steps", "initial_increment", 0.3)
+        .set("steps", "max_load_factor", 1.0)
+        .case();
+    let model = model(rectangle(l, h, 4, 2, 0.2, false), &case).unwrap();
+    let mut last = (0.0, Energy::default());
+    run_steps(&model, &settings(&case), |step| {
+        last = (step.load_factor, step.solution.energy.total);
+        Ok(0.0)
+    })
+    .unwrap();
+    let (lambda, e) = last;
+    assert!(lambda >= 1.0, "{lambda}");
+    let s = lambda * sigma;
+    let clapeyron = 0.5 * (s * h * t) * (s * l / E);
+    assert!(
+        relative(e.external_work, clapeyron) < 1e-7,
+        "{e:?} vs {clapeyron}"
+    );
+    assert!(e.imbalance().abs() < 1e-7 * e.external_work, "{e:?}");
+}
+
 /// An axisymmetric thick cylinder a ≤ r ≤ b (plane-strain ends) under internal pressure p:
 /// the external work p·2πaH·u(a)/2 with Lamé's bore displacement, and the stored energy
 /// equal to it (the mesh's discretisation error, ~1e-5 here, bounds the first; the second
@@ -336,4 +369,38 @@ fn summary_and_history_report_the_balance() {
         column("energy_imbalance"),
         total["imbalance"].as_f64().unwrap()
     );
+}
+
+/// A resumed run rebuilds `summary.json`'s energy from its restart record: resuming a
+/// finished run (the record of its last increment) reports the same energy entries. The
+/// shrink fit of `pipelines/shrink_fit.toml`: its interference stores energy in the bodies
+/// without external work, which the interface energy balances.
+#[test]
+fn resume_keeps_the_energy_report() {
+    use asperity::pipeline::{OutputMode, RunOptions, run_with};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/shrink_fit.toml");
+    let case = Case::from_file(&path).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let energy = |mode| {
+        let options = RunOptions {
+            progress: false,
+            mode,
+            command_line: Vec::new(),
+        };
+        run_with(&case, dir.path(), &options, |_| Ok(())).unwrap();
+        let text = std::fs::read_to_string(dir.path().join("summary.json")).unwrap();
+        let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
+        summary["energy"].clone()
+    };
+    let first = energy(OutputMode::Fresh);
+    let total = &first["total"];
+    let stored = total["elastic_energy"].as_f64().unwrap();
+    assert_eq!(first["steps"].as_array().unwrap().len(), 1);
+    assert_eq!(total["external_work"], 0.0);
+    assert!(stored > 0.0, "{first}");
+    assert!(
+        total["imbalance"].as_f64().unwrap().abs() < 1e-6 * stored,
+        "{first}"
+    );
+    assert_eq!(energy(OutputMode::Resume), first);
 }
