@@ -180,15 +180,11 @@ fn plastic_work_of_a_uniaxial_load_cycle() {
     assert!(relative(overshoot(coarse) / overshoot(fine), 2.0) < 1e-6);
 }
 
-/// A near-rigid block pressed by a prescribed closure g on a near-rigid base through a
-/// linear Coulomb joint (k_N, k_T, μ) at uniform pressure p = k_N g, then moved sideways
-/// cyclically between ±δ: each full cycle dissipates 4 μ p A (δ − μ p / k_T) (the area of
-/// the elastic–perfectly-sliding loop), the cycle's external work equals it plus the change
-/// of the stored energy (zero over a periodic cycle), and the balance holds to 1e-6 of the
-/// cycle's work.
-#[test]
-fn coulomb_joint_dissipates_its_hysteresis_loop_per_cycle() {
-    let (k_n, k_t, mu, g, delta) = (1e4, 1e3, 0.3, 1e-3, 1e-2);
+/// The near-rigid joint: base [0, 4] × [0, 1] held on the ground and block [1, 3] × [1, 2]
+/// (E = 1e9, so that the interface takes all the compliance), a linear Coulomb joint between
+/// them, the block's top pressed down by `closure` and its left side moved by `delta` times
+/// `drive`, one step per entry.
+fn near_rigid_joint(law: [f64; 3], closure: f64, delta: f64, drive: &[f64]) -> (Model, Case) {
     let stiff = 1e9;
     let mut base = tensor(&uniform(0.0, 4.0, 4), &uniform(0.0, 1.0, 1), "base");
     add_curve_group(&mut base, "ground", |x| x[1] == 0.0);
@@ -199,6 +195,36 @@ fn coulomb_joint_dissipates_its_hysteresis_loop_per_cycle() {
     add_curve_group(&mut block, "block_bottom", |x| x[1] == 1.0);
     add_curve_group(&mut block, "block_top", |x| x[1] == 2.0);
     add_curve_group(&mut block, "block_left", |x| x[0] == 1.0);
+    let n = drive.len();
+    let case = tight(
+        CaseBuilder::plane_strain()
+            .body("base", elastic(stiff, NU))
+            .body("block", elastic(stiff, NU))
+            .support("ground", &[("ux", 0.0), ("uy", 0.0)])
+            .support_history("block_top", &[("uy", -closure)], &vec![1.0; n])
+            .support_history("block_left", &[("ux", delta)], drive)
+            .contact(
+                &[
+                    ("side_a", "base_top".into()),
+                    ("side_b", "block_bottom".into()),
+                ],
+                linear_coulomb(law[0], law[1], law[2]),
+            )
+            .steps(n as i64),
+    )
+    .case();
+    (model(merge(base, block, false), &case).unwrap(), case)
+}
+
+/// The near-rigid block pressed by a prescribed closure g on the base through a linear
+/// Coulomb joint (k_N, k_T, μ) at uniform pressure p = k_N g, then moved sideways
+/// cyclically between ±δ: each full cycle dissipates 4 μ p A (δ − μ p / k_T) (the area of
+/// the elastic–perfectly-sliding loop), the cycle's external work equals it plus the change
+/// of the stored energy (zero over a periodic cycle), and the balance holds to 1e-6 of the
+/// cycle's work.
+#[test]
+fn coulomb_joint_dissipates_its_hysteresis_loop_per_cycle() {
+    let (k_n, k_t, mu, g, delta) = (1e4, 1e3, 0.3, 1e-3, 1e-2);
     // Quarter cycles of 4 increments: press, then 0 → δ, then 3 cycles δ → −δ → δ.
     let mut drive = vec![0.0];
     drive.extend((1..=4).map(|i| i as f64 / 4.0));
@@ -206,25 +232,7 @@ fn coulomb_joint_dissipates_its_hysteresis_loop_per_cycle() {
         drive.extend((1..=8).map(|i| 1.0 - i as f64 / 4.0));
         drive.extend((1..=8).map(|i| -1.0 + i as f64 / 4.0));
     }
-    let n = drive.len();
-    let case = tight(
-        CaseBuilder::plane_strain()
-            .body("base", elastic(stiff, NU))
-            .body("block", elastic(stiff, NU))
-            .support("ground", &[("ux", 0.0), ("uy", 0.0)])
-            .support_history("block_top", &[("uy", -g)], &vec![1.0; n])
-            .support_history("block_left", &[("ux", delta)], &drive)
-            .contact(
-                &[
-                    ("side_a", "base_top".into()),
-                    ("side_b", "block_bottom".into()),
-                ],
-                linear_coulomb(k_n, k_t, mu),
-            )
-            .steps(n as i64),
-    )
-    .case();
-    let model = model(merge(base, block, false), &case).unwrap();
+    let (model, case) = near_rigid_joint([k_n, k_t, mu], g, delta, &drive);
     let totals = energies(&model, &case);
     let (p, area) = (k_n * g, 2.0);
     let loop_area = 4.0 * mu * p * area * (delta - mu * p / k_t);
@@ -403,4 +411,34 @@ fn resume_keeps_the_energy_report() {
         "{first}"
     );
     assert_eq!(energy(OutputMode::Resume), first);
+}
+
+/// Pressed alone, the joint stores ½ p²/k_N per unit area (the interface term of a linear
+/// law); a wear jump of depth Δh at a point then moves −p_N Δh dA from the interface energy
+/// to the wear work (dA = 2/3 at the middle Newton–Cotes point of an element of length 1:
+/// weight 4/3 times det j = 1/2), leaving the balance as it was.
+#[test]
+fn interface_energy_and_wear_jumps() {
+    let (k_n, g) = (1e4, 1e-3);
+    let (model, case) = near_rigid_joint([k_n, 1e3, 0.3], g, 0.0, &[0.0]);
+    let (mut solution, _) = run_steps(&model, &settings(&case), |_| Ok(0.0)).unwrap();
+    let p = k_n * g;
+    let before = solution.energy.total;
+    // The bodies take 2 p h/E = 2e-8 mm of the 1e-3 mm closure: p is 2e-5 low, its energy
+    // 4e-5.
+    assert!(
+        relative(before.interface_energy, 0.5 * p * p / k_n * 2.0) < 1e-4,
+        "{before:?}"
+    );
+    let state = solution.interface_committed[1];
+    let depth = 1e-4;
+    solution.energy.record_wear_jump(&model, 1, &state, depth);
+    let after = solution.energy.total;
+    let moved = p * depth * 2.0 / 3.0;
+    assert!(
+        relative(after.wear_work - before.wear_work, moved) < 1e-4,
+        "{after:?}"
+    );
+    assert!(relative(before.interface_energy - after.interface_energy, moved) < 1e-4);
+    assert!((after.imbalance() - before.imbalance()).abs() < 1e-15);
 }
