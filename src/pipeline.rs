@@ -988,7 +988,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         let [history, energy]: [Vec<Vec<f64>>; 2] =
             output.tables.try_into().map_err(|_| Error::Restart {
                 path: self.out_dir.join(RESTART_FILE),
-                reason: "the record has not the history and energy tables".into(),
+                reason: "the record lacks its history and energy tables".into(),
             })?;
         let marks: Option<Vec<EnergyMark>> =
             energy.iter().map(|row| EnergyMark::from_row(row)).collect();
