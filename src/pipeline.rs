@@ -1112,6 +1112,11 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         let fields = self.all_frames || self.model.schedule.timeline().is_end_frame(step.step);
         let row = self.write_step_files(step, step.step as f64, fields)?;
         self.history.rows.push(row);
+        // Before the restart record, which keeps the marks for a resumed run's summary.
+        let total = step.solution.energy.total;
+        if let Some(mark) = EnergyMark::at(&step.frame, step.step, total) {
+            self.summary.energy.push(mark);
+        }
         if let Some(p) = progress {
             self.queue_record(p)?;
         }
@@ -1130,10 +1135,6 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             .map(|(_, f)| [f.x, f.y])
             .collect();
         self.summary.push_step(summary);
-        let total = step.solution.energy.total;
-        if let Some(mark) = EnergyMark::at(&step.frame, step.step, total) {
-            self.summary.energy.push(mark);
-        }
         (self.on_step)(self.model, step)?;
         self.bar.0.inc(1);
         self.bar.0.set_message(self.progress_message(step));

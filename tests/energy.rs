@@ -69,6 +69,39 @@ fn elastic_bar_stores_the_work_of_its_load() {
     }
 }
 
+/// The arc-length loop records its increments too: the bar of
+/// [`elastic_bar_stores_the_work_of_its_load`] followed by arc length to beyond its
+/// reference load ends with the Clapeyron work ½ F u of the load factor it reached.
+#[test]
+fn arc_length_increments_are_recorded() {
+    let (l, h, t, sigma) = (4.0, 1.0, 2.5, 120.0);
+    let case = CaseBuilder::plane_stress(t)
+        .body("body", elastic(E, NU))
+        .support("s0", &[("ux", 0.0)])
+        .support("origin", &[("uy", 0.0)])
+        .traction("s1", [sigma, 0.0])
+        .set("steps", "control", "arc_length")
+        .set("steps", "initial_increment", 0.3)
+        .set("steps", "max_load_factor", 1.0)
+        .case();
+    let model = model(rectangle(l, h, 4, 2, 0.2, false), &case).unwrap();
+    let mut last = (0.0, Energy::default());
+    run_steps(&model, &settings(&case), |step| {
+        last = (step.load_factor, step.solution.energy.total);
+        Ok(0.0)
+    })
+    .unwrap();
+    let (lambda, e) = last;
+    assert!(lambda >= 1.0, "{lambda}");
+    let s = lambda * sigma;
+    let clapeyron = 0.5 * (s * h * t) * (s * l / E);
+    assert!(
+        relative(e.external_work, clapeyron) < 1e-7,
+        "{e:?} vs {clapeyron}"
+    );
+    assert!(e.imbalance().abs() < 1e-7 * e.external_work, "{e:?}");
+}
+
 /// An axisymmetric thick cylinder a ≤ r ≤ b (plane-strain ends) under internal pressure p:
 /// the external work p·2πaH·u(a)/2 with Lamé's bore displacement, and the stored energy
 /// equal to it (the mesh's discretisation error, ~1e-5 here, bounds the first; the second
@@ -147,15 +180,11 @@ fn plastic_work_of_a_uniaxial_load_cycle() {
     assert!(relative(overshoot(coarse) / overshoot(fine), 2.0) < 1e-6);
 }
 
-/// A near-rigid block pressed by a prescribed closure g on a near-rigid base through a
-/// linear Coulomb joint (k_N, k_T, μ) at uniform pressure p = k_N g, then moved sideways
-/// cyclically between ±δ: each full cycle dissipates 4 μ p A (δ − μ p / k_T) (the area of
-/// the elastic–perfectly-sliding loop), the cycle's external work equals it plus the change
-/// of the stored energy (zero over a periodic cycle), and the balance holds to 1e-6 of the
-/// cycle's work.
-#[test]
-fn coulomb_joint_dissipates_its_hysteresis_loop_per_cycle() {
-    let (k_n, k_t, mu, g, delta) = (1e4, 1e3, 0.3, 1e-3, 1e-2);
+/// The near-rigid joint: base [0, 4] × [0, 1] held on the ground and block [1, 3] × [1, 2]
+/// (E = 1e9, so that the interface takes all the compliance), a linear Coulomb joint between
+/// them, the block's top pressed down by `closure` and its left side moved by `delta` times
+/// `drive`, one step per entry.
+fn near_rigid_joint(law: [f64; 3], closure: f64, delta: f64, drive: &[f64]) -> (Model, Case) {
     let stiff = 1e9;
     let mut base = tensor(&uniform(0.0, 4.0, 4), &uniform(0.0, 1.0, 1), "base");
     add_curve_group(&mut base, "ground", |x| x[1] == 0.0);
@@ -166,6 +195,36 @@ fn coulomb_joint_dissipates_its_hysteresis_loop_per_cycle() {
     add_curve_group(&mut block, "block_bottom", |x| x[1] == 1.0);
     add_curve_group(&mut block, "block_top", |x| x[1] == 2.0);
     add_curve_group(&mut block, "block_left", |x| x[0] == 1.0);
+    let n = drive.len();
+    let case = tight(
+        CaseBuilder::plane_strain()
+            .body("base", elastic(stiff, NU))
+            .body("block", elastic(stiff, NU))
+            .support("ground", &[("ux", 0.0), ("uy", 0.0)])
+            .support_history("block_top", &[("uy", -closure)], &vec![1.0; n])
+            .support_history("block_left", &[("ux", delta)], drive)
+            .contact(
+                &[
+                    ("side_a", "base_top".into()),
+                    ("side_b", "block_bottom".into()),
+                ],
+                linear_coulomb(law[0], law[1], law[2]),
+            )
+            .steps(n as i64),
+    )
+    .case();
+    (model(merge(base, block, false), &case).unwrap(), case)
+}
+
+/// The near-rigid block pressed by a prescribed closure g on the base through a linear
+/// Coulomb joint (k_N, k_T, μ) at uniform pressure p = k_N g, then moved sideways
+/// cyclically between ±δ: each full cycle dissipates 4 μ p A (δ − μ p / k_T) (the area of
+/// the elastic–perfectly-sliding loop), the cycle's external work equals it plus the change
+/// of the stored energy (zero over a periodic cycle), and the balance holds to 1e-6 of the
+/// cycle's work.
+#[test]
+fn coulomb_joint_dissipates_its_hysteresis_loop_per_cycle() {
+    let (k_n, k_t, mu, g, delta) = (1e4, 1e3, 0.3, 1e-3, 1e-2);
     // Quarter cycles of 4 increments: press, then 0 → δ, then 3 cycles δ → −δ → δ.
     let mut drive = vec![0.0];
     drive.extend((1..=4).map(|i| i as f64 / 4.0));
@@ -173,25 +232,7 @@ fn coulomb_joint_dissipates_its_hysteresis_loop_per_cycle() {
         drive.extend((1..=8).map(|i| 1.0 - i as f64 / 4.0));
         drive.extend((1..=8).map(|i| -1.0 + i as f64 / 4.0));
     }
-    let n = drive.len();
-    let case = tight(
-        CaseBuilder::plane_strain()
-            .body("base", elastic(stiff, NU))
-            .body("block", elastic(stiff, NU))
-            .support("ground", &[("ux", 0.0), ("uy", 0.0)])
-            .support_history("block_top", &[("uy", -g)], &vec![1.0; n])
-            .support_history("block_left", &[("ux", delta)], &drive)
-            .contact(
-                &[
-                    ("side_a", "base_top".into()),
-                    ("side_b", "block_bottom".into()),
-                ],
-                linear_coulomb(k_n, k_t, mu),
-            )
-            .steps(n as i64),
-    )
-    .case();
-    let model = model(merge(base, block, false), &case).unwrap();
+    let (model, case) = near_rigid_joint([k_n, k_t, mu], g, delta, &drive);
     let totals = energies(&model, &case);
     let (p, area) = (k_n * g, 2.0);
     let loop_area = 4.0 * mu * p * area * (delta - mu * p / k_t);
@@ -336,4 +377,68 @@ fn summary_and_history_report_the_balance() {
         column("energy_imbalance"),
         total["imbalance"].as_f64().unwrap()
     );
+}
+
+/// A resumed run rebuilds `summary.json`'s energy from its restart record: resuming a
+/// finished run (the record of its last increment) reports the same energy entries. The
+/// shrink fit of `pipelines/shrink_fit.toml`: its interference stores energy in the bodies
+/// without external work, which the interface energy balances.
+#[test]
+fn resume_keeps_the_energy_report() {
+    use asperity::pipeline::{OutputMode, RunOptions, run_with};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/shrink_fit.toml");
+    let case = Case::from_file(&path).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let energy = |mode| {
+        let options = RunOptions {
+            progress: false,
+            mode,
+            command_line: Vec::new(),
+        };
+        run_with(&case, dir.path(), &options, |_| Ok(())).unwrap();
+        let text = std::fs::read_to_string(dir.path().join("summary.json")).unwrap();
+        let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
+        summary["energy"].clone()
+    };
+    let first = energy(OutputMode::Fresh);
+    let total = &first["total"];
+    let stored = total["elastic_energy"].as_f64().unwrap();
+    assert_eq!(first["steps"].as_array().unwrap().len(), 1);
+    assert_eq!(total["external_work"], 0.0);
+    assert!(stored > 0.0, "{first}");
+    assert!(
+        total["imbalance"].as_f64().unwrap().abs() < 1e-6 * stored,
+        "{first}"
+    );
+    assert_eq!(energy(OutputMode::Resume), first);
+}
+
+/// Pressed alone, the joint stores ½ p²/k_N per unit area (the interface term of a linear
+/// law); a wear jump of depth Δh at a point then moves −p_N Δh dA from the interface energy
+/// to the wear work (dA = 2/3 at the middle Newton–Cotes point of an element of length 1:
+/// weight 4/3 times det j = 1/2), leaving the balance as it was.
+#[test]
+fn interface_energy_and_wear_jumps() {
+    let (k_n, g) = (1e4, 1e-3);
+    let (model, case) = near_rigid_joint([k_n, 1e3, 0.3], g, 0.0, &[0.0]);
+    let (mut solution, _) = run_steps(&model, &settings(&case), |_| Ok(0.0)).unwrap();
+    let p = k_n * g;
+    let before = solution.energy.total;
+    // The bodies take 2 p h/E = 2e-8 mm of the 1e-3 mm closure: p is 2e-5 low, its energy
+    // 4e-5.
+    assert!(
+        relative(before.interface_energy, 0.5 * p * p / k_n * 2.0) < 1e-4,
+        "{before:?}"
+    );
+    let state = solution.interface_committed[1];
+    let depth = 1e-4;
+    solution.energy.record_wear_jump(&model, 1, &state, depth);
+    let after = solution.energy.total;
+    let moved = p * depth * 2.0 / 3.0;
+    assert!(
+        relative(after.wear_work - before.wear_work, moved) < 1e-4,
+        "{after:?}"
+    );
+    assert!(relative(before.interface_energy - after.interface_energy, moved) < 1e-4);
+    assert!((after.imbalance() - before.imbalance()).abs() < 1e-15);
 }
