@@ -33,13 +33,25 @@ pub(crate) fn write_atomically(
     write: impl FnOnce(&mut dyn Write) -> io::Result<()>,
 ) -> Result<()> {
     super::paths::check_output_path(path)?;
-    write_through(path, |file| Box::new(file), write)
+    write_through(path, BUFFER, |file| Box::new(file), write)
 }
 
-/// [`write_atomically`] with the temporary file reached through `sink` (the file itself;
-/// in tests, a writer that fails like a full disk).
+/// Bytes of the write buffer of [`write_atomically`].
+const BUFFER: usize = 1 << 20;
+
+/// Writes `bytes`, a whole file already in memory, to `path` as [`write_atomically`] does,
+/// without the write buffer: one `write` call, no copy and no buffer to allocate.
+pub(crate) fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
+    super::paths::check_output_path(path)?;
+    write_through(path, 0, |file| Box::new(file), |w| w.write_all(bytes))
+}
+
+/// [`write_atomically`] with a write buffer of `buffer` bytes (0: none) and the temporary
+/// file reached through `sink` (the file itself; in tests, a writer that fails like a full
+/// disk).
 fn write_through(
     path: &Path,
+    buffer: usize,
     sink: impl for<'f> FnOnce(&'f std::fs::File) -> Box<dyn Write + 'f>,
     write: impl FnOnce(&mut dyn Write) -> io::Result<()>,
 ) -> Result<()> {
@@ -69,7 +81,7 @@ fn write_through(
             builder.permissions(std::fs::Permissions::from_mode(0o666));
         }
         let tmp = builder.tempfile_in(dir)?;
-        let mut writer = BufWriter::with_capacity(1 << 20, sink(tmp.as_file()));
+        let mut writer = BufWriter::with_capacity(buffer, sink(tmp.as_file()));
         write(&mut writer)?;
         // `into_inner` flushes and reports flush errors, which dropping a `BufWriter` would
         // silently swallow (a full disk would then yield a truncated file and `Ok`).
@@ -89,9 +101,9 @@ fn write_through(
     result.map_err(|e| Error::io(path, e))
 }
 
-/// Writes `text` to `path` atomically ([`write_atomically`]).
+/// Writes `text` to `path` atomically ([`write_bytes`]).
 pub(crate) fn write_text(path: &Path, text: &str) -> Result<()> {
-    write_atomically(path, |w| w.write_all(text.as_bytes()))
+    write_bytes(path, text.as_bytes())
 }
 
 /// Renames `tmp` onto `path`; on failure `tmp` is dropped, which deletes it.
@@ -167,6 +179,7 @@ mod tests {
         for (room, size) in [(0, 10), (5, 10), (1000, 3 << 20)] {
             let err = write_through(
                 &path,
+                BUFFER,
                 |file| Box::new(FullDisk { file, room }),
                 |w| w.write_all(&vec![b'x'; size]),
             )

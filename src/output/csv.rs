@@ -9,7 +9,7 @@
 
 use std::path::Path;
 
-use super::atomic::{invalid_data, write_atomically};
+use super::atomic::{invalid_data, write_bytes};
 use crate::Result;
 
 /// A table with named columns; the cells are numbers (`f64`, the default) or [`Cell`]s for
@@ -134,7 +134,7 @@ pub fn write_csv<C: CsvCell>(path: &Path, table: &CsvTable<C>) -> Result<()> {
     // The csv crate does the quoting (RFC 4180: only fields with a comma, quote or line
     // break); the numbers are formatted here, in the shortest round-trip form.
     let text = csv_text(table).map_err(|e| invalid_data(path, e))?;
-    write_atomically(path, |w| w.write_all(&text))
+    write_bytes(path, &text)
 }
 
 /// The CSV text of a checked table.

@@ -9,7 +9,7 @@
 use std::fmt::Write as _;
 use std::path::{Component, Path, PathBuf};
 
-use super::atomic::{invalid_data, write_atomically};
+use super::atomic::{invalid_data, write_text};
 use super::csv::format_f64;
 use crate::Result;
 
@@ -72,7 +72,7 @@ pub fn write_pvd(path: &Path, entries: &[PvdEntry]) -> Result<()> {
         );
     }
     xml.push_str("  </Collection>\n</VTKFile>\n");
-    write_atomically(path, |w| w.write_all(xml.as_bytes()))
+    write_text(path, &xml)
 }
 
 /// The path to write for `file`: relative paths are kept (they are relative to the pvd

@@ -20,10 +20,10 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 
 use super::Grid;
-use super::atomic::write_atomically;
+use super::atomic::write_bytes;
 use super::csv::{Cell, CsvTable, write_csv};
 use super::pvd::{PvdEntry, write_pvd};
-use super::vtu::write_vtu;
+use super::vtu::write_vtu_with;
 use crate::contact::{ContactStatus, InterfaceState, PointHistory};
 use crate::material::{PointState, Voigt};
 use crate::solver::energy::{Energy, EnergyLedger};
@@ -67,13 +67,14 @@ pub enum Content {
 }
 
 impl Content {
-    fn write(&self, path: &Path) -> Result<()> {
+    /// Writes the file, a VTU file through `buffer` (the writer thread's, reused).
+    fn write(&self, path: &Path, buffer: &mut Vec<u8>) -> Result<()> {
         match self {
-            Content::Vtu(grid) => write_vtu(path, grid),
+            Content::Vtu(grid) => write_vtu_with(path, grid, buffer),
             Content::Csv(table) => write_csv(path, table),
             Content::Table(table) => write_csv(path, table),
             Content::Pvd(entries) => write_pvd(path, entries),
-            Content::Record(bytes) => write_atomically(path, |w| w.write_all(bytes)),
+            Content::Record(bytes) => write_bytes(path, bytes),
         }
     }
 }
@@ -124,8 +125,9 @@ impl Worker {
         let (commits, inbox) = mpsc::channel::<Vec<(PathBuf, Content)>>();
         let (outbox, outcomes) = mpsc::channel();
         let thread = std::thread::spawn(move || {
+            let mut buffer = Vec::new();
             for files in inbox {
-                if outbox.send(write_in_order(files)).is_err() {
+                if outbox.send(write_in_order(files, &mut buffer)).is_err() {
                     break;
                 }
             }
@@ -235,10 +237,10 @@ impl RecordWriter {
 }
 
 /// Writes `files` in order, stopping at the first error; returns the record's buffer.
-fn write_in_order(files: Vec<(PathBuf, Content)>) -> Result<Vec<u8>> {
+fn write_in_order(files: Vec<(PathBuf, Content)>, buffer: &mut Vec<u8>) -> Result<Vec<u8>> {
     let mut spare = Vec::new();
     for (path, content) in files {
-        content.write(&path)?;
+        content.write(&path, buffer)?;
         if let Content::Record(mut bytes) = content {
             bytes.clear();
             spare = bytes;

@@ -29,10 +29,9 @@
 
 use std::collections::HashSet;
 use std::fmt::Write as _;
-use std::io::{self, Write};
 use std::path::Path;
 
-use super::atomic::{invalid_data, write_atomically};
+use super::atomic::{invalid_data, write_bytes};
 use super::pvd::escape_attr;
 use super::{Field, FieldValues, Grid};
 use crate::Result;
@@ -49,15 +48,28 @@ const HEADER_BYTES: usize = 8;
 /// empty field name, or a NaN/infinite coordinate or value. The error names the array and
 /// the first bad index.
 pub fn write_vtu(path: &Path, grid: &Grid) -> Result<()> {
+    write_vtu_with(path, grid, &mut Vec::new())
+}
+
+/// [`write_vtu`] encoding the whole file into `buffer` first (cleared; kept for the next
+/// file by a caller writing many), then writing it with one call: no write buffer, no
+/// staging copy, and no fresh memory per file.
+pub fn write_vtu_with(path: &Path, grid: &Grid, buffer: &mut Vec<u8>) -> Result<()> {
     validate(grid).map_err(|msg| invalid_data(path, msg))?;
     let head = head(grid);
-    write_atomically(path, |w| {
-        w.write_all(head.as_bytes())?;
-        for array in arrays(grid) {
-            array.write_data(grid, w)?;
-        }
-        w.write_all(b"\n</AppendedData>\n</VTKFile>\n")
-    })
+    buffer.clear();
+    buffer.reserve(
+        head.len()
+            + arrays(grid)
+                .map(|a| HEADER_BYTES + a.data_bytes(grid))
+                .sum::<usize>(),
+    );
+    buffer.extend_from_slice(head.as_bytes());
+    for array in arrays(grid) {
+        array.encode_data(grid, buffer);
+    }
+    buffer.extend_from_slice(b"\n</AppendedData>\n</VTKFile>\n");
+    write_bytes(path, buffer)
 }
 
 /// One `<DataArray>` of the file.
@@ -135,48 +147,37 @@ impl Array<'_> {
         tag
     }
 
-    /// Writes the array's size header and values (little-endian).
-    fn write_data(&self, grid: &Grid, w: &mut dyn Write) -> io::Result<()> {
-        w.write_all(&(self.data_bytes(grid) as u64).to_le_bytes())?;
+    /// Appends the array's size header and values (little-endian) to `out`.
+    fn encode_data(&self, grid: &Grid, out: &mut Vec<u8>) {
+        out.extend_from_slice(&(self.data_bytes(grid) as u64).to_le_bytes());
         match self {
             Array::Field(f) => match &f.values {
-                FieldValues::F64(v) => write_le(w, v, |x| x.to_le_bytes()),
-                FieldValues::I32(v) => write_le(w, v, |x| x.to_le_bytes()),
-                FieldValues::Str(v) => v.iter().try_for_each(|s| {
-                    w.write_all(s.as_bytes())?;
-                    w.write_all(&[0])
+                FieldValues::F64(v) => encode_le(out, v, |x| x.to_le_bytes()),
+                FieldValues::I32(v) => encode_le(out, v, |x| x.to_le_bytes()),
+                FieldValues::Str(v) => v.iter().for_each(|s| {
+                    out.extend_from_slice(s.as_bytes());
+                    out.push(0);
                 }),
             },
-            Array::Points => write_le(w, &grid.points, |&[x, y]| {
+            Array::Points => encode_le(out, &grid.points, |&[x, y]| {
                 let mut b = [0u8; 24];
                 b[..8].copy_from_slice(&x.to_le_bytes());
                 b[8..16].copy_from_slice(&y.to_le_bytes());
                 b
             }),
-            Array::Connectivity => write_le(w, &grid.connectivity, |x| x.to_le_bytes()),
-            Array::Offsets => write_le(w, &grid.offsets, |x| x.to_le_bytes()),
-            Array::Types => w.write_all(&grid.cell_types),
+            Array::Connectivity => encode_le(out, &grid.connectivity, |x| x.to_le_bytes()),
+            Array::Offsets => encode_le(out, &grid.offsets, |x| x.to_le_bytes()),
+            Array::Types => out.extend_from_slice(&grid.cell_types),
         }
     }
 }
 
-/// Writes `values` converted by `bytes`, through a 64 KiB staging buffer (one copy, no
-/// allocation per value, independent of the host's byte order).
-fn write_le<T, const N: usize>(
-    w: &mut dyn Write,
-    values: &[T],
-    bytes: impl Fn(&T) -> [u8; N],
-) -> io::Result<()> {
-    let per_chunk = (1 << 16) / N;
-    let mut buf = Vec::with_capacity(per_chunk * N);
-    for chunk in values.chunks(per_chunk) {
-        buf.clear();
-        for v in chunk {
-            buf.extend_from_slice(&bytes(v));
-        }
-        w.write_all(&buf)?;
+/// Appends `values` converted by `bytes` (independent of the host's byte order).
+fn encode_le<T, const N: usize>(out: &mut Vec<u8>, values: &[T], bytes: impl Fn(&T) -> [u8; N]) {
+    out.reserve(N * values.len());
+    for v in values {
+        out.extend_from_slice(&bytes(v));
     }
-    Ok(())
 }
 
 /// Size in bytes of a VTK scalar type written or read here.
