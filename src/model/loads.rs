@@ -109,7 +109,8 @@ impl Schedule {
         }
     }
 
-    /// The schedule of `[[step]]` analysis steps (amplitudes are added with [`Self::add`]).
+    /// The schedule of `[[step]]` analysis steps (the supports' and loads' amplitudes are
+    /// added as the model is built).
     pub fn with_steps(timeline: Timeline) -> Self {
         let zero = timeline
             .steps()
