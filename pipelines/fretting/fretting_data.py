@@ -91,8 +91,10 @@ def cyclic_steps(case: dict) -> dict[int, dict]:
     return {i: s for i, s in enumerate(case.get("step", []), start=1) if "cycles" in s}
 
 
-def has_wear(contact: dict) -> bool:
-    return "wear" in contact
+def contact_name(contact: dict) -> str:
+    """A `[[contact]]`'s name as the output files use it (README: `name`, else the curve, else
+    "<side_a>-<side_b>")."""
+    return contact.get("name") or contact.get("curve") or f"{contact['side_a']}-{contact['side_b']}"
 
 
 def cycles_per_jump(step: dict, wear: bool) -> int:

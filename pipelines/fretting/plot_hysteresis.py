@@ -150,7 +150,7 @@ def plot_all(out: Path) -> tuple[list[tuple[str, Path]], list[str]]:
         else:
             notes.append("cycles.csv has no rows: dissipation and worn volume not drawn")
     else:
-        notes.append(f"no {out / 'cycles.csv'} (no cyclic step): dissipation and worn volume not drawn")
+        notes.append(f"no {out / 'cycles.csv'} (written by runs with a cyclic step): dissipation and worn volume not drawn")
     wear_files = contact_files(out, "wear")
     for contact, path in wear_files.items():
         wear = read_table(path, WEAR_COLUMNS)
@@ -159,7 +159,7 @@ def plot_all(out: Path) -> tuple[list[tuple[str, Path]], list[str]]:
         else:
             notes.append(f"{path.name} has no rows: no profile drawn")
     for contact in hysteresis_files.keys() - wear_files.keys():
-        notes.append(f"no wear_{contact}.csv (contact `{contact}` has no wear): no wear profile")
+        notes.append(f"no wear_{contact}.csv (written for a contact with wear): no wear profile of `{contact}`")
     return figures, notes
 
 

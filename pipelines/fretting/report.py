@@ -23,7 +23,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from asperity_tools import rust_exp, table, write_report  # noqa: E402
 from fretting_data import (CYCLES_COLUMNS, ENERGY_TERMS, WEAR_COLUMNS, OutputError, contact_files,  # noqa: E402
-                           contact_rows, cycles_per_jump, cyclic_steps, read_case, read_json, read_table,
+                           contact_name, contact_rows, cycles_per_jump, cyclic_steps, read_case, read_json, read_table,
                            simulated_cycles, wear_profiles)
 from plot_hysteresis import plot_all  # noqa: E402
 
@@ -66,7 +66,7 @@ def case_section(case: dict, case_file: str, case_text: str) -> str:
     lines += [f"- load `{ld.get('name', ld['group'])}` on `{ld['group']}`: "
               + ", ".join(f"{k} = {_inline(v)}" for k, v in ld.items() if k not in ("name", "group")) for ld in case.get("load", [])]
     for c in case.get("contact", []):
-        lines.append(f"- contact `{c.get('name', c.get('curve', ''))}` between `{c.get('side_a', c.get('body_a'))}` and "
+        lines.append(f"- contact `{contact_name(c)}` between `{c.get('side_a', c.get('body_a'))}` and "
                      f"`{c.get('side_b', c.get('body_b'))}`: law {_inline(c['law'])}"
                      + (f"; wear {_inline(c['wear'])}" if "wear" in c else "; no wear"))
     lines += [f"- amplitude `{a['name']}`: time {a['time']}, value {a['value']}" for a in case.get("amplitude", [])]
@@ -107,7 +107,7 @@ def dissipation_section(cycles: dict[str, np.ndarray], contact: str) -> str:
             f"cycle to the next {falls} times out of {len(d) - 1}.")
 
 
-def wear_section(out: Path, cycles: dict[str, np.ndarray] | None, contacts: list[str]) -> str:
+def wear_section(out: Path, cycles: dict[str, np.ndarray] | None, contacts: list[str], wearing: set[str]) -> str:
     """Largest depth and worn volume at the end of the run, from cycles.csv and the last wear
     profile of each contact."""
     parts = []
@@ -128,8 +128,10 @@ def wear_section(out: Path, cycles: dict[str, np.ndarray] | None, contacts: list
             text += (f" cycles.csv at N = {last['cycles'][-1]:.0f}: worn volume {last['worn_volume'][-1]:.4g} mm³, "
                      f"largest depth {1e3 * last['max_wear_depth'][-1]:.4g} µm.")
         parts.append(text + f"\n\n![wear profiles of {contact}](wear_{contact}.png)")
-    missing = [c for c in contacts if not (out / f"wear_{c}.csv").is_file()]
-    parts += [f"Contact `{c}`: no wear (no `wear_{c}.csv`)." for c in missing]
+    for c in contacts:
+        if not (out / f"wear_{c}.csv").is_file():
+            parts.append(f"**`wear_{c}.csv` is missing although contact `{c}` has wear.**" if c in wearing
+                         else f"Contact `{c}` has no wear.")
     return "\n\n".join(parts)
 
 
@@ -209,11 +211,16 @@ def write(out: Path) -> Path:
     case = read_case(out)
     figures, notes = plot_all(out)
     contacts = list(contact_files(out, "hysteresis"))
+    wearing = {contact_name(c) for c in case.get("contact", []) if "wear" in c}
     cycles = read_table(out / "cycles.csv", CYCLES_COLUMNS, text=("contact",)) if (out / "cycles.csv").is_file() else None
     loops = "\n\n".join(f"![{caption}]({path.name})" for caption, path in figures if path.name.startswith("hysteresis_"))
     steps = ", ".join(f"{i} (`{s.get('name', f'step-{i}')}`)" for i, s in cyclic_steps(case).items()) or "none"
-    dissipation = ("\n\n".join(dissipation_section(cycles, c) for c in contacts) + "\n\n![dissipation and worn volume](cycles.png)"
-                   if cycles is not None else "No `cycles.csv`: the run has no cyclic step.")
+    if cycles is not None:
+        dissipation = ("\n\n".join(dissipation_section(cycles, c) for c in contacts)
+                       + "\n\n![dissipation and worn volume](cycles.png)")
+    else:
+        dissipation = ("**`cycles.csv` is missing although the case has cyclic steps.**" if cyclic_steps(case)
+                       else "The case has no cyclic step, so the run wrote no `cycles.csv`.")
     sections = [
         ("The case", case_section(case, info.get("case_file", "?"), info.get("case", ""))),
         ("Hysteresis loops", f"""Tangential force ∫p_T dA of each contact against its mean relative slip (the area-weighted
@@ -223,7 +230,7 @@ straight line through its turning points, which shows its opening.
 
 {loops}"""),
         ("Dissipation per cycle as the contact wears in", dissipation),
-        ("Wear", wear_section(out, cycles, contacts)),
+        ("Wear", wear_section(out, cycles, contacts, wearing)),
         ("Energy balance", energy_section(summary)),
         ("Run time", run_time_section(summary, info)),
         ("Your own geometry", OWN_GEOMETRY),
