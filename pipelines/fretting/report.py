@@ -140,6 +140,11 @@ def energy_section(summary: dict) -> str:
     energy = summary.get("energy")
     if not energy:
         return "summary.json has no `energy` record."
+    fields = [*ENERGY_FIELDS, "imbalance"]
+    records = [energy.get("total", {}), *energy.get("steps", []), *energy.get("cycles", [])]
+    lacking = sorted({f for r in records for f in fields if not isinstance(r.get(f), (int, float))})
+    if lacking:
+        return f"**summary.json's `energy` records lack (or have no number for) {', '.join(lacking)}.**"
 
     def relative(e: dict) -> str:
         return rust_exp(e["imbalance"] / abs(e["external_work"])) if e["external_work"] else "—"
