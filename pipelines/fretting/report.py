@@ -135,8 +135,9 @@ def wear_section(out: Path, cycles: dict[str, np.ndarray] | None, contacts: list
     return "\n\n".join(parts)
 
 
-def energy_section(summary: dict) -> str:
-    """The energy balance of summary.json: totals, per step, and per simulated cycle."""
+def energy_section(summary: dict, cyclic: set[int]) -> str:
+    """The energy balance of summary.json: totals, per step, and per simulated cycle of the
+    `cyclic` steps."""
     energy = summary.get("energy")
     if not energy:
         return "summary.json has no `energy` record."
@@ -157,11 +158,12 @@ def energy_section(summary: dict) -> str:
         body += "\n\nPer step:\n\n" + table(["step", *ENERGY_FIELDS, "imbalance", "relative"],
                                             [[s["name"], *(float(s[f]) for f in ENERGY_FIELDS), rust_exp(s["imbalance"]),
                                               relative(s)] for s in steps])
-    per_cycle = energy.get("cycles", [])
+    per_cycle = [c for c in energy.get("cycles", []) if c.get("analysis_step") in cyclic]
     if per_cycle:
         ratios = [abs(c["imbalance"]) / abs(c["external_work"]) for c in per_cycle if c["external_work"]]
         friction = np.array([c["friction_dissipation"] for c in per_cycle])
-        body += (f"\n\nPer simulated cycle ({len(per_cycle)} records; the work of one simulated cycle): friction "
+        body += (f"\n\nPer simulated cycle of the cyclic steps ({len(per_cycle)} records; the work of one simulated "
+                 f"cycle): friction "
                  f"dissipation from {friction[0]:.4g} to {friction[-1]:.4g} N·mm, wear work from "
                  f"{per_cycle[0]['wear_work']:.4g} to {per_cycle[-1]['wear_work']:.4g} N·mm; largest |imbalance| "
                  f"{rust_exp(max(abs(c['imbalance']) for c in per_cycle))} N·mm"
@@ -236,7 +238,7 @@ straight line through its turning points, which shows its opening.
 {loops}"""),
         ("Dissipation per cycle as the contact wears in", dissipation),
         ("Wear", wear_section(out, cycles, contacts, wearing)),
-        ("Energy balance", energy_section(summary)),
+        ("Energy balance", energy_section(summary, set(cyclic_steps(case)))),
         ("Run time", run_time_section(summary, info)),
         ("Your own geometry", OWN_GEOMETRY),
     ]

@@ -82,7 +82,8 @@ def synthetic_run(out: Path) -> None:
     friction = sum(r[4] for r in cycle_rows)
     steps = [dict(_energy(1000.0, 3.0, 0.0), name="press_in"), dict(_energy(1000.0, friction, 0.04), name="service")]
     total = {k: steps[0][k] + steps[1][k] for k in steps[0] if k != "name"}
-    per_cycle = [dict(_energy(3 * r[4], r[4], 0.01), analysis_step=2, cycle=r[1], cycles=r[2]) for r in cycle_rows]
+    per_cycle = [dict(steps[0], analysis_step=1, cycle=1, cycles=1)]  # the press-in step counts as one cycle
+    per_cycle += [dict(_energy(3 * r[4], r[4], 0.01), analysis_step=2, cycle=r[1], cycles=r[2]) for r in cycle_rows]
     (out / "summary.json").write_text(json.dumps({
         "status": "converged", "steps": [{"step": f[0]} for f in frames],
         "totals": {"steps": len(frames), "increments": len(frames), "cutbacks": 0, "iterations": 3 * len(frames)},
@@ -103,10 +104,16 @@ def _edit_csv(path: Path, row: int, column: str, factor: float) -> None:
 
 def _edit_energy(out: Path, record: str, field: str, delta: float, keep_balance: bool) -> None:
     summary = json.loads((out / "summary.json").read_text())
-    r = summary["energy"]["cycles"][1] if record == "cycle" else summary["energy"]["total"]
+    r = summary["energy"]["cycles"][2] if record == "cycle" else summary["energy"]["total"]
     r[field] += delta
     if keep_balance:  # a consistent record, inconsistent with cycles.csv
         r["imbalance"] += delta if field == "external_work" else -delta
+    (out / "summary.json").write_text(json.dumps(summary))
+
+
+def _drop_last_cycle_record(out: Path) -> None:
+    summary = json.loads((out / "summary.json").read_text())
+    summary["energy"]["cycles"].pop()
     (out / "summary.json").write_text(json.dumps(summary))
 
 
@@ -125,6 +132,7 @@ MUTATIONS = {
                                           "Σ cycles.csv dissipation"),
     "imbalance not the difference": (lambda o: _edit_energy(o, "total", "wear_work", 1.0, False),
                                      "imbalance = external work"),
+    "an energy cycle record missing": (_drop_last_cycle_record, "one energy record per simulated cycle"),
     "large total imbalance": (lambda o: _edit_energy(o, "total", "external_work", 10.0, True), "total imbalance"),
 }
 
