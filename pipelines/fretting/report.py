@@ -17,6 +17,7 @@ import argparse
 import sys
 from datetime import datetime
 from pathlib import Path
+from urllib.parse import quote
 
 import numpy as np
 
@@ -127,7 +128,7 @@ def wear_section(out: Path, cycles: dict[str, np.ndarray] | None, contacts: list
             last = contact_rows(cycles, contact)
             text += (f" cycles.csv at N = {last['cycles'][-1]:.0f}: worn volume {last['worn_volume'][-1]:.4g} mm³, "
                      f"largest depth {1e3 * last['max_wear_depth'][-1]:.4g} µm.")
-        parts.append(text + f"\n\n![wear profiles of {contact}](wear_{contact}.png)")
+        parts.append(text + f"\n\n![wear profiles of {contact}]({quote(f'wear_{contact}.png')})")
     for c in contacts:
         if not (out / f"wear_{c}.csv").is_file():
             parts.append(f"**`wear_{c}.csv` is missing although contact `{c}` has wear.**" if c in wearing
@@ -220,7 +221,8 @@ def write(out: Path) -> Path:
     contacts = list(contact_files(out, "hysteresis"))
     wearing = {contact_name(c) for c in case.get("contact", []) if "wear" in c}
     cycles = read_table(out / "cycles.csv", CYCLES_COLUMNS, text=("contact",)) if (out / "cycles.csv").is_file() else None
-    loops = "\n\n".join(f"![{caption}]({path.name})" for caption, path in figures if path.name.startswith("hysteresis_"))
+    loops = "\n\n".join(f"![{caption}]({quote(path.name)})" for caption, path in figures
+                          if path.name.startswith("hysteresis_"))
     steps = ", ".join(f"{i} (`{s.get('name', f'step-{i}')}`)" for i, s in cyclic_steps(case).items()) or "none"
     if cycles is not None:
         dissipation = ("\n\n".join(dissipation_section(cycles, c) for c in contacts)
