@@ -145,6 +145,17 @@ def wear_profiles(wear: dict[str, np.ndarray]) -> list[tuple[float, dict[str, np
     return [(float(cycles[a]), {name: values[a:b] for name, values in wear.items()}) for a, b in zip(starts, ends)]
 
 
+def read_cycles(out: Path, steps: set[int]) -> dict[str, np.ndarray] | None:
+    """The rows of OUT/cycles.csv that belong to the cyclic analysis `steps` (a step without
+    cycles may be written as a cycle of its own, but it is no load cycle of the service), or
+    None if the run wrote no cycles.csv."""
+    if not (out / "cycles.csv").is_file():
+        return None
+    table = read_table(out / "cycles.csv", CYCLES_COLUMNS, text=("contact",))
+    keep = np.isin(table["analysis_step"].astype(int), sorted(steps))
+    return {name: values[keep] for name, values in table.items()}
+
+
 def contact_rows(table: dict[str, np.ndarray], contact: str) -> dict[str, np.ndarray]:
     """The rows of cycles.csv that belong to `contact`."""
     keep = table["contact"] == contact

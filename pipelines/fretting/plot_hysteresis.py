@@ -29,8 +29,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import Normalize  # noqa: E402
 
-from fretting_data import (CYCLES_COLUMNS, HYSTERESIS_COLUMNS, WEAR_COLUMNS, OutputError, contact_files,  # noqa: E402
-                           Loop, contact_rows, cyclic_steps, loops, read_case, read_table, wear_profiles)
+from fretting_data import (HYSTERESIS_COLUMNS, WEAR_COLUMNS, OutputError, contact_files,  # noqa: E402
+                           Loop, contact_rows, cyclic_steps, loops, read_case, read_cycles, read_table,
+                           wear_profiles)
 
 COLOURS = "viridis"
 
@@ -137,20 +138,21 @@ def plot_all(out: Path) -> tuple[list[tuple[str, Path]], list[str]]:
     if not hysteresis_files:
         raise OutputError(f"{out}: no hysteresis_<contact>.csv (not the output folder of a run with contact?)")
     figures, notes = [], []
+    cyclic_all: set[int] = set()
     for contact, path in hysteresis_files.items():
         hysteresis = read_table(path, HYSTERESIS_COLUMNS)
         cyclic = cyclic_step_numbers(out, hysteresis)
+        cyclic_all |= cyclic
         if not cyclic:
             notes.append(f"{path.name}: no cyclic step: the curve is drawn without loops")
         figures.append((f"hysteresis loops of `{contact}`", plot_loops(out, contact, hysteresis, cyclic)))
-    if (out / "cycles.csv").is_file():
-        table = read_table(out / "cycles.csv", CYCLES_COLUMNS, text=("contact",))
-        if len(table["contact"]):
-            figures.append(("dissipation per cycle and worn volume", plot_cycles(out, table)))
-        else:
-            notes.append("cycles.csv has no rows: dissipation and worn volume not drawn")
-    else:
+    table = read_cycles(out, cyclic_all)
+    if table is None:
         notes.append(f"no {out / 'cycles.csv'} (written by runs with a cyclic step): dissipation and worn volume not drawn")
+    elif len(table["contact"]):
+        figures.append(("dissipation per cycle and worn volume", plot_cycles(out, table)))
+    else:
+        notes.append("cycles.csv has no row of a cyclic step: dissipation and worn volume not drawn")
     wear_files = contact_files(out, "wear")
     for contact, path in wear_files.items():
         wear = read_table(path, WEAR_COLUMNS)

@@ -23,9 +23,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from asperity_tools import rust_exp, table, write_report  # noqa: E402
-from fretting_data import (CYCLES_COLUMNS, ENERGY_TERMS, WEAR_COLUMNS, OutputError, contact_files,  # noqa: E402
-                           contact_name, contact_rows, cycles_per_jump, cyclic_steps, read_case, read_json, read_table,
-                           simulated_cycles, wear_profiles)
+from fretting_data import (ENERGY_TERMS, WEAR_COLUMNS, OutputError, contact_files, contact_name,  # noqa: E402
+                           contact_rows, cycles_per_jump, cyclic_steps, read_case, read_cycles, read_json,
+                           read_table, simulated_cycles, wear_profiles)
 from plot_hysteresis import plot_all  # noqa: E402
 
 ENERGY_FIELDS = ["external_work", *ENERGY_TERMS]
@@ -220,7 +220,7 @@ def write(out: Path) -> Path:
     figures, notes = plot_all(out)
     contacts = list(contact_files(out, "hysteresis"))
     wearing = {contact_name(c) for c in case.get("contact", []) if "wear" in c}
-    cycles = read_table(out / "cycles.csv", CYCLES_COLUMNS, text=("contact",)) if (out / "cycles.csv").is_file() else None
+    cycles = read_cycles(out, set(cyclic_steps(case)))
     loops = "\n\n".join(f"![{caption}]({quote(path.name)})" for caption, path in figures
                           if path.name.startswith("hysteresis_"))
     steps = ", ".join(f"{i} (`{s.get('name', f'step-{i}')}`)" for i, s in cyclic_steps(case).items()) or "none"
