@@ -7,6 +7,7 @@
 #   make thick_cylinder          Lamé thick cylinder (gmsh -> solver -> plots)
 #   make prandtl                 Prandtl's punch on a perfectly plastic half-space (B-bar element)
 #   make shrink_fit              shrink-fit contact example
+#   make fretting                tapered joint pressed in, then 10^6 load cycles with wear -> out/fretting
 #   make test                    all tests (Rust unit/integration tests + output checks)
 #   make convergence             mesh-convergence verification studies -> out/convergence
 #   make mesh GEO=geo/X.geo SIZE=0.5   mesh a .geo script into build/mesh/
@@ -27,6 +28,7 @@ SIZE    ?= 1
 .PHONY: convergence bench-calculix bench-scale
 .PHONY: fit-example sweep-test gnu-parallel
 .PHONY: fuzz
+.PHONY: fretting
 
 all: build
 
@@ -78,6 +80,19 @@ shrink_fit: deps build
 	$(BIN) run pipelines/shrink_fit.toml --out out/shrink_fit --force
 	$(PYTHON) pipelines/plot_fields.py out/shrink_fit --case pipelines/shrink_fit.toml
 	@echo "results: out/shrink_fit (results.pvd for ParaView, *.png, contact_fit_*.csv, history.csv)"
+
+# `make fretting`: the case meshes its own .geo ([mesh] geo), runs the press-in and the cyclic
+# step with wear, then report.py draws the figures (plot_hysteresis.py) and writes REPORT.md,
+# and check_fretting.py checks the files against each other. Your own joint:
+# make fretting FRETTING_CASE=my_case.toml [FRETTING_OUT=out/my_case]
+FRETTING_CASE ?= pipelines/fretting/tapered_fretting.toml
+FRETTING_OUT  ?= out/fretting
+fretting: deps build
+	$(BIN) run $(FRETTING_CASE) --out $(FRETTING_OUT) --force
+	$(PYTHON) pipelines/fretting/report.py $(FRETTING_OUT)
+	$(PYTHON) pipelines/fretting/check_fretting.py $(FRETTING_OUT) >$(FRETTING_OUT)/checks.txt \
+	  || { cat $(FRETTING_OUT)/checks.txt; exit 1; }
+	@echo "results: $(FRETTING_OUT) (REPORT.md, hysteresis_*.png, cycles.png, wear_*.png, checks.txt, results.pvd for ParaView)"
 
 ## --- tests --------------------------------------------------------------------
 test: deps
