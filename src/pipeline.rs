@@ -687,6 +687,8 @@ fn describe_model(summary: &mut Summary, model: &Model, model_seconds: f64) {
         thickness,
     });
     summary.seconds.model = Some(model_seconds);
+    let steps = model.schedule.timeline().steps();
+    summary.energy.step_names = steps.iter().map(|plan| plan.name.clone()).collect();
 }
 
 /// Completes `summary` with the counters and timings of the converged `run`.

@@ -436,7 +436,6 @@ fn dissipation_per_cycle_matches_the_analytic_value() {
 /// `OUT/cycles.csv` is the analytic W (the same 5 % as the in-memory sum above, which
 /// measured +0.12 % on this mesh and schedule).
 #[test]
-#[ignore = "needs the [[step]]/[[amplitude]] syntax and OUT/cycles.csv of issue 14"]
 fn cyclic_case_reports_the_analytic_dissipation_per_cycle() {
     let case = Case::from_file(&data("cattaneo_mindlin_cyclic.toml")).expect("the case reads");
     let setup = Setup::new(&Case::from_file(&data("cattaneo_mindlin.toml")).unwrap());

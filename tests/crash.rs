@@ -158,7 +158,8 @@ fn series_steps(pvd: &str, dir: &Path) -> Vec<usize> {
 /// (`hysteresis_<pair>.csv`) or per cycle (`cycles.csv`, `wear_<pair>.csv`).
 fn is_growing_table(name: &str) -> bool {
     name == "cycles.csv"
-        || (name.ends_with(".csv") && (name.starts_with("hysteresis_") || name.starts_with("wear_")))
+        || (name.ends_with(".csv")
+            && (name.starts_with("hysteresis_") || name.starts_with("wear_")))
 }
 
 /// What a killed run must have left in `dir`, against the uninterrupted run in `reference`.

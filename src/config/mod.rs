@@ -21,8 +21,8 @@ mod check;
 pub mod history;
 mod names;
 mod quantity;
-pub mod wear;
 mod steps;
+pub mod wear;
 
 pub use check::{MAX_CUTBACKS, MAX_ITERATIONS, MAX_STEPS, MAX_TOLERANCE};
 pub use names::{MAX_NAME_LEN, check_name};

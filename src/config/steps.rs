@@ -170,10 +170,8 @@ impl Motion<'_> {
 impl Case {
     /// Whether some contact pair wears (cycle jumping then defaults to about 20 simulated
     /// cycles per cyclic step).
-    // Wear spot: the wear work adds `wear: Option<WearSpec>` to `ContactSpec`; this becomes
-    // `self.contacts.iter().any(|c| c.wear.is_some())`.
     pub fn has_wear(&self) -> bool {
-        false
+        self.contacts.iter().any(|c| c.wear.is_some())
     }
 
     /// Whether the case describes its history by `[[step]]` (else by `[steps]`).

@@ -94,6 +94,11 @@ pub struct Schedule {
 /// not end a sub-increment.
 const KNOT_TOLERANCE: f64 = 1e-9;
 
+/// How far back (in output increments) [`Schedule::leaves_direction`] looks for the loads'
+/// direction before an increment: far above the round-off of a pseudo-time, far below any
+/// increment.
+const DIRECTION_PROBE: f64 = 1e-6;
+
 impl Schedule {
     /// The `[steps]` schedule: one step of `factors.len()` increments, the global factor 0
     /// at τ = 0 and `factors[j − 1]` at τ = j.
@@ -176,6 +181,23 @@ impl Schedule {
     pub fn value(&self, k: usize, time: f64) -> f64 {
         let p = self.timeline.locate(time);
         self.amplitudes[k][p.step].value(p.u)
+    }
+
+    /// Whether the increment from pseudo-time `from` to `to` leaves the direction in which
+    /// the loads moved up to `from`: some amplitude that changes over the increment was
+    /// constant or moved the other way just before `from` (a load reversal, or a load that
+    /// starts moving). Sub-increments end on the amplitudes' breakpoints, so each amplitude is
+    /// linear on both sides of `from` and the one-sided differences give its directions.
+    pub fn leaves_direction(&self, from: f64, to: f64) -> bool {
+        if from <= 0.0 {
+            return true;
+        }
+        let before = (from - DIRECTION_PROBE).max(0.0);
+        (0..self.amplitudes.len()).any(|k| {
+            let ahead = self.value(k, to) - self.value(k, from);
+            let behind = self.value(k, from) - self.value(k, before);
+            ahead != 0.0 && ahead * behind <= 0.0
+        })
     }
 
     /// How much the load level changes from pseudo-time `from` to `to` (for the secant

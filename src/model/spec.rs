@@ -3,9 +3,9 @@
 //! file's plain data. Every material and interface law is built here, exactly once, and so
 //! checked before any mesh exists; [`Model::build`](super::Model::build) consumes the spec.
 
-use crate::config::wear::{WearLawKind, WearSpec};
 use super::loads::{History, Schedule, Table, factors_history};
 use super::timeline::{StepPlan, Timeline};
+use crate::config::wear::{WearLawKind, WearSpec};
 use crate::config::{
     AnalysisSpec, Case, ContactAlgorithmKind, ControlKind, Faces, FormulationKind, IntegrationKind,
     LawSpec, Leg, MaterialSpec, Motion, PairingKind, Role, Steps,

@@ -244,6 +244,9 @@ fn step_name(n: usize) -> String {
 pub struct EnergyReport {
     /// The marks of the converged cycle ends, in order.
     pub marks: Vec<EnergyMark>,
+    /// The names of the analysis steps (`[[step]] name`), in order; a step without one is
+    /// reported by its mark's name.
+    pub step_names: Vec<String>,
 }
 
 /// Energy terms with their imbalance, as written.
@@ -328,8 +331,9 @@ impl EnergyReport {
                 .get(i + 1)
                 .is_none_or(|next| next.analysis_step != mark.analysis_step);
             if step_ends {
+                let name = self.step_names.get(mark.analysis_step.wrapping_sub(1));
                 steps.push(StepEnergy {
-                    name: &mark.name,
+                    name: name.unwrap_or(&mark.name),
                     analysis_step: mark.analysis_step,
                     terms: (mark.total - step_start).into(),
                 });
@@ -548,7 +552,11 @@ mod tests {
             (mark.analysis_step, mark.cycle, mark.name.as_str()),
             (3, 1, "step-3")
         );
-        let value = serde_json::to_value(EnergyReport { marks: vec![mark] }).unwrap();
+        let value = serde_json::to_value(EnergyReport {
+            marks: vec![mark],
+            step_names: Vec::new(),
+        })
+        .unwrap();
         assert_eq!(value["total"]["relative_imbalance"], 0.5);
     }
 }

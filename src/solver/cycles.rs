@@ -63,8 +63,13 @@ fn restart_trackers(s: &mut InterfaceState) {
 pub fn end_cycle(model: &Model, solution: &mut Solution, jump_cycles: f64) -> Result<()> {
     let extra = (jump_cycles - 1.0).max(0.0);
     check_jump(model, &solution.interface_committed, jump_cycles, extra)?;
-    for s in &mut solution.interface_committed {
+    for (point, s) in solution.interface_committed.iter_mut().enumerate() {
+        let [a, b] = cycle_wear(&s.history);
         close_cycle(&mut s.history, extra);
+        if extra > 0.0 && a + b > 0.0 {
+            // The jump's wear takes its work out of the interface's stored energy.
+            (solution.energy).record_wear_jump(model, point, s, extra * (a + b));
+        }
     }
     solution
         .interface_trial
