@@ -111,6 +111,8 @@ test: deps
 	  $(PYTHON) pipelines/check_output.py build/test/$$c || exit 1; \
 	  $(PYTHON) pipelines/plot_fields.py build/test/$$c >/dev/null 2>&1 || { echo "plot_fields.py failed on $$c"; exit 1; }; \
 	done
+	$(PYTHON) pipelines/fretting/selftest.py >/dev/null
+	$(PYTHON) pipelines/fretting/check_fretting.py --quick build/test/fretting >build/test/fretting.txt || { cat build/test/fretting.txt; exit 1; }
 	$(call convergence_studies,3,3,build/test/convergence,$(CONVERGENCE_SUMMARY))
 	@$(MAKE) --no-print-directory sweep-test fit-example OUT_FIT=build/test/fit
 

@@ -58,7 +58,7 @@ def synthetic_run(out: Path) -> None:
         "cycles_per_jump = 40000", f"cycles_per_jump = {JUMP}").replace("increments = 10", f"increments = {INCREMENTS}")
     (out / "run.json").write_text(json.dumps({"case": case, "case_file": "synthetic.toml", "host": "test", "threads": 1,
                                               "start": "2026-01-01T00:00:00Z", "end": "2026-01-01T00:00:05Z"}))
-    frames = [[i, 1, 1, 1, i / PRESS, F0 * i / PRESS, -5 * F0 * i / PRESS, F0 * i / PRESS / STIFFNESS]
+    frames = [[i, 1, 1, 1, i / PRESS, F0 * i / PRESS, 5 * F0 * i / PRESS, F0 * i / PRESS / STIFFNESS]
               for i in range(1, PRESS + 1)]
     for c in range(1, CYCLES + 1):
         width = 1e-12 * (1.0 - 0.05 * (c - 1))  # the loop narrows as the contact wears in
@@ -66,7 +66,7 @@ def synthetic_run(out: Path) -> None:
             t = i / INCREMENTS
             force = F0 * (1.0 - 0.5 * min(2 * t, 2 - 2 * t))
             opening = width * (F0 - force) * (force - 0.5 * F0) * (1 if t <= 0.5 else -1)
-            frames.append([len(frames) + 1, 2, c, c * JUMP, t, force, -5 * force, force / STIFFNESS + opening])
+            frames.append([len(frames) + 1, 2, c, c * JUMP, t, force, 5 * force, force / STIFFNESS + opening])
     _write_csv(out / "hysteresis_cone.csv", HYSTERESIS_COLUMNS, frames)
     s = np.linspace(0.0, 40.0 * math.hypot(1.0, 0.2), 9)
     x = 16.0 + 0.2 * s / math.hypot(1.0, 0.2)
@@ -88,7 +88,7 @@ def synthetic_run(out: Path) -> None:
         "status": "converged", "steps": [{"step": f[0]} for f in frames],
         "totals": {"steps": len(frames), "increments": len(frames), "cutbacks": 0, "iterations": 3 * len(frames)},
         "seconds": {"total": 1.0}, "energy": {"total": total, "steps": steps, "cycles": per_cycle}}))
-    history = [[0, 0.0, 0.0, 0.0]] + [[f[0], float(f[0]), f[6], f[5]] for f in frames]
+    history = [[0, 0.0, 0.0, 0.0]] + [[f[0], float(f[0]), -f[6], f[5]] for f in frames]  # compression negative, as asperity writes it
     _write_csv(out / "history.csv", ["step", "time", "cone_normal_force", "cone_tangential_force"], history)
     (out / "results.pvd").write_text('<VTKFile type="Collection"><Collection>' + "".join(
         f'<DataSet timestep="{f[0]}" part="0" file="bodies_{f[0]:04d}.vtu"/>' for f in frames) + "</Collection></VTKFile>")
