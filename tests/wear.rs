@@ -746,10 +746,14 @@ count = 4
     assert!(header.ends_with(&FRETTING.join(",")), "{header}");
 }
 
+/// Every pair gets its hysteresis loop and per-cycle table (fretting without wear is still
+/// fretting); only a pair that wears gets a wear profile.
 #[test]
-fn without_wear_the_model_has_no_fretting_files() {
+fn without_wear_a_pair_has_its_loop_and_cycles_but_no_wear_profile() {
     let d = Driver::new(linear_coulomb(KN, KT, MU), None, CLOSURE);
-    assert!(FrettingTables::new(&d.model).files(&d.model).is_empty());
+    let files = FrettingTables::new(&d.model).files(&d.model);
+    let names: Vec<&str> = files.iter().map(|(name, _)| name.as_str()).collect();
+    assert_eq!(names, ["hysteresis_joint.csv", "cycles.csv"]);
 }
 
 /// The block on the base pressed by 8 MPa and pushed back and forth by its top edge
