@@ -179,7 +179,7 @@ pub enum Error {
     /// the case (`contact[j]`), `step_index` the `[[step]]` (0-based) when the caller knows
     /// it ([`Error::in_analysis_step`]).
     #[error(
-        "contact '{contact}': a wear jump over {jump_cycles} cycles would add a depth of {depth:.4e} mm          at ({x}, {y}), more than its stability limit {limit:.4e} mm (contact[{contact_index}].wear.jump_limit          = {jump_limit} times the elastic closure |p_N|/k_N of the point); lower {} or raise          contact[{contact_index}].wear.jump_limit (the results up to the cycle before are kept)",
+        "contact '{contact}': a wear jump over {jump_cycles} cycles would add a depth of {depth:.4e} mm at ({x}, {y}), more than its stability limit {limit:.4e} mm (contact[{contact_index}].wear.jump_limit = {jump_limit} times the elastic closure |p_N|/k_N of the point); lower {} or raise contact[{contact_index}].wear.jump_limit (the results up to the cycle before are kept)",
         step_key(*step_index, "cycles_per_jump"), x = position[0], y = position[1]
     )]
     WearJump {
@@ -195,7 +195,7 @@ pub enum Error {
     /// The total wear depth h_A + h_B of a point of contact `contact` (`contact[contact_index]`
     /// in the case) would exceed the pair's `max_depth`: the interface is worn through.
     #[error(
-        "contact '{contact}': worn through at ({x}, {y}): the wear depth {depth:.4e} mm exceeds          contact[{contact_index}].wear.max_depth = {max_depth} mm{}; the converged results before it are kept",
+        "contact '{contact}': worn through at ({x}, {y}): the wear depth {depth:.4e} mm exceeds contact[{contact_index}].wear.max_depth = {max_depth} mm{}; the converged results before it are kept",
         step_index.map_or_else(String::new, |i| format!(" in step[{i}]")),
         x = position[0], y = position[1]
     )]

@@ -9,7 +9,7 @@ Usage: check_fretting.py OUT                check the finished run in OUT
 Checks (each printed; exit status 1 if one fails, 2 if a file is missing or malformed):
 - the run converged; every contact has OUT/hysteresis_<contact>.csv with one row per frame
   (the frames of results.pvd), frames numbered 1..n, `increments` rows per simulated cycle,
-  as many simulated cycles per cyclic step as the case asks (ceil(cycles / ΔN)), the last
+  as many simulated cycles per cyclic step as the case asks (1 + ceil((cycles − 1) / ΔN)), the last
   frame of a cyclic step at its `cycles`, and forces equal to history.csv's
   <contact>_tangential_force / _normal_force of the same frame;
 - OUT/cycles.csv: one row per simulated cycle and contact, cycles as in the hysteresis,
@@ -86,7 +86,7 @@ def check_hysteresis(out: Path, case: dict, contact: str, frames: int, history: 
         expected = simulated_cycles(s, wear)
         cycles_seen = np.unique(cycle[rows])
         check(np.array_equal(cycles_seen, np.arange(1, expected + 1)),
-              f"{name}: step {k} has simulated cycles 1..{expected} (ceil(cycles / ΔN)); found {len(cycles_seen)}")
+              f"{name}: step {k} has simulated cycles 1..{expected} (1 + ceil((cycles − 1) / ΔN)); found {len(cycles_seen)}")
         per_cycle = [int(np.sum(rows & (cycle == c))) for c in cycles_seen]
         check(all(n == s.get("increments", 1) for n in per_cycle),
               f"{name}: step {k}: {s.get('increments', 1)} frames per simulated cycle (found {sorted(set(per_cycle))})")

@@ -106,9 +106,10 @@ def cycles_per_jump(step: dict, wear: bool) -> int:
 
 
 def simulated_cycles(step: dict, wear: bool) -> int:
-    """How many cycles of a cyclic step are simulated: each stands for ΔN cycles, the last for
-    what remains."""
-    return math.ceil(step["cycles"] / cycles_per_jump(step, wear))
+    """How many cycles of a cyclic step are simulated: the first stands for itself (the
+    transient after the previous step), each later one for ΔN cycles, the last for what
+    remains."""
+    return 1 + math.ceil((step["cycles"] - 1) / cycles_per_jump(step, wear))
 
 
 @dataclass

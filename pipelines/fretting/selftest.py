@@ -31,6 +31,12 @@ from fretting_data import CYCLES_COLUMNS, ENERGY_TERMS, HYSTERESIS_COLUMNS, WEAR
 from report import write  # noqa: E402
 
 PRESS, INCREMENTS, CYCLES, JUMP = 4, 4, 4, 25
+
+
+def done(c: int) -> int:
+    """Cycles completed after simulated cycle c: the first stands for itself, each later one
+    for JUMP cycles."""
+    return 1 + (c - 1) * JUMP
 F0, STIFFNESS = 18000.0, 2.0e6  # N, N/mm: the synthetic joint's tangential force and stiffness
 
 
@@ -54,7 +60,7 @@ def synthetic_run(out: Path) -> None:
     out.mkdir(parents=True)
     case = (HERE / "tapered_fretting.toml").read_text()
     case = case.replace("increments = 10", f"increments = {PRESS}", 1)  # the press-in step
-    case = case.replace("cycles = 1000000", f"cycles = {CYCLES * JUMP}").replace(
+    case = case.replace("cycles = 1000000", f"cycles = {done(CYCLES)}").replace(
         "cycles_per_jump = 40000", f"cycles_per_jump = {JUMP}").replace("increments = 10", f"increments = {INCREMENTS}")
     (out / "run.json").write_text(json.dumps({"case": case, "case_file": "synthetic.toml", "host": "test", "threads": 1,
                                               "start": "2026-01-01T00:00:00Z", "end": "2026-01-01T00:00:05Z"}))
@@ -66,16 +72,16 @@ def synthetic_run(out: Path) -> None:
             t = i / INCREMENTS
             force = F0 * (1.0 - 0.5 * min(2 * t, 2 - 2 * t))
             opening = width * (F0 - force) * (force - 0.5 * F0) * (1 if t <= 0.5 else -1)
-            frames.append([len(frames) + 1, 2, c, c * JUMP, t, force, 5 * force, force / STIFFNESS + opening])
+            frames.append([len(frames) + 1, 2, c, done(c), t, force, 5 * force, force / STIFFNESS + opening])
     _write_csv(out / "hysteresis_cone.csv", HYSTERESIS_COLUMNS, frames)
     s = np.linspace(0.0, 40.0 * math.hypot(1.0, 0.2), 9)
     x = 16.0 + 0.2 * s / math.hypot(1.0, 0.2)
     wear_rows, cycle_rows = [], []
     for c in range(1, CYCLES + 1):
         depth = 1e-5 * c * (np.exp(-s / 3) + np.exp(-(s[-1] - s) / 3))
-        wear_rows += [[c * JUMP, s[k], x[k], s[k] / math.hypot(1.0, 0.2), 0.7 * depth[k], 0.3 * depth[k], depth[k]]
+        wear_rows += [[done(c), s[k], x[k], s[k] / math.hypot(1.0, 0.2), 0.7 * depth[k], 0.3 * depth[k], depth[k]]
                       for k in range(len(s))]
-        cycle_rows.append([2, c, c * JUMP, "cone", 5.0 * (1 - 0.05 * (c - 1)), np.trapezoid(2 * math.pi * x * depth, s),
+        cycle_rows.append([2, c, done(c), "cone", 5.0 * (1 - 0.05 * (c - 1)), np.trapezoid(2 * math.pi * x * depth, s),
                            depth.max()])
     _write_csv(out / "wear_cone.csv", WEAR_COLUMNS, wear_rows)
     _write_csv(out / "cycles.csv", CYCLES_COLUMNS, cycle_rows)

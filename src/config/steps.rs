@@ -104,9 +104,13 @@ impl StepSpec {
         }
     }
 
-    /// Simulated cycles: ceil(cycles / cycles_per_jump); the last stands for the remainder.
+    /// Simulated cycles: the first on its own, then one per `cycles_per_jump` of the rest,
+    /// the last standing for the remainder.
     pub fn simulated_cycles(&self, wear: bool) -> usize {
-        self.cycles.div_ceil(self.cycles_per_jump(wear).max(1))
+        1 + self
+            .cycles
+            .saturating_sub(1)
+            .div_ceil(self.cycles_per_jump(wear).max(1))
     }
 }
 

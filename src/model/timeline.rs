@@ -53,9 +53,11 @@ impl StepPlan {
         }
     }
 
-    /// Simulated cycles: ceil(cycles / cycles_per_jump).
+    /// Simulated cycles: the first cycle on its own (the transient from the previous step's
+    /// state, which the later cycles do not repeat), then one per `cycles_per_jump` of the
+    /// rest: 1 + ceil((cycles − 1) / cycles_per_jump).
     pub fn simulated(&self) -> usize {
-        self.cycles.div_ceil(self.cycles_per_jump)
+        1 + (self.cycles - 1).div_ceil(self.cycles_per_jump)
     }
 
     /// Output increments of the step.
@@ -68,19 +70,27 @@ impl StepPlan {
         self.cycles > 1
     }
 
-    /// Load cycles simulated cycle `cycle` (1-based) stands for: `cycles_per_jump`, the last
-    /// one the remainder.
+    /// Load cycles simulated cycle `cycle` (1-based) stands for: 1 for the first,
+    /// `cycles_per_jump` for the next ones, the remainder for the last.
     pub fn jump(&self, cycle: usize) -> usize {
-        if cycle < self.simulated() {
+        if cycle <= 1 {
+            1
+        } else if cycle < self.simulated() {
             self.cycles_per_jump
         } else {
-            self.cycles - (self.simulated() - 1) * self.cycles_per_jump
+            self.cycles - self.cycles_done(cycle - 1)
         }
     }
 
     /// Load cycles completed when simulated cycle `cycle` ends.
     pub fn cycles_done(&self, cycle: usize) -> usize {
-        cycle.saturating_mul(self.cycles_per_jump).min(self.cycles)
+        match cycle {
+            0 => 0,
+            c => (c - 1)
+                .saturating_mul(self.cycles_per_jump)
+                .saturating_add(1)
+                .min(self.cycles),
+        }
     }
 }
 
@@ -227,14 +237,16 @@ mod tests {
     }
 
     #[test]
-    fn a_cyclic_step_is_simulated_in_ceil_cycles_over_jump_cycles() {
+    fn a_cyclic_step_simulates_its_first_cycle_then_one_per_jump() {
         let t = timeline();
         let service = &t.steps()[1];
         assert_eq!((service.simulated(), service.first), (4, 2));
         assert_eq!(t.frames(), 2 + 16);
-        // 3 + 3 + 3 + 1: the last simulated cycle stands for the remainder.
+        // 1 + 3 + 3 + 3: the first cycle on its own, the last standing for the remainder.
         let jumps: Vec<usize> = (1..=4).map(|c| service.jump(c)).collect();
-        assert_eq!(jumps, [3, 3, 3, 1]);
+        assert_eq!(jumps, [1, 3, 3, 3]);
+        let done: Vec<usize> = (1..=4).map(|c| service.cycles_done(c)).collect();
+        assert_eq!(done, [1, 4, 7, 10]);
         assert_eq!(jumps.iter().sum::<usize>(), service.cycles);
         assert_eq!(service.cycles_done(4), 10);
     }
@@ -249,7 +261,8 @@ mod tests {
         assert!(t.starts_cycle(7) && t.starts_cycle(3) && !t.starts_cycle(8));
         assert_eq!(t.ends_cycle(2), Some(1));
         assert_eq!(t.ends_cycle(10), Some(3));
-        assert_eq!(t.ends_cycle(18), Some(1));
+        assert_eq!(t.ends_cycle(6), Some(1));
+        assert_eq!(t.ends_cycle(18), Some(3));
         assert_eq!(t.ends_cycle(9), None);
         // A boundary belongs to what ends there.
         let p = t.locate(6.0);
@@ -257,7 +270,7 @@ mod tests {
         let p = t.locate(6.5);
         assert_eq!((p.step, p.cycle, p.u), (1, 2, 0.5));
         let f = t.frame(8.0);
-        assert_eq!((f.analysis_step, f.cycle, f.cycles), (2, 2, 6.0));
+        assert_eq!((f.analysis_step, f.cycle, f.cycles), (2, 2, 4.0));
         assert_eq!((f.step_time, f.cycle_end), (0.5, false));
         assert!(t.frame(10.0).cycle_end);
         assert_eq!(t.analysis_time(2.0), 1.0);
