@@ -645,8 +645,8 @@ fn hysteresis_cycle_and_wear_tables_hold_the_pair_integrals() {
     assert_eq!(profile.columns, WEAR);
     assert_eq!(profile.rows.len(), 9);
     let last: Vec<f64> = profile.rows[8].iter().map(number).collect();
-    assert!(close(last[1], AREA, ROUND_OFF));
-    assert!(close(last[6], depth, ROUND_OFF));
+    assert!(close(last[2], AREA, ROUND_OFF));
+    assert!(close(last[7], depth, ROUND_OFF));
     // The restart record's rows give the same tables back; rows of another model do not.
     let mut restored = FrettingTables::new(&d.model);
     assert_eq!(restored.restore(tables.rows()), Some(()));

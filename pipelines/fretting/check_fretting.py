@@ -154,9 +154,10 @@ def check_wear(out: Path, case: dict, contact: str, cycles: dict, check: Checks)
     profiles = wear_profiles(read_table(out / name, WEAR_COLUMNS))
     rows = contact_rows(cycles, contact)
     cyclic = np.isin(rows["analysis_step"].astype(int), list(cyclic_steps(case)))
-    jumps = rows["cycles"][cyclic]
-    written = [n for n, _ in profiles]
-    check(written == list(jumps) or written == list(rows["cycles"]),
+    key = lambda steps, cycles: list(zip(steps.astype(int).tolist(), cycles.tolist()))  # noqa: E731
+    jumps = key(rows["analysis_step"][cyclic], rows["cycles"][cyclic])
+    written = [(int(p["analysis_step"][0]), n) for n, p in profiles]
+    check(written == jumps or written == key(rows["analysis_step"], rows["cycles"]),
           f"{name}: one profile per jump (and perhaps per step without cycles), at the cycles of cycles.csv "
           f"({len(profiles)} profiles, {len(jumps)} jumps)")
     previous = None
@@ -170,7 +171,8 @@ def check_wear(out: Path, case: dict, contact: str, cycles: dict, check: Checks)
             check(bool(np.all(depth >= previous - ROUND_OFF * depth.max(initial=0.0))),
                   f"{name} at N = {n:.0f}: no point's depth decreased since the previous jump")
         previous = depth
-        volume = rows["worn_volume"][cyclic][rows["cycles"][cyclic] == n]
+        same = (rows["cycles"] == n) & (rows["analysis_step"] == p["analysis_step"][0])
+        volume = rows["worn_volume"][same]
         if len(volume):
             integral = float(np.trapezoid(depth * area_weight(case, p["x"]), p["s"]))
             check(close(integral, volume[-1], 0.10, scale=1e-300),

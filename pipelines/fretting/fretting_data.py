@@ -26,7 +26,7 @@ import numpy as np
 HYSTERESIS_COLUMNS = ["frame", "analysis_step", "cycle", "cycles", "step_time", "tangential_force",
                       "normal_force", "relative_slip"]
 CYCLES_COLUMNS = ["analysis_step", "cycle", "cycles", "contact", "dissipation", "worn_volume", "max_wear_depth"]
-WEAR_COLUMNS = ["cycles", "s", "x", "y", "wear_a", "wear_b", "wear_depth"]
+WEAR_COLUMNS = ["analysis_step", "cycles", "s", "x", "y", "wear_a", "wear_b", "wear_depth"]
 # The terms of the energy balance (solver/energy.rs); imbalance = external_work - sum(TERMS).
 ENERGY_TERMS = ["elastic_energy", "interface_energy", "plastic_dissipation", "friction_dissipation", "wear_work",
                 "numerical_dissipation"]
@@ -139,9 +139,11 @@ def loops(hysteresis: dict[str, np.ndarray], steps: set[int]) -> list[Loop]:
 
 
 def wear_profiles(wear: dict[str, np.ndarray]) -> list[tuple[float, dict[str, np.ndarray]]]:
-    """The profiles of a wear_<contact>.csv, one per jump: consecutive rows of equal `cycles`."""
-    cycles = wear["cycles"]
-    starts = np.flatnonzero(np.concatenate([[True], cycles[1:] != cycles[:-1]]))
+    """The profiles of a wear_<contact>.csv, one per jump: consecutive rows of equal
+    `analysis_step` and `cycles`."""
+    cycles, steps = wear["cycles"], wear["analysis_step"]
+    changed = (cycles[1:] != cycles[:-1]) | (steps[1:] != steps[:-1])
+    starts = np.flatnonzero(np.concatenate([[True], changed]))
     ends = np.concatenate([starts[1:], [len(cycles)]])
     return [(float(cycles[a]), {name: values[a:b] for name, values in wear.items()}) for a, b in zip(starts, ends)]
 

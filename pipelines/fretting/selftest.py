@@ -79,7 +79,7 @@ def synthetic_run(out: Path) -> None:
     wear_rows, cycle_rows = [], []
     for c in range(1, CYCLES + 1):
         depth = 1e-5 * c * (np.exp(-s / 3) + np.exp(-(s[-1] - s) / 3))
-        wear_rows += [[done(c), s[k], x[k], s[k] / math.hypot(1.0, 0.2), 0.7 * depth[k], 0.3 * depth[k], depth[k]]
+        wear_rows += [[2, done(c), s[k], x[k], s[k] / math.hypot(1.0, 0.2), 0.7 * depth[k], 0.3 * depth[k], depth[k]]
                       for k in range(len(s))]
         cycle_rows.append([2, c, done(c), "cone", 5.0 * (1 - 0.05 * (c - 1)), np.trapezoid(2 * math.pi * x * depth, s),
                            depth.max()])

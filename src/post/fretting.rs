@@ -64,7 +64,16 @@ pub const CYCLES: [&str; 7] = [
 ];
 
 /// Columns of `wear_<pair>.csv`: the profile along side A at each cycle end.
-pub const WEAR: [&str; 7] = ["cycles", "s", "x", "y", "wear_a", "wear_b", "wear_depth"];
+pub const WEAR: [&str; 8] = [
+    "analysis_step",
+    "cycles",
+    "s",
+    "x",
+    "y",
+    "wear_a",
+    "wear_b",
+    "wear_depth",
+];
 
 /// Index of `contact` in [`CYCLES`] (kept as the pair's index in the rows).
 const CONTACT: usize = 3;
@@ -162,7 +171,7 @@ impl FrettingTables {
             }
             let profile = interface.wear_profile(model, step.solution, p);
             self.wear[p].extend(profile.into_iter().map(|v| {
-                let mut row = vec![frame.cycles];
+                let mut row = vec![frame.analysis_step as f64, frame.cycles];
                 row.extend(v);
                 row
             }));
