@@ -183,6 +183,19 @@ impl Case {
         !self.analysis_steps.is_empty()
     }
 
+    /// The output frames of a load-controlled run (the step numbers of its files): the
+    /// `[steps]` count, or with `[[step]]` the increments of every simulated cycle.
+    pub fn frames(&self) -> usize {
+        if !self.has_analysis_steps() {
+            return self.steps.len();
+        }
+        let wear = self.has_wear();
+        let frames = self.analysis_steps.iter();
+        frames
+            .map(|s| s.increments.saturating_mul(s.simulated_cycles(wear)))
+            .sum()
+    }
+
     /// The amplitude called `name`.
     pub fn amplitude(&self, name: &str) -> Option<&AmplitudeSpec> {
         self.amplitudes.iter().find(|a| a.name == name)
@@ -224,5 +237,30 @@ impl Case {
         supports
             .map(|(i, s)| (Role::Support, i, s.name()))
             .chain(loads.map(|(i, l)| (Role::Load, i, l.name())))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn case(history: &str) -> Case {
+        let text = format!(
+            "[mesh]\nfile = \"m.msh\"\n[analysis]\ntype = \"plane_strain\"\n\
+             [[body]]\ngroup = \"b\"\nmaterial = {{ E = 1.0, nu = 0.3 }}\n\
+             [[load]]\nname = \"p\"\ngroup = \"top\"\npressure = 1.0\n{history}"
+        );
+        Case::from_toml(&text, Path::new("case.toml")).unwrap()
+    }
+
+    #[test]
+    fn frames_count_the_increments_of_every_simulated_cycle() {
+        assert_eq!(case("[steps]\ncount = 7\n").frames(), 7);
+        let steps = "[[amplitude]]\nname = \"c\"\ntime = [0.0, 0.5, 1.0]\nvalue = [1.0, 0.0, 1.0]\n\
+                     [[step]]\nincrements = 3\nloads = { p = 1.0 }\n\
+                     [[step]]\ncycles = 10\nincrements = 4\ncycles_per_jump = 3\nloads = { p = \"c\" }\n";
+        // 3 + 4 × (1 + ceil(9 / 3)) = 3 + 16.
+        assert_eq!(case(steps).frames(), 19);
     }
 }

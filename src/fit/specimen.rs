@@ -48,7 +48,7 @@ impl Specimen {
                 ),
             ));
         }
-        let n = case.steps.len();
+        let n = case.frames();
         let steps = steps
             .iter()
             .enumerate()
@@ -62,7 +62,7 @@ impl Specimen {
                         key: format!("column 'step', row {}", row + 1),
                         value: s.to_string(),
                         reason: format!(
-                            "must be a step number from 1 to {n} (the steps of {})",
+                            "must be a step number from 1 to {n} (the output steps of {})",
                             path.display()
                         ),
                     })
