@@ -39,7 +39,7 @@ use crate::element::Analysis;
 use crate::mesh::{Mesh, gmsh, msh};
 use crate::model::{Model, ModelSpec, Schedule};
 use crate::output::atomic::write_text;
-use crate::output::csv::CsvTable;
+use crate::output::csv::{CsvTable, GrowingCsv};
 use crate::output::pvd::PvdEntry;
 use crate::output::restart::{
     Content, OutputState, RESTART_FILE, Record, RecordWriter, read_record,
@@ -993,6 +993,8 @@ struct StepWriter<'m, 's, F> {
     layout: HistoryLayout,
     series: Vec<PvdEntry>,
     history: CsvTable,
+    /// `history.csv`'s text, grown with `history` (see [`GrowingCsv`]).
+    history_text: GrowingCsv,
     fretting: FrettingTables,
     summary: &'s mut Summary,
     last_reactions: Vec<[f64; 2]>,
@@ -1025,6 +1027,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             case_text: session.restart.map(|r| r.case_text.as_str()),
             layout,
             series: Vec::new(),
+            history_text: GrowingCsv::new(&columns),
             history: CsvTable::new(columns),
             fretting: FrettingTables::new(model),
             summary,
@@ -1053,7 +1056,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             external_force: &zero,
         };
         let row = self.row(&start, 0.0)?;
-        self.history.rows.push(row);
+        self.push_history(row)?;
         self.write_indexes()
     }
 
@@ -1090,6 +1093,11 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
                 reason: "its history rows do not match the case's columns".into(),
             });
         }
+        self.history_text = GrowingCsv::new(&self.history.columns);
+        for row in &history {
+            self.history_text
+                .push(&self.out_dir.join("history.csv"), row)?;
+        }
         self.history.rows = history;
         self.series = output.series;
         for row in self.history.rows.iter().filter(|r| r[0] > 0.0) {
@@ -1113,7 +1121,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         let start = Instant::now();
         let fields = self.all_frames || self.model.schedule.timeline().is_end_frame(step.step);
         let row = self.write_step_files(step, step.step as f64, fields)?;
-        self.history.rows.push(row);
+        self.push_history(row)?;
         // Before the restart record, which keeps the marks for a resumed run's summary.
         let total = step.solution.energy.total;
         if let Some(mark) = EnergyMark::at(&step.frame, step.step, total) {
@@ -1266,6 +1274,14 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         Ok(())
     }
 
+    /// Adds a row to `history.csv`'s table and text.
+    fn push_history(&mut self, row: Vec<f64>) -> Result<()> {
+        self.history_text
+            .push(&self.out_dir.join("history.csv"), &row)?;
+        self.history.rows.push(row);
+        Ok(())
+    }
+
     /// Queues `history.csv`, then `results.pvd`, after the step's files and record, and
     /// commits them: the series is the last file written for a step, so it lists only steps
     /// whose other files are complete.
@@ -1276,7 +1292,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         }
         self.records.queue(
             self.out_dir.join("history.csv"),
-            Content::Csv(self.history.clone()),
+            Content::Text(self.history_text.bytes().to_vec()),
         );
         if self.vtu && !self.series.is_empty() {
             self.records.queue(
@@ -1308,7 +1324,7 @@ impl<F: FnMut(&Model, &StepResult) -> Result<()>> Observer for StepWriter<'_, '_
     /// its fractional pseudo-time (no restart record: a resumed run retries the step).
     fn partial_step(&mut self, step: &StepResult, time: f64) -> Result<()> {
         let row = self.write_step_files(step, time, true)?;
-        self.history.rows.push(row);
+        self.push_history(row)?;
         self.write_indexes()
     }
 }

@@ -137,6 +137,68 @@ pub fn write_csv<C: CsvCell>(path: &Path, table: &CsvTable<C>) -> Result<()> {
     write_bytes(path, &text)
 }
 
+/// A numeric table that grows by rows and is written after every one (`history.csv`): each
+/// row is checked and formatted once, when it is added, so that writing the table again
+/// costs a copy of its text instead of formatting every row again (which made writing a
+/// run of thousands of frames quadratic in their number). The text is what [`write_csv`]
+/// writes for the same table.
+#[derive(Clone, Debug, Default)]
+pub struct GrowingCsv {
+    text: Vec<u8>,
+    columns: usize,
+    cell: String,
+}
+
+impl GrowingCsv {
+    /// The table of `columns` without rows.
+    pub fn new(columns: &[String]) -> Self {
+        let header = CsvTable::<f64> {
+            columns: columns.to_vec(),
+            rows: Vec::new(),
+        };
+        Self {
+            // Writing a header into memory cannot fail.
+            text: csv_text(&header).unwrap_or_default(),
+            columns: columns.len(),
+            cell: String::new(),
+        }
+    }
+
+    /// Appends `row`, refusing one of the wrong length or with a value that is not finite
+    /// (the error names `path`, the file the table is written to).
+    pub fn push(&mut self, path: &Path, row: &[f64]) -> Result<()> {
+        if row.len() != self.columns {
+            let message = format!(
+                "a row has {} values but the table has {} columns",
+                row.len(),
+                self.columns
+            );
+            return Err(invalid_data(path, message));
+        }
+        if let Some((c, v)) = row.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(invalid_data(
+                path,
+                format!("column {c}: value {v} is not finite"),
+            ));
+        }
+        for (c, &v) in row.iter().enumerate() {
+            if c > 0 {
+                self.text.push(b',');
+            }
+            self.cell.clear();
+            push_f64(&mut self.cell, v);
+            self.text.extend_from_slice(self.cell.as_bytes());
+        }
+        self.text.push(b'\n');
+        Ok(())
+    }
+
+    /// The CSV text so far.
+    pub fn bytes(&self) -> &[u8] {
+        &self.text
+    }
+}
+
 /// The CSV text of a checked table.
 fn csv_text<C: CsvCell>(table: &CsvTable<C>) -> std::result::Result<Vec<u8>, String> {
     let capacity = 16 * (table.columns.len() + 1) * (table.rows.len() + 1);
@@ -180,6 +242,22 @@ pub(crate) fn format_f64(v: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_growing_table_is_the_text_write_csv_writes() {
+        let columns: Vec<String> = ["step", "a,b", "value"].map(String::from).to_vec();
+        let rows = vec![vec![0.0, -0.0, 1e-300], vec![1.0, 1.0 / 3.0, -2.5e20]];
+        let mut growing = GrowingCsv::new(&columns);
+        for row in &rows {
+            growing.push(Path::new("t.csv"), row).unwrap();
+        }
+        let table = CsvTable { columns, rows };
+        assert_eq!(growing.bytes(), csv_text(&table).unwrap().as_slice());
+        let nan = growing.push(Path::new("t.csv"), &[1.0, f64::NAN, 0.0]);
+        assert!(nan.unwrap_err().to_string().contains("t.csv"));
+        assert!(growing.push(Path::new("t.csv"), &[1.0]).is_err());
+        assert_eq!(growing.bytes(), csv_text(&table).unwrap().as_slice());
+    }
 
     #[test]
     fn numbers_round_trip_and_stay_short() {

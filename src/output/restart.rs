@@ -62,6 +62,8 @@ pub enum Content {
     /// A table with text or empty cells.
     Table(CsvTable<Cell>),
     Pvd(Vec<PvdEntry>),
+    /// A file's text, already formatted (a [`super::csv::GrowingCsv`]).
+    Text(Vec<u8>),
     /// A restart record, already encoded (by [`RecordWriter::queue_record`]).
     Record(Vec<u8>),
 }
@@ -74,7 +76,7 @@ impl Content {
             Content::Csv(table) => write_csv(path, table),
             Content::Table(table) => write_csv(path, table),
             Content::Pvd(entries) => write_pvd(path, entries),
-            Content::Record(bytes) => write_bytes(path, bytes),
+            Content::Record(bytes) | Content::Text(bytes) => write_bytes(path, bytes),
         }
     }
 }
