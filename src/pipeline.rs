@@ -1213,7 +1213,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
                 .queue(self.out_dir.join(file), Content::Csv(table));
         }
         self.fretting
-            .record(self.model, &self.interface, step, time);
+            .record(self.model, &self.interface, step, time)?;
         let row = self.row(step, time)?;
         self.series.extend(entries);
         tracing::debug!(
@@ -1286,9 +1286,8 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
     /// commits them: the series is the last file written for a step, so it lists only steps
     /// whose other files are complete.
     fn write_indexes(&mut self) -> Result<()> {
-        for (file, table) in self.fretting.files(self.model) {
-            self.records
-                .queue(self.out_dir.join(file), Content::Table(table));
+        for (file, content) in self.fretting.contents(self.model) {
+            self.records.queue(self.out_dir.join(file), content);
         }
         self.records.queue(
             self.out_dir.join("history.csv"),

@@ -602,14 +602,18 @@ fn hysteresis_cycle_and_wear_tables_hold_the_pair_integrals() {
         step_time: 1.0,
         cycle_end,
     };
-    tables.record(
-        &d.model,
-        &interface,
-        &frame_of(&d, frame(false), &zero),
-        1.0,
-    );
+    tables
+        .record(
+            &d.model,
+            &interface,
+            &frame_of(&d, frame(false), &zero),
+            1.0,
+        )
+        .unwrap();
     d.cycle(DELTA, 4, 1.0).unwrap();
-    tables.record(&d.model, &interface, &frame_of(&d, frame(true), &zero), 2.0);
+    tables
+        .record(&d.model, &interface, &frame_of(&d, frame(true), &zero), 2.0)
+        .unwrap();
     let files = tables.files(&d.model);
     let names: Vec<&str> = files.iter().map(|(n, _)| n.as_str()).collect();
     assert_eq!(

@@ -142,7 +142,7 @@ pub fn write_csv<C: CsvCell>(path: &Path, table: &CsvTable<C>) -> Result<()> {
 /// costs a copy of its text instead of formatting every row again (which made writing a
 /// run of thousands of frames quadratic in their number). The text is what [`write_csv`]
 /// writes for the same table.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct GrowingCsv {
     text: Vec<u8>,
     columns: usize,

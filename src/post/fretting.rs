@@ -9,7 +9,11 @@ use crate::contact::{ContactStatus, InterfaceState};
 use crate::element::interface6::interface_point;
 use crate::element::set::INTERFACE_POINTS;
 use crate::model::Model;
-use crate::output::csv::{Cell, CsvTable};
+use std::path::Path;
+
+use crate::Result;
+use crate::output::csv::{Cell, CsvTable, GrowingCsv};
+use crate::output::restart::Content;
 use crate::post::interface::InterfaceOutput;
 use crate::solver::stepping::StepResult;
 
@@ -19,6 +23,22 @@ pub const CYCLES_FILE: &str = "cycles.csv";
 /// The hysteresis table's file name of pair `pair`.
 pub fn hysteresis_file(pair: &str) -> String {
     format!("hysteresis_{pair}.csv")
+}
+
+/// A table of numbers as cells.
+fn cell_table(columns: &[&str], rows: &[Vec<f64>]) -> CsvTable<Cell> {
+    CsvTable {
+        columns: columns.iter().map(|c| c.to_string()).collect(),
+        rows: rows
+            .iter()
+            .map(|r| r.iter().map(|&v| Cell::Number(v)).collect())
+            .collect(),
+    }
+}
+
+/// An empty hysteresis table's text.
+fn hysteresis_csv() -> GrowingCsv {
+    GrowingCsv::new(&HYSTERESIS.map(String::from))
 }
 
 /// The wear-profile table's file name of pair `pair`.
@@ -116,6 +136,8 @@ fn pair_sums(model: &Model, states: &[InterfaceState]) -> Vec<PairSums> {
 pub struct FrettingTables {
     /// Rows of [`HYSTERESIS`] per pair.
     hysteresis: Vec<Vec<Vec<f64>>>,
+    /// The same rows as CSV text, grown row by row (the table is written after every frame).
+    hysteresis_text: Vec<GrowingCsv>,
     /// Rows of [`CYCLES`] (the contact as its pair index).
     cycles: Vec<Vec<f64>>,
     /// Rows of [`WEAR`] per pair (empty for pairs that do not wear).
@@ -128,6 +150,7 @@ impl FrettingTables {
         let pairs = model.interface.pairs.len();
         Self {
             hysteresis: vec![Vec::new(); pairs],
+            hysteresis_text: vec![hysteresis_csv(); pairs],
             cycles: Vec::new(),
             wear: vec![Vec::new(); pairs],
         }
@@ -135,18 +158,20 @@ impl FrettingTables {
 
     /// Adds the rows of output frame `step` at pseudo-time `time`: a hysteresis row per
     /// pair, and at the end of a cycle (`step.frame.cycle_end`) a cycle row per pair and the
-    /// wear profile of each pair that wears.
+    /// wear profile of each pair that wears. Fails, naming the hysteresis file, on a value
+    /// that is not finite.
     pub fn record(
         &mut self,
         model: &Model,
         interface: &InterfaceOutput,
         step: &StepResult,
         time: f64,
-    ) {
+    ) -> Result<()> {
         let frame = step.frame;
         let sums = pair_sums(model, &step.solution.interface_committed);
         let position = [frame.analysis_step as f64, frame.cycle as f64, frame.cycles];
-        for (rows, s) in self.hysteresis.iter_mut().zip(&sums) {
+        let tables = self.hysteresis.iter_mut().zip(&mut self.hysteresis_text);
+        for (((rows, text), s), pair) in tables.zip(&sums).zip(&model.interface.pairs) {
             let slip = if s.closed_area > 0.0 {
                 s.slip_area / s.closed_area
             } else {
@@ -155,10 +180,11 @@ impl FrettingTables {
             let mut row = vec![time];
             row.extend(position);
             row.extend([frame.step_time, s.tangential_force, s.normal_force, slip]);
+            text.push(Path::new(&hysteresis_file(&pair.name)), &row)?;
             rows.push(row);
         }
         if !frame.cycle_end {
-            return;
+            return Ok(());
         }
         for (p, s) in sums.iter().enumerate() {
             let mut row = position.to_vec();
@@ -176,6 +202,7 @@ impl FrettingTables {
                 row
             }));
         }
+        Ok(())
     }
 
     /// The rows for a restart record: the hysteresis tables, the cycle table, the wear
@@ -201,29 +228,60 @@ impl FrettingTables {
             && fits(&cycles, CYCLES.len())
             && cycles.iter().all(|r| (r[CONTACT] as usize) < pairs)
             && wear.iter().all(|t| fits(t, WEAR.len()));
-        ok.then(|| {
-            self.hysteresis = rows;
-            self.cycles = cycles;
-            self.wear = wear;
-        })
+        if !ok {
+            return None;
+        }
+        let mut texts = Vec::with_capacity(rows.len());
+        for table in &rows {
+            let mut text = hysteresis_csv();
+            for row in table {
+                text.push(Path::new("hysteresis"), row).ok()?;
+            }
+            texts.push(text);
+        }
+        self.hysteresis = rows;
+        self.hysteresis_text = texts;
+        self.cycles = cycles;
+        self.wear = wear;
+        Some(())
     }
 
     /// The tables' files: (file name, table) of every pair of `model`; a wear table only for
     /// a pair that wears.
     pub fn files(&self, model: &Model) -> Vec<(String, CsvTable<Cell>)> {
-        let table = |columns: &[&str], rows: &[Vec<f64>]| CsvTable {
-            columns: columns.iter().map(|c| c.to_string()).collect(),
-            rows: rows
-                .iter()
-                .map(|r| r.iter().map(|&v| Cell::Number(v)).collect())
-                .collect(),
-        };
         let pairs = &model.interface.pairs;
-        let mut out: Vec<(String, CsvTable<Cell>)> = pairs
-            .iter()
-            .zip(&self.hysteresis)
-            .map(|(p, rows)| (hysteresis_file(&p.name), table(&HYSTERESIS, rows)))
+        let hysteresis = pairs.iter().zip(&self.hysteresis);
+        let mut out: Vec<(String, CsvTable<Cell>)> = hysteresis
+            .map(|(p, rows)| (hysteresis_file(&p.name), cell_table(&HYSTERESIS, rows)))
             .collect();
+        out.extend(self.cycle_files(model));
+        out
+    }
+
+    /// [`Self::files`] as the writer takes them: the hysteresis tables as the text grown
+    /// frame by frame, the per-cycle tables as tables.
+    pub fn contents(&self, model: &Model) -> Vec<(String, Content)> {
+        let pairs = &model.interface.pairs;
+        let hysteresis = pairs.iter().zip(&self.hysteresis_text);
+        let mut out: Vec<(String, Content)> = hysteresis
+            .map(|(p, text)| {
+                (
+                    hysteresis_file(&p.name),
+                    Content::Text(text.bytes().to_vec()),
+                )
+            })
+            .collect();
+        let cycle_files = self.cycle_files(model).into_iter();
+        out.extend(cycle_files.map(|(name, table)| (name, Content::Table(table))));
+        out
+    }
+
+    /// The per-cycle tables: `cycles.csv` (when the model has pairs) and the wear profile
+    /// of each pair that wears.
+    fn cycle_files(&self, model: &Model) -> Vec<(String, CsvTable<Cell>)> {
+        let table = cell_table;
+        let pairs = &model.interface.pairs;
+        let mut out = Vec::new();
         if !pairs.is_empty() {
             let mut cycles = table(&CYCLES, &self.cycles);
             for (row, numbers) in cycles.rows.iter_mut().zip(&self.cycles) {
