@@ -146,7 +146,6 @@ pub fn write_csv<C: CsvCell>(path: &Path, table: &CsvTable<C>) -> Result<()> {
 pub struct GrowingCsv {
     text: Vec<u8>,
     columns: usize,
-    cell: String,
 }
 
 impl GrowingCsv {
@@ -160,7 +159,6 @@ impl GrowingCsv {
             // Writing a header into memory cannot fail.
             text: csv_text(&header).unwrap_or_default(),
             columns: columns.len(),
-            cell: String::new(),
         }
     }
 
@@ -181,15 +179,15 @@ impl GrowingCsv {
                 format!("column {c}: value {v} is not finite"),
             ));
         }
+        let mut line = String::with_capacity(24 * row.len());
         for (c, &v) in row.iter().enumerate() {
             if c > 0 {
-                self.text.push(b',');
+                line.push(',');
             }
-            self.cell.clear();
-            push_f64(&mut self.cell, v);
-            self.text.extend_from_slice(self.cell.as_bytes());
+            push_f64(&mut line, v);
         }
-        self.text.push(b'\n');
+        line.push('\n');
+        self.text.extend_from_slice(line.as_bytes());
         Ok(())
     }
 
