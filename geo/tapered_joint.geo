@@ -7,16 +7,24 @@
 // with a cylindrical head of height L_head = 20 mm above the sleeve. The shaft is pushed down
 // into the sleeve by a pressure on its top face; the sleeve rests on its bottom face.
 //
+// Angular mismatch (optional, default none): `mismatch` > 0 widens the sleeve's cone by that
+// radial clearance at its wide end z = L (0 at z = 0), so that the shaft first bears at the
+// narrow end, as on a hip-implant trunnion in a head whose bore has a larger cone angle. The
+// faces then no longer coincide: pair them with `pairing = "ordered"` (same node count on
+// both, the initial gap measured from the geometry).
+//
 // Two bodies with coincident but distinct nodes on the cone (Geometry.AutoCoherence = 0).
 // Physical groups: surfaces "shaft", "sleeve"; curves "shaft_cone" (side A of the contact),
 // "sleeve_cone" (side B), "shaft_top" (load), "sleeve_bottom" (support), "shaft_bottom",
 // "sleeve_outer", "sleeve_top".
 // Run: gmsh tapered_joint.geo -2 -order 2 -setnumber Mesh.SecondOrderIncomplete 1
-//      [-setnumber taper 0.2 -setnumber L 40 -setnumber r_m 20 -setnumber R_o 40 -clscale s]
+//      [-setnumber taper 0.2 -setnumber L 40 -setnumber r_m 20 -setnumber R_o 40
+//       -setnumber mismatch 0 -clscale s]
 DefineConstant[ taper = {0.2, Name "tan(gamma): half-angle tangent of the cone (DIN 1:2.5)"} ];
 DefineConstant[ L = {40, Name "contact length L [mm]"} ];
 DefineConstant[ r_m = {20, Name "mean contact radius r_m [mm]"} ];
 DefineConstant[ R_o = {40, Name "sleeve outer radius R_o [mm]"} ];
+DefineConstant[ mismatch = {0, Name "radial clearance of the sleeve cone at z = L [mm]"} ];
 DefineConstant[ L_head = {20, Name "height of the shaft head above the sleeve [mm]"} ];
 DefineConstant[ n_cone = {16, Name "elements along the cone (size factor 1)"} ];
 DefineConstant[ n_radial = {6, Name "elements across shaft and sleeve (size factor 1)"} ];
@@ -40,7 +48,7 @@ Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};
 Curve Loop(2) = {5, 6, 7, -3}; Plane Surface(2) = {2};
 
 // Sleeve: its own points on the cone.
-Point(11) = {r0, 0, 0}; Point(12) = {R_o, 0, 0}; Point(13) = {R_o, L, 0}; Point(14) = {r1, L, 0};
+Point(11) = {r0, 0, 0}; Point(12) = {R_o, 0, 0}; Point(13) = {R_o, L, 0}; Point(14) = {r1 + mismatch, L, 0};
 Line(11) = {11, 12}; Line(12) = {12, 13}; Line(13) = {13, 14}; Line(14) = {14, 11};
 Curve Loop(3) = {11, 12, 13, 14}; Plane Surface(3) = {3};
 

@@ -175,11 +175,11 @@ pub enum Error {
     Restart { path: PathBuf, reason: String },
     /// A wear jump (cycle jumping) would add more depth at a point than its stability limit
     /// allows: `depth` added over the `jump_cycles − 1` extrapolated cycles against `limit` =
-    /// `jump_limit` × |p_N| / k_N. `contact` is the pair's name, `contact_index` its place in
+    /// `jump_limit` × |p_N| (1/k_N + c_B) (see [`crate::solver::cycles`]). `contact` is the pair's name, `contact_index` its place in
     /// the case (`contact[j]`), `step_index` the `[[step]]` (0-based) when the caller knows
     /// it ([`Error::in_analysis_step`]).
     #[error(
-        "contact '{contact}': a wear jump over {jump_cycles} cycles would add a depth of {depth:.4e} mm at ({x}, {y}), more than its stability limit {limit:.4e} mm (contact[{contact_index}].wear.jump_limit = {jump_limit} times the elastic closure |p_N|/k_N of the point); lower {} or raise contact[{contact_index}].wear.jump_limit (the results up to the cycle before are kept)",
+        "contact '{contact}': a wear jump over {jump_cycles} cycles would add a depth of {depth:.4e} mm at ({x}, {y}), more than its stability limit {limit:.4e} mm (contact[{contact_index}].wear.jump_limit = {jump_limit} times the point's elastic closure |p_N| (1/k_N + l/(pi E*)), interface and bodies in series); lower {} or raise contact[{contact_index}].wear.jump_limit (the results up to the cycle before are kept)",
         step_key(*step_index, "cycles_per_jump"), x = position[0], y = position[1]
     )]
     WearJump {
@@ -191,6 +191,18 @@ pub enum Error {
         depth: f64,
         limit: f64,
         jump_limit: f64,
+    },
+    /// After a wear jump over `jump_cycles` cycles, the bodies could not be brought back
+    /// into equilibrium under the same loads with the worn gaps (`reason`: the solver's last
+    /// word): the jump changed the contact too much at once.
+    #[error(
+        "the equilibrium after a wear jump over {jump_cycles} cycles did not converge ({reason}); lower {} (the results up to the cycle before are kept)",
+        step_key(*step_index, "cycles_per_jump")
+    )]
+    JumpSettling {
+        step_index: Option<usize>,
+        jump_cycles: f64,
+        reason: String,
     },
     /// The total wear depth h_A + h_B of a point of contact `contact` (`contact[contact_index]`
     /// in the case) would exceed the pair's `max_depth`: the interface is worn through.
@@ -247,7 +259,8 @@ impl Error {
             | Error::ArcLength(_)
             | Error::Linear(_)
             | Error::WearJump { .. }
-            | Error::WornThrough { .. } => 1,
+            | Error::WornThrough { .. }
+            | Error::JumpSettling { .. } => 1,
             Error::OutputExists { .. } => 2,
             Error::Mesh { .. }
             | Error::Case { .. }
@@ -274,8 +287,9 @@ impl Error {
     /// [`crate::solver::cycles::end_cycle`] (which knows the model, not the load history);
     /// other errors are returned unchanged.
     pub fn in_analysis_step(mut self, index: usize) -> Self {
-        if let Error::WearJump { step_index, .. } | Error::WornThrough { step_index, .. } =
-            &mut self
+        if let Error::WearJump { step_index, .. }
+        | Error::WornThrough { step_index, .. }
+        | Error::JumpSettling { step_index, .. } = &mut self
         {
             *step_index = Some(index);
         }

@@ -4,7 +4,8 @@ by plot_hysteresis.py, report.py and check_fretting.py:
 - `OUT/hysteresis_<contact>.csv`, one row per frame: frame, analysis_step, cycle, cycles,
   step_time, tangential_force (N), normal_force (N), relative_slip (mm);
 - `OUT/cycles.csv`, one row per simulated cycle and contact: analysis_step, cycle, cycles,
-  contact, dissipation (N mm), worn_volume (mm^3), max_wear_depth (mm);
+  contact, dissipation (N mm), settling_dissipation (N mm, the re-equilibrium after the
+  cycle's wear jump), worn_volume (mm^3), max_wear_depth (mm);
 - `OUT/wear_<contact>.csv`, the wear-depth profile after each jump: cycles, s (arc length
   along side A), x, y, wear_a, wear_b, wear_depth (mm);
 - `OUT/summary.json` (its `energy`) and `OUT/run.json` (the case text as run).
@@ -25,7 +26,8 @@ import numpy as np
 
 HYSTERESIS_COLUMNS = ["frame", "analysis_step", "cycle", "cycles", "step_time", "tangential_force",
                       "normal_force", "relative_slip"]
-CYCLES_COLUMNS = ["analysis_step", "cycle", "cycles", "contact", "dissipation", "worn_volume", "max_wear_depth"]
+CYCLES_COLUMNS = ["analysis_step", "cycle", "cycles", "contact", "dissipation", "settling_dissipation", "worn_volume",
+                  "max_wear_depth"]
 WEAR_COLUMNS = ["analysis_step", "cycles", "s", "x", "y", "wear_a", "wear_b", "wear_depth"]
 # The terms of the energy balance (solver/energy.rs); imbalance = external_work - sum(TERMS).
 ENERGY_TERMS = ["elastic_energy", "interface_energy", "plastic_dissipation", "friction_dissipation", "wear_work",

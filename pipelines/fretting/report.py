@@ -94,10 +94,12 @@ def dissipation_section(cycles: dict[str, np.ndarray], contact: str) -> str:
     if not len(d):
         return f"`{contact}`: no row in cycles.csv."
     body = table(["step", "simulated cycle", "cycles N", "dissipation per cycle [N·mm]", "relative to the first",
-                  "worn volume [mm³]", "max wear depth [µm]"],
-                 [[int(k), int(c), f"{n:.0f}", float(e), float(e / d[0]) if d[0] else "—", float(v), float(1e3 * h)]
-                  for k, c, n, e, v, h in zip(rows["analysis_step"], rows["cycle"], rows["cycles"], d,
-                                              rows["worn_volume"], rows["max_wear_depth"])])
+                  "re-seating after the jump [N·mm]", "worn volume [mm³]", "max wear depth [µm]"],
+                 [[int(k), int(c), f"{n:.0f}", float(e), float(e / d[0]) if d[0] else "—", float(r), float(v),
+                   float(1e3 * h)]
+                  for k, c, n, e, r, v, h in zip(rows["analysis_step"], rows["cycle"], rows["cycles"], d,
+                                                 rows["settling_dissipation"], rows["worn_volume"],
+                                                 rows["max_wear_depth"])])
     if len(d) < 2:
         return body
     change = (d[-1] - d[0]) / d[0] if d[0] else float("nan")

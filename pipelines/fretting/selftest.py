@@ -17,6 +17,7 @@ import csv
 import io
 import json
 import math
+import re
 import shutil
 import sys
 import tempfile
@@ -60,8 +61,9 @@ def synthetic_run(out: Path) -> None:
     out.mkdir(parents=True)
     case = (HERE / "tapered_fretting.toml").read_text()
     case = case.replace("increments = 10", f"increments = {PRESS}", 1)  # the press-in step
-    case = case.replace("cycles = 1000000", f"cycles = {done(CYCLES)}").replace(
-        "cycles_per_jump = 40000", f"cycles_per_jump = {JUMP}").replace("increments = 10", f"increments = {INCREMENTS}")
+    case = re.sub(r"(?m)^cycles_per_jump = \d+$", f"cycles_per_jump = {JUMP}", case, count=1)
+    case = case.replace("cycles = 1000000", f"cycles = {done(CYCLES)}").replace("increments = 10",
+                                                                              f"increments = {INCREMENTS}")
     (out / "run.json").write_text(json.dumps({"case": case, "case_file": "synthetic.toml", "host": "test", "threads": 1,
                                               "start": "2026-01-01T00:00:00Z", "end": "2026-01-01T00:00:05Z"}))
     frames = [[i, 1, 1, 1, i / PRESS, F0 * i / PRESS, 5 * F0 * i / PRESS, F0 * i / PRESS / STIFFNESS]
@@ -81,15 +83,17 @@ def synthetic_run(out: Path) -> None:
         depth = 1e-5 * c * (np.exp(-s / 3) + np.exp(-(s[-1] - s) / 3))
         wear_rows += [[2, done(c), s[k], x[k], s[k] / math.hypot(1.0, 0.2), 0.7 * depth[k], 0.3 * depth[k], depth[k]]
                       for k in range(len(s))]
-        cycle_rows.append([2, c, done(c), "cone", 5.0 * (1 - 0.05 * (c - 1)), np.trapezoid(2 * math.pi * x * depth, s),
-                           depth.max()])
+        settling = 0.0 if c == 1 else 0.2  # the re-equilibrium after a jump
+        cycle_rows.append([2, c, done(c), "cone", 5.0 * (1 - 0.05 * (c - 1)), settling,
+                           np.trapezoid(2 * math.pi * x * depth, s), depth.max()])
     _write_csv(out / "wear_cone.csv", WEAR_COLUMNS, wear_rows)
     _write_csv(out / "cycles.csv", CYCLES_COLUMNS, cycle_rows)
-    friction = sum(r[4] for r in cycle_rows)
+    friction = sum(r[4] + r[5] for r in cycle_rows)
     steps = [dict(_energy(1000.0, 3.0, 0.0), name="press_in"), dict(_energy(1000.0, friction, 0.04), name="service")]
     total = {k: steps[0][k] + steps[1][k] for k in steps[0] if k != "name"}
     per_cycle = [dict(steps[0], analysis_step=1, cycle=1, cycles=1)]  # the press-in step counts as one cycle
-    per_cycle += [dict(_energy(3 * r[4], r[4], 0.01), analysis_step=2, cycle=r[1], cycles=r[2]) for r in cycle_rows]
+    per_cycle += [dict(_energy(3 * r[4], r[4] + r[5], 0.01), analysis_step=2, cycle=r[1], cycles=r[2])
+                  for r in cycle_rows]
     (out / "summary.json").write_text(json.dumps({
         "status": "converged", "steps": [{"step": f[0]} for f in frames],
         "totals": {"steps": len(frames), "increments": len(frames), "cutbacks": 0, "iterations": 3 * len(frames)},
@@ -180,7 +184,7 @@ def main() -> None:
         pressed = Path(tmp) / "press_in_row"
         shutil.copytree(base, pressed)
         rows = list(csv.reader(open(pressed / "cycles.csv")))[1:]
-        _write_csv(pressed / "cycles.csv", CYCLES_COLUMNS, [[1, 1, 1, "cone", 3.0, 0.0, 0.0], *rows])
+        _write_csv(pressed / "cycles.csv", CYCLES_COLUMNS, [[1, 1, 1, "cone", 3.0, 0.0, 0.0, 0.0], *rows])
         found = quiet(check_run, pressed, 1e-3)
         report = quiet(write, pressed).read_text()
         expect(not found and "fell from 5 N·mm in the first simulated cycle" in report,

@@ -88,8 +88,10 @@ pub struct PointHistory {
     pub cycle_slip_range: [f64; 2],
     /// Largest |p_T| in the current cycle (MPa).
     pub cycle_max_shear: f64,
-    /// Largest |p_N| / k_N of the current cycle at the closed point (mm): the elastic
-    /// closure the cycle-jump stability limit is a fraction of.
+    /// Largest |p_N| (1/k_N + c_B) of the current cycle's increments at the closed point
+    /// (mm), c_B the bodies' surface compliance at the point's element: the elastic closure
+    /// of the interface and the bodies in series, which the cycle-jump stability limit is a
+    /// fraction of.
     pub cycle_elastic_closure: f64,
     /// Results of the last completed cycle: dissipation per unit area (N/mm), slip amplitude
     /// (half the range of u_T^p, mm), largest |p_T| (MPa) and wear depth added (mm, A and B).
@@ -102,7 +104,9 @@ pub struct PointHistory {
 impl PointHistory {
     /// The history after a law update from the committed state whose history is `self` to
     /// `trial` (stress p_{n+1}, plastic slip u_T^p), with `wear` the pair's wear model and
-    /// `gap_wear` the wear the law saw. Backward Euler like the law: the dissipation
+    /// `gap_wear` the wear the law saw, and `body_compliance` the compliance c_B of the
+    /// bodies' surfaces in series with the interface (mm/MPa, for the elastic closure
+    /// tracker). Backward Euler like the law: the dissipation
     /// increment is p_T,{n+1} Δu_T^p (exact for Coulomb at constant pressure, where p_T is
     /// constant during slip) and the wear increment is explicit in the trial stress.
     pub fn advanced(
@@ -111,6 +115,7 @@ impl PointHistory {
         trial: &InterfaceState,
         wear: Option<&WearModel>,
         gap_wear: f64,
+        body_compliance: f64,
     ) -> Self {
         let mut h = *self;
         h.gap_wear = gap_wear;
@@ -127,7 +132,8 @@ impl PointHistory {
         ];
         h.cycle_max_shear = h.cycle_max_shear.max(p_t.abs());
         if trial.stiffness[1] > 0.0 {
-            h.cycle_elastic_closure = h.cycle_elastic_closure.max(p_n.abs() / trial.stiffness[1]);
+            let closure = p_n.abs() * (1.0 / trial.stiffness[1] + body_compliance);
+            h.cycle_elastic_closure = h.cycle_elastic_closure.max(closure);
         }
         if let Some(w) = wear {
             let dh = w.increment(trial.stress, slip);

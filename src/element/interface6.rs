@@ -89,6 +89,19 @@ pub struct InterfaceElement {
     /// Index of the contact pair (law, interference).
     pub pair: u32,
     pub rule: InterfaceRule,
+    /// Normal compliance of the two bodies' surfaces under the shortest pressure wave the
+    /// element resolves (mm/MPa): ℓ / (π E*), see [`surface_compliance`]. Only the cycle-jump
+    /// stability limit uses it.
+    pub body_compliance: f64,
+}
+
+/// Normal compliance (mm/MPa) of the surfaces of two bodies with moduli `surface_moduli`
+/// (each E / (1 − ν²), or E in plane stress) to a pressure wave of wavelength `wavelength`:
+/// the faces approach by λ / (π E*) per unit pressure amplitude, 1/E* = 1/E'_A + 1/E'_B
+/// (Westergaard's wavy surface, Johnson, *Contact Mechanics*, 1985, §13.2: a pressure
+/// amplitude p* = π E* Δ / λ flattens a wave of amplitude Δ).
+pub fn surface_compliance(surface_moduli: [f64; 2], wavelength: f64) -> f64 {
+    wavelength / std::f64::consts::PI * (1.0 / surface_moduli[0] + 1.0 / surface_moduli[1])
 }
 
 /// Relative displacement operator row for point `p`: u_T = Σ N_i (u_B,i − u_A,i)·t and the
@@ -152,9 +165,13 @@ pub fn evaluate_interface(
         }
         let mut state = state;
         state.unsymmetric = used[(0, 1)] != used[(1, 0)];
-        state.history = before
-            .history
-            .advanced(before.plastic_slip, &state, wear, worn);
+        state.history = before.history.advanced(
+            before.plastic_slip,
+            &state,
+            wear,
+            worn,
+            element.body_compliance,
+        );
         trial[g] = state;
     }
 }
@@ -198,6 +215,7 @@ mod tests {
             offsets: [[0.0; 2]; 3],
             pair: 0,
             rule,
+            body_compliance: 0.0,
         }
     }
 
@@ -303,5 +321,26 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn surface_compliance_is_that_of_two_half_spaces_under_a_pressure_wave() {
+        // A plane-strain half-space under p cos(κx) sinks by 2 p (1 − ν²) / (E κ), κ = 2π/λ
+        // (the Flamant solution integrated over the Fourier load; Johnson, Contact Mechanics,
+        // §13.2); the two faces add up.
+        let (ea, nua, eb, nub) = (110_000.0, 0.3, 210_000.0, 0.29);
+        let wavelength = 0.4;
+        let kappa = 2.0 * std::f64::consts::PI / wavelength;
+        let sink = |e: f64, nu: f64| 2.0 * (1.0 - nu * nu) / (e * kappa);
+        let moduli = [ea / (1.0 - nua * nua), eb / (1.0 - nub * nub)];
+        let expected = sink(ea, nua) + sink(eb, nub);
+        let got = surface_compliance(moduli, wavelength);
+        assert!(
+            (got - expected).abs() <= 1e-14 * expected,
+            "{got} vs {expected}"
+        );
+        // A rigid face adds nothing.
+        let rigid = surface_compliance([moduli[0], f64::INFINITY], wavelength);
+        assert!((rigid - sink(ea, nua)).abs() <= 1e-14 * rigid);
     }
 }

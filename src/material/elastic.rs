@@ -11,6 +11,17 @@ pub struct LinearElastic {
 }
 
 impl LinearElastic {
+    /// The modulus with which the surface of a half-space of this material resists a normal
+    /// load: the plane-strain modulus E / (1 − ν²) of contact mechanics in plane strain and
+    /// axisymmetry (the surface is locally in plane strain), E in plane stress.
+    pub fn surface_modulus(&self, plane_stress: bool) -> f64 {
+        if plane_stress {
+            self.e
+        } else {
+            self.e / (1.0 - self.nu * self.nu)
+        }
+    }
+
     /// Checks the parameters: E > 0 and −1 < ν < 0.5.
     pub fn new(e: f64, nu: f64) -> Result<Self, ParameterError> {
         if !(e.is_finite() && e > 0.0) {
@@ -115,6 +126,10 @@ impl Material for LinearElastic {
     fn describe(&self) -> String {
         format!("linear elastic, E = {} MPa, nu = {}", self.e, self.nu)
     }
+
+    fn elastic(&self) -> &LinearElastic {
+        self
+    }
 }
 
 #[cfg(test)]
@@ -159,5 +174,12 @@ mod tests {
     fn rejects_bad_parameters() {
         assert!(LinearElastic::new(-1.0, 0.3).is_err());
         assert!(LinearElastic::new(1.0, 0.5).is_err());
+    }
+
+    #[test]
+    fn surface_modulus_is_plane_strain_except_in_plane_stress() {
+        let m = LinearElastic::new(200_000.0, 0.3).unwrap();
+        assert_eq!(m.surface_modulus(true), 200_000.0);
+        assert!((m.surface_modulus(false) - 200_000.0 / 0.91).abs() < 1e-9);
     }
 }

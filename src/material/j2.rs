@@ -417,6 +417,10 @@ impl Material for J2Plasticity {
             self.elastic.e, self.elastic.nu, self.yield_stress, self.hardening
         )
     }
+
+    fn elastic(&self) -> &LinearElastic {
+        &self.elastic
+    }
 }
 
 #[cfg(test)]

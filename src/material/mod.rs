@@ -67,6 +67,9 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     /// Short description for logs, e.g. "elastic E=210000 nu=0.3".
     fn describe(&self) -> String;
 
+    /// The elastic part of the model (its E and ν): what the material does before it yields.
+    fn elastic(&self) -> &elastic::LinearElastic;
+
     /// Whether the stress is a fixed linear function of the strain, independent of the
     /// history (then the bodies' stiffness is constant and needs assembling only once).
     fn is_linear(&self) -> bool {

@@ -20,7 +20,7 @@ pub use spec::{
 use crate::assembly::{Coloring, DofMap, SparsityPattern};
 use crate::element::Analysis;
 use crate::element::continuum::min_jacobian;
-use crate::element::interface6::{InterfaceElement, InterfaceRule};
+use crate::element::interface6::{InterfaceElement, InterfaceRule, surface_compliance};
 use crate::element::set::{ContactPair, ContinuumCell, ContinuumSet, ElementSet, InterfaceSet};
 use crate::error::{GroupKind, GroupProblem, TopologyProblem};
 use crate::mesh::interface::{InterfaceTopology, insert_interface};
@@ -75,9 +75,14 @@ impl Model {
         // Interfaces first: splitting a conforming curve re-points body B's cells.
         let topologies = insert_interfaces(&mut mesh, &bodies, &contacts)?;
         let (bodies, continuum) = build_continuum(&mesh, analysis, bodies)?;
-        let in_body = nodes_in_bodies(&continuum, mesh.nodes.len());
+        let owners = node_bodies(&continuum, mesh.nodes.len());
+        let in_body: Vec<bool> = owners.iter().map(Option::is_some).collect();
         let scale = model_scale(&mesh);
-        let interface = build_interface(&mesh, analysis, contacts, topologies, scale)?;
+        let surfaces = BodySurfaces {
+            owners: &owners,
+            continuum: &continuum,
+        };
+        let interface = build_interface(&mesh, analysis, contacts, topologies, &surfaces, scale)?;
         let Constraints {
             supports,
             prescribed,
@@ -124,15 +129,43 @@ fn insert_interfaces(
         .collect()
 }
 
-/// Which nodes belong to a body cell.
-fn nodes_in_bodies(continuum: &ContinuumSet, node_count: usize) -> Vec<bool> {
-    let mut in_body = vec![false; node_count];
+/// The body whose cells hold each node (None: the node is in no body).
+fn node_bodies(continuum: &ContinuumSet, node_count: usize) -> Vec<Option<u32>> {
+    let mut owners = vec![None; node_count];
     for c in &continuum.cells {
         for &n in &c.nodes[..c.kind.node_count()] {
-            in_body[n as usize] = true;
+            owners[n as usize] = Some(c.body);
         }
     }
-    in_body
+    owners
+}
+
+/// The bodies behind the interface faces: which body holds a node, and its material.
+struct BodySurfaces<'a> {
+    owners: &'a [Option<u32>],
+    continuum: &'a ContinuumSet,
+}
+
+impl BodySurfaces<'_> {
+    /// Surface modulus E / (1 − ν²) (E in plane stress) of the body holding `node`;
+    /// infinite (a rigid face) for a node in no body.
+    fn modulus(&self, node: u32) -> f64 {
+        let plane_stress = self.continuum.analysis.is_plane_stress();
+        self.owners[node as usize].map_or(f64::INFINITY, |b| {
+            let material = &self.continuum.materials[b as usize];
+            material.elastic().surface_modulus(plane_stress)
+        })
+    }
+
+    /// Compliance of the two bodies' surfaces at interface element `nodes` with B-side
+    /// coordinates `b_coords`: the shortest pressure wave its quadratic faces resolve
+    /// alternates from node to node (spacing ℓ/2), wavelength ℓ = the element's length.
+    fn compliance(&self, nodes: &[u32; 6], b_coords: &[[f64; 2]; 3]) -> f64 {
+        let [b0, b1, _] = b_coords;
+        let length = (b1[0] - b0[0]).hypot(b1[1] - b0[1]);
+        let moduli = [self.modulus(nodes[0]), self.modulus(nodes[3])];
+        surface_compliance(moduli, length)
+    }
 }
 
 /// The degree-of-freedom numbering and what depends on it.
@@ -191,6 +224,7 @@ fn build_interface(
     analysis: Analysis,
     contacts: Vec<Contact>,
     topologies: Vec<InterfaceTopology>,
+    surfaces: &BodySurfaces,
     scale: f64,
 ) -> Result<InterfaceSet> {
     let mut elements = Vec::new();
@@ -214,6 +248,7 @@ fn build_interface(
                 offsets: *offsets,
                 pair: p as u32,
                 rule: if on_axis { InterfaceRule::Gauss } else { rule },
+                body_compliance: surfaces.compliance(nodes, &b_coords),
             });
         }
         if elements.len() == start {

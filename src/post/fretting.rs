@@ -71,14 +71,17 @@ pub const HYSTERESIS: [&str; 8] = [
 ];
 
 /// Columns of `cycles.csv`: per simulated cycle and pair, the friction work of the cycle
-/// ∫ (dissipation of the cycle) dA (N·mm), the worn volume ∫ (h_A + h_B) dA (mm³, with 2πr in
+/// ∫ (dissipation of the cycle) dA (N·mm), the friction work of the re-equilibrium after its
+/// wear jump (N·mm: the bodies re-seat on the worn faces, a slip spread over the jumped
+/// cycles in reality; 0 without a jump), the worn volume ∫ (h_A + h_B) dA (mm³, with 2πr in
 /// axisymmetry) and the largest depth (mm) after the cycle (and its jump).
-pub const CYCLES: [&str; 7] = [
+pub const CYCLES: [&str; 8] = [
     "analysis_step",
     "cycle",
     "cycles",
     "contact",
     "dissipation",
+    "settling_dissipation",
     "worn_volume",
     "max_wear_depth",
 ];
@@ -106,11 +109,14 @@ struct PairSums {
     closed_area: f64,
     slip_area: f64,
     cycle_dissipation: f64,
+    settling_dissipation: f64,
     worn_volume: f64,
     max_depth: f64,
 }
 
-fn pair_sums(model: &Model, states: &[InterfaceState]) -> Vec<PairSums> {
+/// The integrals of every pair at a state whose cycle (if it just ended) stood for `jump`
+/// cycles.
+fn pair_sums(model: &Model, states: &[InterfaceState], jump: f64) -> Vec<PairSums> {
     let mut out = vec![PairSums::default(); model.interface.pairs.len()];
     for (e, element) in model.interface.elements.iter().enumerate() {
         let sums = &mut out[element.pair as usize];
@@ -123,7 +129,13 @@ fn pair_sums(model: &Model, states: &[InterfaceState]) -> Vec<PairSums> {
                 sums.closed_area += da;
                 sums.slip_area += s.relative[0] * da;
             }
-            sums.cycle_dissipation += s.history.last_cycle_dissipation * da;
+            let h = &s.history;
+            sums.cycle_dissipation += h.last_cycle_dissipation * da;
+            // What the point dissipated since its cycle started beyond the cycle's own
+            // dissipation extrapolated over the jump: the re-equilibrium after the jump.
+            let settling =
+                h.dissipation - h.cycle_start_dissipation - jump * h.last_cycle_dissipation;
+            sums.settling_dissipation += settling * da;
             sums.worn_volume += s.history.depth() * da;
             sums.max_depth = sums.max_depth.max(s.history.depth());
         }
@@ -168,7 +180,8 @@ impl FrettingTables {
         time: f64,
     ) -> Result<()> {
         let frame = step.frame;
-        let sums = pair_sums(model, &step.solution.interface_committed);
+        let jump = model.schedule.timeline().ends_cycle(step.step).unwrap_or(1);
+        let sums = pair_sums(model, &step.solution.interface_committed, jump as f64);
         let position = [frame.analysis_step as f64, frame.cycle as f64, frame.cycles];
         let tables = self.hysteresis.iter_mut().zip(&mut self.hysteresis_text);
         for (((rows, text), s), pair) in tables.zip(&sums).zip(&model.interface.pairs) {
@@ -188,7 +201,13 @@ impl FrettingTables {
         }
         for (p, s) in sums.iter().enumerate() {
             let mut row = position.to_vec();
-            row.extend([p as f64, s.cycle_dissipation, s.worn_volume, s.max_depth]);
+            row.extend([
+                p as f64,
+                s.cycle_dissipation,
+                s.settling_dissipation,
+                s.worn_volume,
+                s.max_depth,
+            ]);
             self.cycles.push(row);
         }
         for (p, pair) in model.interface.pairs.iter().enumerate() {

@@ -7,16 +7,25 @@
 //!
 //! **Cycle jumping.** A simulated cycle stands for ΔN cycles: the wear it added is
 //! extrapolated linearly, h += (ΔN − 1)(h − h_cycle start) (explicit Euler in the cycle
-//! number). With the local pressure p = k_N(δ − h) of a point whose surfaces wear, Archard's
-//! law gives dh/dN = k k_N s (δ − h) (s the slip per cycle), whose explicit Euler step has the
-//! amplification factor 1 − ΔN k k_N s on the distance δ − h to wear-out: accurate and
-//! monotone (no overshoot of the unloaded state, hence no oscillation of the pressure from
-//! jump to jump) when ΔN k k_N s ≤ ½. Since ΔN k k_N s (δ − h) is the depth the jump adds and
-//! δ − h = |p_N| / k_N, the bound reads: depth added ≤ `jump_limit` · |p_N| / k_N, with
-//! `jump_limit` = ½ by default. The compliance of the bodies only lowers the effective
-//! stiffness seen by the point, so the bound is conservative. |p_N| / k_N is taken as its
-//! largest value in the cycle, so that a point loaded only in part of the cycle is bounded by
-//! the closure it had while it wore.
+//! number). Wear opens the gap, and the pressure at a point falls by k_eff per unit depth,
+//! k_eff the stiffness of the interface and the two bodies in series. Archard's law then gives
+//! dh/dN = k k_eff s (δ − h) (s the slip per cycle, δ − h = |p_N| / k_eff the closure left),
+//! whose explicit Euler step has the amplification factor 1 − ΔN k k_eff s on the closure:
+//! accurate and monotone (no overshoot of the unloaded state, hence no oscillation of the
+//! pressure from jump to jump) when ΔN k k_eff s ≤ ½. Since ΔN k k_eff s (δ − h) is the depth
+//! the jump adds, the bound reads: depth added ≤ `jump_limit` · |p_N| / k_eff, with
+//! `jump_limit` = ½ by default. The energy law (dh = α |p_T Δu_T|, p_T = μ p_N in slip) is
+//! the same with k = α μ.
+//!
+//! 1/k_eff = 1/k_N + c_B: the interface's tangent normal stiffness k_N and the compliance of
+//! the bodies' surfaces c_B = ℓ / (π E*) to the shortest pressure wave the mesh resolves
+//! (wavelength ℓ, the interface element's length; 1/E* = (1 − ν_A²)/E_A + (1 − ν_B²)/E_B,
+//! E in plane stress; Westergaard's wavy surface, Johnson, *Contact Mechanics*, §13.2). Longer
+//! waves meet a smaller stiffness πE*/λ, so the shortest one bounds the jump. A stiff penalty
+//! interface (k_N ≫ πE*/ℓ) is thus limited by the bodies, not by its penalty. |p_N| / k_eff
+//! is taken as its largest value over the cycle's increments (the states whose pressure the
+//! wear increments use), so that a point loaded only in part of the cycle is bounded by the
+//! closure it had while it wore.
 //!
 //! [`PointHistory`]: crate::contact::PointHistory
 
@@ -37,8 +46,9 @@ pub fn start_cycle(solution: &mut Solution) {
         .copy_from_slice(&solution.interface_committed);
 }
 
-/// The trackers of a cycle starting at state `s`: no slip yet, the current shear and elastic
-/// closure as the extremes so far.
+/// The trackers of a cycle starting at state `s`: no slip yet, the current shear as the
+/// largest so far, no elastic closure yet (the increments record theirs, with the bodies'
+/// compliance that only the element knows).
 fn restart_trackers(s: &mut InterfaceState) {
     let closed = s.status != ContactStatus::Open;
     let h = &mut s.history;
@@ -47,11 +57,7 @@ fn restart_trackers(s: &mut InterfaceState) {
     h.cycle_slip = 0.0;
     h.cycle_slip_range = [0.0; 2];
     h.cycle_max_shear = if closed { s.stress[0].abs() } else { 0.0 };
-    h.cycle_elastic_closure = if closed && s.stiffness[1] > 0.0 {
-        s.stress[1].abs() / s.stiffness[1]
-    } else {
-        0.0
-    };
+    h.cycle_elastic_closure = 0.0;
 }
 
 /// Ends a simulated load cycle that stands for `jump_cycles` ≥ 1 cycles: the last-cycle
@@ -59,22 +65,25 @@ fn restart_trackers(s: &mut InterfaceState) {
 /// `jump_cycles − 1` cycles not simulated. Errs, leaving the solution unchanged, when the
 /// depth a jump adds exceeds the stability limit at some point ([`Error::WearJump`]) or the
 /// total depth would exceed the pair's `max_depth` ([`Error::WornThrough`]); the caller adds
-/// the step with [`Error::in_analysis_step`].
-pub fn end_cycle(model: &Model, solution: &mut Solution, jump_cycles: f64) -> Result<()> {
+/// the step with [`Error::in_analysis_step`]. Returns whether the jump added wear (then the
+/// worn gaps no longer match the converged displacements: the caller re-equilibrates).
+pub fn end_cycle(model: &Model, solution: &mut Solution, jump_cycles: f64) -> Result<bool> {
     let extra = (jump_cycles - 1.0).max(0.0);
     check_jump(model, &solution.interface_committed, jump_cycles, extra)?;
+    let mut worn = false;
     for (point, s) in solution.interface_committed.iter_mut().enumerate() {
         let [a, b] = cycle_wear(&s.history);
         close_cycle(&mut s.history, extra);
         if extra > 0.0 && a + b > 0.0 {
             // The jump's wear takes its work out of the interface's stored energy.
             (solution.energy).record_wear_jump(model, point, s, extra * (a + b));
+            worn = true;
         }
     }
     solution
         .interface_trial
         .copy_from_slice(&solution.interface_committed);
-    Ok(())
+    Ok(worn)
 }
 
 /// Wear depth (A, B) added since the cycle started.
