@@ -47,7 +47,7 @@ use crate::output::restart::{
 use crate::output::summary::{
     ContactResultant, EnergyMark, Force, ModelSize, Named, Status, StepSummary, Summary,
 };
-use crate::post::fretting::{FrettingTables, is_fretting_file};
+use crate::post::fretting::{FrettingTables, TracedPoint, is_fretting_file, trace_point};
 use crate::post::interface::{InterfaceOutput, resultants};
 use crate::post::quantities::evaluate;
 use crate::post::{BodyPoints, StepInfo, reactions, step_grids};
@@ -373,7 +373,8 @@ fn solve(
         });
     }
     let settings = newton_settings(&case.solver);
-    let mut writer = StepWriter::new(case, &model, session, summary, on_step);
+    let traced = traced_points(case, &model)?;
+    let mut writer = StepWriter::new(case, &model, session, summary, traced, on_step);
     let resume = match record {
         Some(record) => Some(writer.restore(record)?),
         None => {
@@ -1007,12 +1008,45 @@ struct StepWriter<'m, 's, F> {
     on_step: F,
 }
 
+/// The interface points whose local loops the contacts of `case` trace (`hysteresis_points`),
+/// per pair of `model`: the integration point nearest to each given point, which must lie
+/// within one element length of it.
+fn traced_points(case: &Case, model: &Model) -> Result<Vec<Vec<TracedPoint>>> {
+    let contacts = case.contacts.iter().enumerate();
+    contacts
+        .map(|(j, contact)| {
+            let points = contact.hysteresis_points.iter().enumerate();
+            points
+                .map(|(k, &wanted)| {
+                    trace_point(model, j, wanted).map_err(|off| {
+                        case.invalid(
+                            format!("contact[{j}].hysteresis_points[{k}]"),
+                            format!("[{}, {}]", wanted[0], wanted[1]),
+                            format!(
+                                "the point lies {:.4} mm from the nearest point of contact '{}' \
+                                 (at ({:.4}, {:.4})), farther than that element's length \
+                                 {:.4} mm: give a point on the contact",
+                                off.distance,
+                                model.interface.pairs[j].name,
+                                off.nearest[0],
+                                off.nearest[1],
+                                off.length
+                            ),
+                        )
+                    })
+                })
+                .collect()
+        })
+        .collect()
+}
+
 impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> {
     fn new(
         case: &'m Case,
         model: &'m Model,
         session: &'m Session,
         summary: &'s mut Summary,
+        traced: Vec<Vec<TracedPoint>>,
         on_step: F,
     ) -> Self {
         let (layout, columns) = HistoryLayout::new(case, model);
@@ -1029,7 +1063,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             series: Vec::new(),
             history_text: GrowingCsv::new(&columns),
             history: CsvTable::new(columns),
-            fretting: FrettingTables::new(model),
+            fretting: FrettingTables::new(model).with_points(traced),
             summary,
             last_reactions: Vec::new(),
             bar: progress_bar(session.progress, model.schedule.steps()),

@@ -721,6 +721,14 @@ fn case_values_out_of_range_are_named() {
             )),
             Invalid("contact[0].interference"),
         ),
+        (
+            "hysteresis point with an infinite coordinate",
+            case_plus(&format!(
+                "{PAIR}hysteresis_points = [[0.5, 1.0], [inf, 1.0]]
+law = {{ type = \"linear_coulomb\", normal_stiffness = 1.0, tangential_stiffness = 1.0 }}"
+            )),
+            Invalid("contact[0].hysteresis_points[1]"),
+        ),
     ];
     let count = cases.len();
     for (label, case, expected) in cases {

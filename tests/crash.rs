@@ -155,11 +155,14 @@ fn series_steps(pvd: &str, dir: &Path) -> Vec<usize> {
 }
 
 /// The per-contact fretting tables, which like `history.csv` grow by a row per frame
-/// (`hysteresis_<pair>.csv`) or per cycle (`cycles.csv`, `wear_<pair>.csv`).
+/// (`hysteresis_<pair>.csv`, `point_loops_<pair>.csv`) or per cycle (`cycles.csv`,
+/// `wear_<pair>.csv`).
 fn is_growing_table(name: &str) -> bool {
     name == "cycles.csv"
         || (name.ends_with(".csv")
-            && (name.starts_with("hysteresis_") || name.starts_with("wear_")))
+            && ["hysteresis_", "point_loops_", "wear_"]
+                .iter()
+                .any(|prefix| name.starts_with(prefix)))
 }
 
 /// What a killed run must have left in `dir`, against the uninterrupted run in `reference`.

@@ -14,7 +14,7 @@ use asperity::element::set::{ElementSet, INTERFACE_POINTS};
 use asperity::element::{ElementInput, ElementOutput, ElementVector};
 use asperity::model::Model;
 use asperity::model::timeline::Frame;
-use asperity::post::fretting::{CYCLES, FrettingTables, HYSTERESIS, WEAR};
+use asperity::post::fretting::{CYCLES, FrettingTables, HYSTERESIS, POINT_LOOPS, WEAR};
 use asperity::post::interface::{FRETTING, InterfaceOutput};
 use asperity::solver::cycles::{end_cycle, start_cycle};
 use asperity::solver::newton::NewtonLog;
@@ -672,14 +672,27 @@ fn hysteresis_cycle_and_wear_tables_hold_the_pair_integrals() {
     assert_eq!(restored.restore(rows), None);
 }
 
-#[test]
-fn a_run_with_contact_writes_its_hysteresis_and_resumes_it_unchanged() {
-    let dir = tempfile::tempdir().unwrap();
-    let case = dir.path().join("case.toml");
-    std::fs::write(
-        &case,
-        format!(
-            r#"[mesh]
+/// The rows of the all-numeric CSV file `path`, whose header must be `columns`.
+fn numeric_csv(path: &std::path::Path, columns: &[&str]) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        columns.join(","),
+        "{}",
+        path.display()
+    );
+    lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect()
+}
+
+/// Two blocks (tests/fixtures/contact_pair.msh, contact at y = 1 for 0 ≤ x ≤ 2) pressed by
+/// 10 MPa and sheared back and forth, with energy wear and `points` as the contact's
+/// `hysteresis_points`.
+fn sheared_pair_case(points: &str) -> String {
+    format!(
+        r#"[mesh]
 file = "{}"
 [analysis]
 type = "plane_strain"
@@ -707,15 +720,22 @@ side_a = "lower_top"
 side_b = "upper_bottom"
 law = {{ type = "linear_coulomb", normal_stiffness = 1e4, tangential_stiffness = 1e4, friction = 0.3 }}
 wear = {{ model = "energy", coefficient = 1e-6 }}
+hysteresis_points = {}
 [steps]
 count = 4
 "#,
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("tests/fixtures/contact_pair.msh")
-                .display()
-        ),
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/fixtures/contact_pair.msh")
+            .display(),
+        points
     )
-    .unwrap();
+}
+
+#[test]
+fn a_run_with_contact_writes_its_hysteresis_and_resumes_it_unchanged() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = dir.path().join("case.toml");
+    std::fs::write(&case, sheared_pair_case("[[0.6, 1.0], [1.5, 1.0]]")).unwrap();
     let out = dir.path().join("out");
     let run = |extra: &[&str]| {
         let status = std::process::Command::new(env!("CARGO_BIN_EXE_asperity"))
@@ -729,12 +749,7 @@ count = 4
         assert!(status.status.success(), "{status:?}");
     };
     run(&[]);
-    let text = std::fs::read_to_string(out.join("hysteresis_joint.csv")).unwrap();
-    let mut lines = text.lines();
-    assert_eq!(lines.next().unwrap(), HYSTERESIS.join(","));
-    let rows: Vec<Vec<f64>> = lines
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
+    let rows = numeric_csv(&out.join("hysteresis_joint.csv"), &HYSTERESIS);
     assert_eq!(rows.len(), 4);
     for row in &rows {
         // The lid pressure (10 MPa on 2 mm) is carried by the contact alone.
@@ -745,21 +760,64 @@ count = 4
     for file in ["cycles.csv", "wear_joint.csv"] {
         assert!(out.join(file).is_file(), "{file}");
     }
-    let before: Vec<Vec<u8>> = ["hysteresis_joint.csv", "cycles.csv", "wear_joint.csv"]
+    // The traced points: one row per frame and point, at the interface point nearest to
+    // each given one, with the stresses the frame's contact table has at that point.
+    let rows = numeric_csv(&out.join("point_loops_joint.csv"), &POINT_LOOPS);
+    assert_eq!(rows.len(), 4 * 2);
+    for (i, row) in rows.iter().enumerate() {
+        let (frame, point) = (i / 2 + 1, i % 2 + 1);
+        assert_eq!((row[0], row[5]), (frame as f64, point as f64), "{row:?}");
+        let wanted = [0.6, 1.5][point - 1];
+        assert!((row[6] - wanted).abs() <= 0.25 && row[7] == 1.0, "{row:?}");
+        assert!(row[9] < 0.0 && row[8].abs() <= 0.3 * row[9].abs() * (1.0 + 1e-9));
+        let table = std::fs::read_to_string(out.join(format!("contact_joint_{frame:04}.csv")));
+        let same_point = table.unwrap().lines().skip(1).any(|line| {
+            let v: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+            // x, contact_normal_stress, contact_shear_stress
+            [v[1], v[3], v[5]] == [row[6], row[9], row[8]]
+        });
+        assert!(same_point, "frame {frame}: {row:?}");
+    }
+    let files = [
+        "hysteresis_joint.csv",
+        "point_loops_joint.csv",
+        "cycles.csv",
+        "wear_joint.csv",
+    ];
+    let before: Vec<Vec<u8>> = files
         .iter()
         .map(|f| std::fs::read(out.join(f)).unwrap())
         .collect();
     run(&["--resume"]);
-    for (f, bytes) in ["hysteresis_joint.csv", "cycles.csv", "wear_joint.csv"]
-        .iter()
-        .zip(before)
-    {
+    for (f, bytes) in files.iter().zip(before) {
         assert_eq!(std::fs::read(out.join(f)).unwrap(), bytes, "{f}");
     }
     // The contact table carries the fretting columns.
     let contact = std::fs::read_to_string(out.join("contact_joint_0004.csv")).unwrap();
     let header = contact.lines().next().unwrap();
     assert!(header.ends_with(&FRETTING.join(",")), "{header}");
+}
+
+/// A traced point must lie on its contact: one farther than an element length from every
+/// interface point stops the run before it starts, naming the key and the distance.
+#[test]
+fn a_hysteresis_point_off_the_contact_is_refused_naming_its_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = dir.path().join("case.toml");
+    std::fs::write(&case, sheared_pair_case("[[0.6, 1.0], [1.0, 1.9]]")).unwrap();
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .arg("run")
+        .arg(&case)
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(3), "{run:?}");
+    let message = String::from_utf8_lossy(&run.stderr);
+    for part in ["contact[0].hysteresis_points[1]", "0.9000 mm", "'joint'"] {
+        assert!(message.contains(part), "{message}");
+    }
+    assert!(!dir.path().join("out/point_loops_joint.csv").exists());
 }
 
 /// Every pair gets its hysteresis loop and per-cycle table (fretting without wear is still

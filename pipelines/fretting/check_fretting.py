@@ -18,10 +18,14 @@ Checks (each printed; exit status 1 if one fails, 2 if a file is missing or malf
   cycles.csv, wear_depth = wear_a + wear_b, depths never decreasing from one jump to the next,
   and the worn volume of cycles.csv equal to the integral of the profile (10 %: the profile is
   nodal, the volume integrated at the interface's points);
+- OUT/point_loops_<contact>.csv for each contact with `hysteresis_points`: one row per frame
+  and traced point, in frame order, each point at a fixed position within one element length
+  of the point asked for, the frame columns as in the hysteresis;
 - summary.json's `energy`: every record's imbalance equals external work minus its terms, the
   steps (each holding what happened in it) add up to the total, one cycle record per simulated
   cycle and per step without cycles (README, summary.json), the friction dissipation of each
-  cycle is the sum of cycles.csv's dissipation over the contacts (1e-6), and the total imbalance within
+  cycle is the sum of cycles.csv's dissipation and settling_dissipation over the contacts
+  (1e-6), and the total imbalance within
   --energy-tolerance (default 1e-3) of the external work: the work of the out-of-balance forces
   that the solver's residual tolerance (5e-4 by default) leaves.
 """
@@ -37,9 +41,9 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 from asperity_tools import read_csv, run_cases, variant  # noqa: E402
-from fretting_data import (CYCLES_COLUMNS, ENERGY_TERMS, HYSTERESIS_COLUMNS, WEAR_COLUMNS, OutputError,  # noqa: E402
-                           contact_name, contact_rows, cyclic_steps, imbalance, read_case, read_json, read_table, simulated_cycles,
-                           wear_profiles)
+from fretting_data import (CYCLES_COLUMNS, ENERGY_TERMS, HYSTERESIS_COLUMNS, POINT_LOOPS_COLUMNS, WEAR_COLUMNS,  # noqa: E402
+                           OutputError, contact_name, contact_rows, cyclic_steps, imbalance, read_case, read_json,
+                           read_table, simulated_cycles, wear_profiles)
 
 ROUND_OFF = 1e-9  # relative: values that are the same number written twice (CSV and JSON, ~16 digits)
 
@@ -228,6 +232,28 @@ def check_energy(summary: dict, case: dict, hysteresis: dict, cycles: dict | Non
             break
 
 
+def check_point_loops(out: Path, contact: str, wanted: list, hysteresis: dict, check: Checks) -> None:
+    """The traced points' table of `contact` against the points the case asks for and the
+    contact's hysteresis (the same frames)."""
+    name = f"point_loops_{contact}.csv"
+    t = read_table(out / name, POINT_LOOPS_COLUMNS)
+    n, frames = len(wanted), len(hysteresis["frame"])
+    check(len(t["frame"]) == n * frames, f"{name}: {len(t['frame'])} rows, one per frame and point ({n} × {frames})")
+    if len(t["frame"]) != n * frames:
+        return
+    check(np.array_equal(t["point"], np.tile(np.arange(1, n + 1), frames)), f"{name}: points 1..{n} in every frame")
+    for column in ("frame", "analysis_step", "cycle", "cycles", "step_time"):
+        check(np.array_equal(t[column], np.repeat(hysteresis[column], n)),
+              f"{name}: `{column}` as in hysteresis_{contact}.csv")
+    for k, (x, y) in enumerate(wanted, start=1):
+        rows = t["point"] == k
+        fixed = np.all(t["x"][rows] == t["x"][rows][0]) and np.all(t["y"][rows] == t["y"][rows][0])
+        distance = math.hypot(t["x"][rows][0] - x, t["y"][rows][0] - y)
+        check(bool(fixed), f"{name}: point {k} keeps its position")
+        print(f"       point {k}: asked ({x}, {y}), traced ({t['x'][rows][0]:.6g}, {t['y'][rows][0]:.6g}), "
+              f"{distance:.3g} mm apart")
+
+
 def check_run(out: Path, tolerance: float) -> list[str]:
     check = Checks()
     summary = read_json(out / "summary.json")
@@ -245,6 +271,9 @@ def check_run(out: Path, tolerance: float) -> list[str]:
         for contact, c in zip(contacts, case.get("contact", [])):
             if "wear" in c:
                 check_wear(out, case, contact, cycles, check)
+    for contact, c in zip(contacts, case.get("contact", [])):
+        if c.get("hysteresis_points"):
+            check_point_loops(out, contact, c["hysteresis_points"], hysteresis[contact], check)
     check_energy(summary, case, hysteresis, cycles, tolerance, check)
     return check.failures
 

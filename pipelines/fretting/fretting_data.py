@@ -6,6 +6,9 @@ by plot_hysteresis.py, report.py and check_fretting.py:
 - `OUT/cycles.csv`, one row per simulated cycle and contact: analysis_step, cycle, cycles,
   contact, dissipation (N mm), settling_dissipation (N mm, the re-equilibrium after the
   cycle's wear jump), worn_volume (mm^3), max_wear_depth (mm);
+- `OUT/point_loops_<contact>.csv` (contacts with `hysteresis_points`), one row per frame and
+  traced point: frame, analysis_step, cycle, cycles, step_time, point (1-based), x, y,
+  shear_stress, normal_stress (MPa), tangential_displacement, plastic_slip (mm);
 - `OUT/wear_<contact>.csv`, the wear-depth profile after each jump: cycles, s (arc length
   along side A), x, y, wear_a, wear_b, wear_depth (mm);
 - `OUT/summary.json` (its `energy`) and `OUT/run.json` (the case text as run).
@@ -29,6 +32,8 @@ HYSTERESIS_COLUMNS = ["frame", "analysis_step", "cycle", "cycles", "step_time", 
 CYCLES_COLUMNS = ["analysis_step", "cycle", "cycles", "contact", "dissipation", "settling_dissipation", "worn_volume",
                   "max_wear_depth"]
 WEAR_COLUMNS = ["analysis_step", "cycles", "s", "x", "y", "wear_a", "wear_b", "wear_depth"]
+POINT_LOOPS_COLUMNS = ["frame", "analysis_step", "cycle", "cycles", "step_time", "point", "x", "y", "shear_stress",
+                       "normal_stress", "tangential_displacement", "plastic_slip"]
 # The terms of the energy balance (solver/energy.rs); imbalance = external_work - sum(TERMS).
 ENERGY_TERMS = ["elastic_energy", "interface_energy", "plastic_dissipation", "friction_dissipation", "wear_work",
                 "numerical_dissipation"]
@@ -137,6 +142,19 @@ def loops(hysteresis: dict[str, np.ndarray], steps: set[int]) -> list[Loop]:
             rows = np.concatenate([[rows[0] - 1], rows]) if rows[0] > 0 else rows
             result.append(Loop(k, int(c), float(hysteresis["cycles"][rows[-1]]),
                                hysteresis["relative_slip"][rows], hysteresis["tangential_force"][rows]))
+    return result
+
+
+def point_tables(table: dict[str, np.ndarray]) -> list[dict[str, np.ndarray]]:
+    """The rows of a point_loops_<contact>.csv per traced point (in point order), each shaped
+    like a hysteresis table (`relative_slip` the point's u_T, `tangential_force` its p_T) so
+    that `loops` cuts it into cycles."""
+    result = []
+    for k in np.unique(table["point"].astype(int)):
+        rows = {name: values[table["point"] == k] for name, values in table.items()}
+        rows["relative_slip"] = rows["tangential_displacement"]
+        rows["tangential_force"] = rows["shear_stress"]
+        result.append(rows)
     return result
 
 

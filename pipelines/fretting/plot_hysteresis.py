@@ -4,7 +4,8 @@ cycle and the worn volume against the cycles, and the wear-depth profiles after 
 
 Usage: plot_hysteresis.py OUT
 
-Reads OUT/hysteresis_<contact>.csv, OUT/cycles.csv, OUT/wear_<contact>.csv and OUT/run.json
+Reads OUT/hysteresis_<contact>.csv, OUT/cycles.csv, OUT/wear_<contact>.csv,
+OUT/point_loops_<contact>.csv and OUT/run.json
 (README "Output") and writes into OUT:
 - hysteresis_<contact>.png: tangential force ∫p_T dA against the mean relative slip, one loop
   per simulated cycle coloured by the cycles it has reached (the steps before the first cyclic
@@ -12,6 +13,9 @@ Reads OUT/hysteresis_<contact>.csv, OUT/cycles.csv, OUT/wear_<contact>.csv and O
 - cycles.png: energy dissipated per cycle and worn volume against the cycles (every contact);
 - wear_<contact>.png: wear-depth profile along the contact (arc length of side A) after each
   jump, coloured by the cycles.
+- point_loops_<contact>.png (contacts with `hysteresis_points`): each traced point's local
+  loop, shear stress p_T against tangential relative displacement u_T, one loop per simulated
+  cycle.
 cycles.csv and the wear profiles are optional (a run without cyclic steps or without wear has
 none): what is missing is said and skipped. Exits with status 2 when OUT holds no hysteresis
 file or a file is malformed.
@@ -29,9 +33,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import Normalize  # noqa: E402
 
-from fretting_data import (HYSTERESIS_COLUMNS, WEAR_COLUMNS, OutputError, contact_files,  # noqa: E402
-                           Loop, contact_rows, cyclic_steps, loops, read_case, read_cycles, read_table,
-                           wear_profiles)
+from fretting_data import (HYSTERESIS_COLUMNS, POINT_LOOPS_COLUMNS, WEAR_COLUMNS, OutputError,  # noqa: E402
+                           contact_files, Loop, contact_rows, cyclic_steps, loops, point_tables, read_case,
+                           read_cycles, read_table, wear_profiles)
 
 COLOURS = "viridis"
 
@@ -99,6 +103,37 @@ def plot_loops(out: Path, contact: str, hysteresis: dict[str, np.ndarray], cycli
     return out / f"hysteresis_{contact}.png"
 
 
+def plot_point_loops(out: Path, contact: str, table: dict[str, np.ndarray], cyclic: set[int]) -> Path:
+    """point_loops_<contact>.png: one panel per traced point, p_T (MPa) against u_T (µm), the
+    frames before the cyclic steps in grey and one loop per simulated cycle."""
+    points = point_tables(table)
+    columns = min(len(points), 3)
+    rows = -(-len(points) // columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(4.5 * columns, 4 * rows), layout="constrained",
+                             squeeze=False)
+    cycle_loops = [loops(p, cyclic) for p in points]
+    everything = [lp.cycles for group in cycle_loops for lp in group]
+    mappable, norm = _colour_scale(everything or [0.0])
+    for ax, p, group in zip(axes.flat, points, cycle_loops):
+        before = p["analysis_step"] < min(cyclic, default=np.inf)
+        if before.any():
+            ax.plot(1e3 * p["relative_slip"][before], p["tangential_force"][before], "-", color="0.6", lw=1)
+        for lp in group:
+            ax.plot(1e3 * lp.slip, lp.force, "-", lw=1.2, color=mappable.cmap(norm(lp.cycles)))
+        ax.set_title(f"point {int(p['point'][0])} at ({p['x'][0]:.4g}, {p['y'][0]:.4g}) mm", fontsize=10)
+        ax.set_xlabel("tangential relative displacement u_T [µm]")
+        ax.set_ylabel("shear stress p_T [MPa]")
+        ax.grid(True, alpha=0.3)
+    for ax in list(axes.flat)[len(points):]:
+        ax.set_visible(False)
+    if everything:
+        fig.colorbar(mappable, ax=axes.ravel().tolist(), label="cycles N at the end of the loop")
+    fig.suptitle(f"contact `{contact}`: local loops of the traced points")
+    fig.savefig(out / f"point_loops_{contact}.png", dpi=120)
+    plt.close(fig)
+    return out / f"point_loops_{contact}.png"
+
+
 def plot_cycles(out: Path, table: dict[str, np.ndarray]) -> Path:
     """cycles.png: dissipation per simulated cycle and worn volume against the cycles."""
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 7), sharex=True)
@@ -146,6 +181,11 @@ def plot_all(out: Path) -> tuple[list[tuple[str, Path]], list[str]]:
         if not cyclic:
             notes.append(f"{path.name}: no cyclic step: the curve is drawn without loops")
         figures.append((f"hysteresis loops of `{contact}`", plot_loops(out, contact, hysteresis, cyclic)))
+    for contact, path in contact_files(out, "point_loops").items():
+        points = read_table(path, POINT_LOOPS_COLUMNS)
+        if len(points["frame"]):
+            figures.append((f"local loops of the traced points of `{contact}`",
+                            plot_point_loops(out, contact, points, cyclic_all)))
     table = read_cycles(out, cyclic_all)
     if table is None:
         notes.append(f"no {out / 'cycles.csv'} (written by runs with a cyclic step): dissipation and worn volume not drawn")

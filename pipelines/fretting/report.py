@@ -225,6 +225,12 @@ def write(out: Path) -> Path:
     cycles = read_cycles(out, set(cyclic_steps(case)))
     loops = "\n\n".join(f"![{caption}]({quote(path.name)})" for caption, path in figures
                           if path.name.startswith("hysteresis_"))
+    point_loops = "\n\n".join(f"![{caption}]({quote(path.name)})" for caption, path in figures
+                                if path.name.startswith("point_loops_"))
+    if point_loops:
+        loops += ("\n\nThe points the case traces (`hysteresis_points`): shear stress p_T against the "
+                  "tangential relative displacement u_T of each, one loop per simulated cycle "
+                  "(`point_loops_<contact>.csv`).\n\n" + point_loops)
     steps = ", ".join(f"{i} (`{s.get('name', f'step-{i}')}`)" for i, s in cyclic_steps(case).items()) or "none"
     if cycles is not None:
         dissipation = ("\n\n".join(dissipation_section(cycles, c) for c in contacts)

@@ -21,6 +21,7 @@ import re
 import shutil
 import sys
 import tempfile
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +29,8 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 from check_fretting import check_run  # noqa: E402
-from fretting_data import CYCLES_COLUMNS, ENERGY_TERMS, HYSTERESIS_COLUMNS, WEAR_COLUMNS, OutputError  # noqa: E402
+from fretting_data import (CYCLES_COLUMNS, ENERGY_TERMS, HYSTERESIS_COLUMNS, POINT_LOOPS_COLUMNS,  # noqa: E402
+                           WEAR_COLUMNS, OutputError)
 from report import write  # noqa: E402
 
 PRESS, INCREMENTS, CYCLES, JUMP = 4, 4, 4, 25
@@ -76,6 +78,10 @@ def synthetic_run(out: Path) -> None:
             opening = width * (F0 - force) * (force - 0.5 * F0) * (1 if t <= 0.5 else -1)
             frames.append([len(frames) + 1, 2, c, done(c), t, force, 5 * force, force / STIFFNESS + opening])
     _write_csv(out / "hysteresis_cone.csv", HYSTERESIS_COLUMNS, frames)
+    traced = tomllib.loads(case)["contact"][0].get("hysteresis_points", [])
+    _write_csv(out / "point_loops_cone.csv", POINT_LOOPS_COLUMNS,
+               [[*f[:5], k, x + 0.01, y, 0.2 * f[5] / F0, -f[6] / F0, f[7], 0.5 * f[7]]
+                for f in frames for k, (x, y) in enumerate(traced, start=1)])
     s = np.linspace(0.0, 40.0 * math.hypot(1.0, 0.2), 9)
     x = 16.0 + 0.2 * s / math.hypot(1.0, 0.2)
     wear_rows, cycle_rows = [], []
@@ -137,6 +143,10 @@ MUTATIONS = {
     "a cycle row missing": (lambda o: _write_csv(o / "cycles.csv", CYCLES_COLUMNS,
                                                  list(csv.reader(open(o / "cycles.csv")))[1:-1]), "simulated cycles ×"),
     "worn volume off the profile": (lambda o: _edit_csv(o / "cycles.csv", 2, "worn_volume", 1.5), "∫ wear_depth dA"),
+    "a traced point's row missing": (lambda o: _write_csv(o / "point_loops_cone.csv", POINT_LOOPS_COLUMNS,
+                                                          list(csv.reader(open(o / "point_loops_cone.csv")))[1:-1]),
+                                     "one per frame and point"),
+    "a traced point moving": (lambda o: _edit_csv(o / "point_loops_cone.csv", 4, "x", 1.01), "keeps its position"),
     "wear depth healing": (lambda o: _edit_csv(o / "wear_cone.csv", 30, "wear_depth", 0.5), "no point's depth decreased"),
     "per-cycle friction off cycles.csv": (lambda o: _edit_energy(o, "cycle", "friction_dissipation", 0.05, True),
                                           "Σ cycles.csv dissipation"),
@@ -179,7 +189,8 @@ def main() -> None:
         expect("fell from 5 N·mm in the first simulated cycle to 4.25 N·mm in the last (-15.0 %)" in report,
                "report.py states the fall of the dissipation per cycle computed from cycles.csv")
         expect("largest wear depth 0.04 µm" in report, "report.py states the largest wear depth of the last profile")
-        expect(all((base / f).is_file() for f in ("hysteresis_cone.png", "cycles.png", "wear_cone.png")),
+        expect(all((base / f).is_file() for f in ("hysteresis_cone.png", "cycles.png", "wear_cone.png",
+                                                   "point_loops_cone.png")),
                "the figures are drawn")
         pressed = Path(tmp) / "press_in_row"
         shutil.copytree(base, pressed)

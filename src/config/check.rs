@@ -43,6 +43,7 @@ impl Case {
         }
         self.check_names()?;
         self.check_laws()?;
+        self.check_hysteresis_points()?;
         self.check_wear()?;
         self.check_steps()?;
         self.check_solver()
@@ -152,6 +153,23 @@ impl Case {
                              (contact '{}')",
                             c.name()
                         ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The points whose local loops a contact traces have finite coordinates (whether they
+    /// lie on the contact is checked against the mesh, when the run starts).
+    fn check_hysteresis_points(&self) -> Result<()> {
+        for (i, c) in self.contacts.iter().enumerate() {
+            for (k, point) in c.hysteresis_points.iter().enumerate() {
+                if !point.iter().all(|v| v.is_finite()) {
+                    return Err(self.invalid(
+                        format!("contact[{i}].hysteresis_points[{k}]"),
+                        format!("{point:?}"),
+                        "the coordinates (x, y) of a point on the contact must be finite numbers (mm)",
                     ));
                 }
             }

@@ -248,6 +248,10 @@ pub struct ContactSpec {
     pub law: LawSpec,
     /// Wear of the pair's surfaces (default: none).
     pub wear: Option<wear::WearSpec>,
+    /// Points (x, y in mm, on the contact) whose local loops p_T against u_T are written to
+    /// `point_loops_<name>.csv` at every frame (default: none).
+    #[serde(default)]
+    pub hysteresis_points: Vec<[f64; 2]>,
 }
 
 /// How the nodes of `side_a` and `side_b` are paired.

@@ -1,13 +1,14 @@
 //! The per-contact fretting tables of a run: the hysteresis loop of each pair (one row per
 //! output frame), the results of every simulated load cycle (one row per cycle and pair), and
-//! the wear-depth profile of each pair that wears at every cycle end. They are kept as rows of
-//! numbers (the restart record stores them like `history.csv`'s rows) and turned into CSV
-//! tables for `hysteresis_<pair>.csv`, `cycles.csv` and `wear_<pair>.csv`, written for the
-//! models where some pair wears.
+//! the wear-depth profile of each pair that wears at every cycle end, and the local loops of the
+//! points a case traces (`hysteresis_points`). They are kept as rows of numbers (the restart
+//! record stores them like `history.csv`'s rows) and turned into CSV tables for
+//! `hysteresis_<pair>.csv`, `point_loops_<pair>.csv`, `cycles.csv` and
+//! `wear_<pair>.csv`.
 
 use crate::contact::{ContactStatus, InterfaceState};
 use crate::element::interface6::interface_point;
-use crate::element::set::INTERFACE_POINTS;
+use crate::element::set::{ContactPair, INTERFACE_POINTS};
 use crate::model::Model;
 use std::path::Path;
 
@@ -41,6 +42,16 @@ fn hysteresis_csv() -> GrowingCsv {
     GrowingCsv::new(&HYSTERESIS.map(String::from))
 }
 
+/// The traced points' hysteresis table's file name of pair `pair`.
+pub fn point_loops_file(pair: &str) -> String {
+    format!("point_loops_{pair}.csv")
+}
+
+/// An empty table of traced points' text.
+fn point_loops_csv() -> GrowingCsv {
+    GrowingCsv::new(&POINT_LOOPS.map(String::from))
+}
+
 /// The wear-profile table's file name of pair `pair`.
 pub fn wear_file(pair: &str) -> String {
     format!("wear_{pair}.csv")
@@ -49,7 +60,7 @@ pub fn wear_file(pair: &str) -> String {
 /// Whether `name` is one of the fretting tables' files.
 pub fn is_fretting_file(name: &str) -> bool {
     name == CYCLES_FILE
-        || ["hysteresis_", "wear_"].iter().any(|p| {
+        || ["hysteresis_", "point_loops_", "wear_"].iter().any(|p| {
             name.strip_prefix(p)
                 .is_some_and(|r| r.len() > 4 && r.ends_with(".csv"))
         })
@@ -69,6 +80,75 @@ pub const HYSTERESIS: [&str; 8] = [
     "normal_force",
     "relative_slip",
 ];
+
+/// Columns of `point_loops_<pair>.csv`: per output frame and traced point (numbered
+/// from 1 in the order of the case's `hysteresis_points`) where the frame lies in the load
+/// history as in [`HYSTERESIS`], the point's position (side B, mm), its contact stresses
+/// p_T and p_N (MPa, p_N < 0 in compression), its tangential relative displacement u_T and
+/// its plastic slip u_T^p (mm): p_T against u_T is the point's local fretting loop.
+pub const POINT_LOOPS: [&str; 12] = [
+    "frame",
+    "analysis_step",
+    "cycle",
+    "cycles",
+    "step_time",
+    "point",
+    "x",
+    "y",
+    "shear_stress",
+    "normal_stress",
+    "tangential_displacement",
+    "plastic_slip",
+];
+
+/// An interface integration point whose local loop is traced: its index into the interface
+/// states and its position (side B, mm).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TracedPoint {
+    pub state: usize,
+    pub position: [f64; 2],
+}
+
+/// Why a wanted point cannot be traced: it lies `distance` (mm) from the nearest integration
+/// point of its pair, at `nearest`, farther than that point's element length `length`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OffContact {
+    pub distance: f64,
+    pub nearest: [f64; 2],
+    pub length: f64,
+}
+
+/// The integration point of pair `pair` of `model` nearest to `wanted` (mm), which must lie
+/// within one element length of it (a point on the contact curve always does).
+pub fn trace_point(
+    model: &Model,
+    pair: usize,
+    wanted: [f64; 2],
+) -> std::result::Result<TracedPoint, OffContact> {
+    let interface = &model.interface;
+    let mut best = (f64::INFINITY, 0, [0.0; 2], 0.0);
+    for e in interface.pairs[pair].elements.clone() {
+        let [b0, b1, _] = interface.elements[e].b_coords;
+        let length = (b1[0] - b0[0]).hypot(b1[1] - b0[1]);
+        for g in 0..INTERFACE_POINTS {
+            let x = interface.point_position(e, g);
+            let distance = (x[0] - wanted[0]).hypot(x[1] - wanted[1]);
+            if distance < best.0 {
+                best = (distance, e * INTERFACE_POINTS + g, x, length);
+            }
+        }
+    }
+    let (distance, state, position, length) = best;
+    if distance <= length {
+        Ok(TracedPoint { state, position })
+    } else {
+        Err(OffContact {
+            distance,
+            nearest: position,
+            length,
+        })
+    }
+}
 
 /// Columns of `cycles.csv`: per simulated cycle and pair, the friction work of the cycle
 /// ∫ (dissipation of the cycle) dA (N·mm), the friction work of the re-equilibrium after its
@@ -154,6 +234,11 @@ pub struct FrettingTables {
     cycles: Vec<Vec<f64>>,
     /// Rows of [`WEAR`] per pair (empty for pairs that do not wear).
     wear: Vec<Vec<Vec<f64>>>,
+    /// The traced points of each pair, their rows of [`POINT_LOOPS`] and those rows as
+    /// CSV text.
+    traced: Vec<Vec<TracedPoint>>,
+    points: Vec<Vec<Vec<f64>>>,
+    points_text: Vec<GrowingCsv>,
 }
 
 impl FrettingTables {
@@ -165,7 +250,17 @@ impl FrettingTables {
             hysteresis_text: vec![hysteresis_csv(); pairs],
             cycles: Vec::new(),
             wear: vec![Vec::new(); pairs],
+            traced: vec![Vec::new(); pairs],
+            points: vec![Vec::new(); pairs],
+            points_text: vec![point_loops_csv(); pairs],
         }
+    }
+
+    /// The tables with the local loops of `traced` points, per pair (in the model's order).
+    pub fn with_points(mut self, traced: Vec<Vec<TracedPoint>>) -> Self {
+        debug_assert_eq!(traced.len(), self.traced.len());
+        self.traced = traced;
+        self
     }
 
     /// Adds the rows of output frame `step` at pseudo-time `time`: a hysteresis row per
@@ -196,6 +291,7 @@ impl FrettingTables {
             text.push(Path::new(&hysteresis_file(&pair.name)), &row)?;
             rows.push(row);
         }
+        self.record_points(model, step, time)?;
         if !frame.cycle_end {
             return Ok(());
         }
@@ -224,12 +320,44 @@ impl FrettingTables {
         Ok(())
     }
 
+    /// The rows of the traced points of every pair at output frame `step` (pseudo-time
+    /// `time`).
+    fn record_points(&mut self, model: &Model, step: &StepResult, time: f64) -> Result<()> {
+        let frame = step.frame;
+        let tables = self.points.iter_mut().zip(&mut self.points_text);
+        for ((rows, text), (traced, pair)) in
+            tables.zip(self.traced.iter().zip(&model.interface.pairs))
+        {
+            for (i, point) in traced.iter().enumerate() {
+                let s = &step.solution.interface_committed[point.state];
+                let row = vec![
+                    time,
+                    frame.analysis_step as f64,
+                    frame.cycle as f64,
+                    frame.cycles,
+                    frame.step_time,
+                    (i + 1) as f64,
+                    point.position[0],
+                    point.position[1],
+                    s.stress[0],
+                    s.stress[1],
+                    s.relative[0],
+                    s.plastic_slip,
+                ];
+                text.push(Path::new(&point_loops_file(&pair.name)), &row)?;
+                rows.push(row);
+            }
+        }
+        Ok(())
+    }
+
     /// The rows for a restart record: the hysteresis tables, the cycle table, the wear
-    /// tables.
+    /// tables, the traced points' tables.
     pub fn rows(&self) -> Vec<Vec<Vec<f64>>> {
         let mut out = self.hysteresis.clone();
         out.push(self.cycles.clone());
         out.extend(self.wear.iter().cloned());
+        out.extend(self.points.iter().cloned());
         out
     }
 
@@ -237,31 +365,35 @@ impl FrettingTables {
     /// when they do not fit the model's pairs and the tables' columns.
     pub fn restore(&mut self, mut rows: Vec<Vec<Vec<f64>>>) -> Option<()> {
         let pairs = self.hysteresis.len();
-        if rows.len() != 2 * pairs + 1 {
+        if rows.len() != 3 * pairs + 1 {
             return None;
         }
+        let points = rows.split_off(2 * pairs + 1);
         let wear = rows.split_off(pairs + 1);
         let cycles = rows.pop()?;
         let fits = |table: &[Vec<f64>], width: usize| table.iter().all(|r| r.len() == width);
+        // Each frame adds one row per traced point.
+        let traced_fit = points.iter().zip(&self.traced).all(|(table, traced)| {
+            fits(table, POINT_LOOPS.len())
+                && match traced.len() {
+                    0 => table.is_empty(),
+                    n => table.len() % n == 0,
+                }
+        });
         let ok = rows.iter().all(|t| fits(t, HYSTERESIS.len()))
             && fits(&cycles, CYCLES.len())
             && cycles.iter().all(|r| (r[CONTACT] as usize) < pairs)
-            && wear.iter().all(|t| fits(t, WEAR.len()));
+            && wear.iter().all(|t| fits(t, WEAR.len()))
+            && traced_fit;
         if !ok {
             return None;
         }
-        let mut texts = Vec::with_capacity(rows.len());
-        for table in &rows {
-            let mut text = hysteresis_csv();
-            for row in table {
-                text.push(Path::new("hysteresis"), row).ok()?;
-            }
-            texts.push(text);
-        }
+        self.hysteresis_text = grown(&rows, hysteresis_csv)?;
+        self.points_text = grown(&points, point_loops_csv)?;
         self.hysteresis = rows;
-        self.hysteresis_text = texts;
         self.cycles = cycles;
         self.wear = wear;
+        self.points = points;
         Some(())
     }
 
@@ -273,8 +405,26 @@ impl FrettingTables {
         let mut out: Vec<(String, CsvTable<Cell>)> = hysteresis
             .map(|(p, rows)| (hysteresis_file(&p.name), cell_table(&HYSTERESIS, rows)))
             .collect();
+        let points = self.traced_pairs(model).map(|(p, rows, _)| {
+            let table = cell_table(&POINT_LOOPS, rows);
+            (point_loops_file(&p.name), table)
+        });
+        out.extend(points.collect::<Vec<_>>());
         out.extend(self.cycle_files(model));
         out
+    }
+
+    /// The pairs with traced points, with their rows and text.
+    fn traced_pairs<'a>(
+        &'a self,
+        model: &'a Model,
+    ) -> impl Iterator<Item = (&'a ContactPair, &'a Vec<Vec<f64>>, &'a GrowingCsv)> {
+        let tables = self.points.iter().zip(&self.points_text);
+        let pairs = model.interface.pairs.iter().zip(&self.traced);
+        pairs
+            .zip(tables)
+            .filter(|((_, traced), _)| !traced.is_empty())
+            .map(|((pair, _), (rows, text))| (pair, rows, text))
     }
 
     /// [`Self::files`] as the writer takes them: the hysteresis tables as the text grown
@@ -290,6 +440,10 @@ impl FrettingTables {
                 )
             })
             .collect();
+        out.extend(self.traced_pairs(model).map(|(p, _, text)| {
+            let content = Content::Text(text.bytes().to_vec());
+            (point_loops_file(&p.name), content)
+        }));
         let cycle_files = self.cycle_files(model).into_iter();
         out.extend(cycle_files.map(|(name, table)| (name, Content::Table(table))));
         out
@@ -315,4 +469,19 @@ impl FrettingTables {
         }
         out
     }
+}
+
+/// The CSV texts of `tables`, grown row by row from `empty()`; `None` on a value that is not
+/// finite.
+fn grown(tables: &[Vec<Vec<f64>>], empty: fn() -> GrowingCsv) -> Option<Vec<GrowingCsv>> {
+    tables
+        .iter()
+        .map(|table| {
+            let mut text = empty();
+            for row in table {
+                text.push(Path::new("restart record"), row).ok()?;
+            }
+            Some(text)
+        })
+        .collect()
 }
