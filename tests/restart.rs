@@ -82,6 +82,8 @@ fn solution() -> Solution {
             previous_force: (40..50).map(awkward).collect(),
             weights: Default::default(),
         },
+        // Output of the last cycle end only: not part of the record.
+        jump_use: vec![0.25],
     }
 }
 
@@ -143,6 +145,7 @@ fn a_record_gives_back_every_bit() {
         interface_committed: vec![InterfaceState::default(); 5],
         interface_trial: vec![InterfaceState::default(); 5],
         energy: EnergyLedger::default(),
+        jump_use: vec![0.0],
     };
     let record = read_record(&path, "case text", &template).unwrap();
     let resume = &record.resume;

@@ -306,6 +306,12 @@ fn a_jump_beyond_the_stability_limit_is_refused_and_changes_nothing() {
     let body_compliance = 0.5 / (std::f64::consts::PI * 35000.0);
     let limit_expected = 0.5 * (CLOSURE + P * body_compliance);
     d.cycle(DELTA, 5, 90.0).unwrap();
+    // The accepted jump reports the share of the limit it used.
+    let share = d.solution.jump_use[0];
+    assert!(
+        close(share, 89.0 * per_cycle / limit_expected, 1e-9),
+        "{share}"
+    );
     let jumped = d.solution.interface_committed.clone();
     start_cycle(&mut d.solution);
     d.ramp(DELTA, -DELTA, 5);
@@ -650,12 +656,13 @@ fn hysteresis_cycle_and_wear_tables_hold_the_pair_integrals() {
         cycles.rows[0][3],
         asperity::output::csv::Cell::Text("joint".into())
     );
-    let values = [4, 5, 6, 7].map(|i| number(&cycles.rows[0][i]));
+    let values = [4, 5, 6, 7, 8].map(|i| number(&cycles.rows[0][i]));
     assert!(close(values[0], 4.0 * MU * P * AREA * slip, ROUND_OFF));
     // No jump, no re-equilibrium after it.
     assert_eq!(values[1], 0.0);
     assert!(close(values[2], depth * AREA, ROUND_OFF));
     assert!(close(values[3], depth, ROUND_OFF));
+    assert_eq!(values[4], 0.0, "no jump, no share of its limit");
     // The profile along side A: 9 nodes from s = 0 to the contact length.
     let profile = &files[2].1;
     assert_eq!(profile.columns, WEAR);

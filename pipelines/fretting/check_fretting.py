@@ -13,7 +13,7 @@ Checks (each printed; exit status 1 if one fails, 2 if a file is missing or malf
   frame of a cyclic step at its `cycles`, and forces equal to history.csv's
   <contact>_tangential_force / _normal_force of the same frame;
 - OUT/cycles.csv: one row per simulated cycle and contact, cycles as in the hysteresis,
-  dissipation >= 0, worn volume and largest depth >= 0 and never decreasing (zero without wear);
+  dissipation and settling_dissipation >= 0, jump_limit_share within [0, 1], worn volume and largest depth >= 0 and never decreasing (zero without wear);
 - OUT/wear_<contact>.csv for each wearing contact: one profile per jump at the cycles of
   cycles.csv, wear_depth = wear_a + wear_b, depths never decreasing from one jump to the next,
   and the worn volume of cycles.csv equal to the integral of the profile (10 %: the profile is
@@ -136,6 +136,8 @@ def check_cycles(out: Path, case: dict, contacts: list[str], hysteresis: dict, c
         scale = max(np.abs(rows["dissipation"]).max(initial=0.0), 1e-300)
         for column in ("dissipation", "settling_dissipation"):
             check(bool(np.all(rows[column] >= -ROUND_OFF * scale)), f"cycles.csv `{contact}`: {column} >= 0")
+        share = rows["jump_limit_share"]
+        check(bool(np.all((share >= 0) & (share <= 1))), f"cycles.csv `{contact}`: jump_limit_share within [0, 1]")
         for column in ("worn_volume", "max_wear_depth"):
             v = rows[column]
             if wear[contact]:

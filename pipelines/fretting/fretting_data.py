@@ -5,7 +5,8 @@ by plot_hysteresis.py, report.py and check_fretting.py:
   step_time, tangential_force (N), normal_force (N), relative_slip (mm);
 - `OUT/cycles.csv`, one row per simulated cycle and contact: analysis_step, cycle, cycles,
   contact, dissipation (N mm), settling_dissipation (N mm, the re-equilibrium after the
-  cycle's wear jump), worn_volume (mm^3), max_wear_depth (mm);
+  cycle's wear jump), worn_volume (mm^3), max_wear_depth (mm), jump_limit_share (largest
+  share of the stability limit the jump added at a point);
 - `OUT/point_loops_<contact>.csv` (contacts with `hysteresis_points`), one row per frame and
   traced point: frame, analysis_step, cycle, cycles, step_time, point (1-based), x, y,
   shear_stress, normal_stress (MPa), tangential_displacement, plastic_slip (mm);
@@ -30,7 +31,7 @@ import numpy as np
 HYSTERESIS_COLUMNS = ["frame", "analysis_step", "cycle", "cycles", "step_time", "tangential_force",
                       "normal_force", "relative_slip"]
 CYCLES_COLUMNS = ["analysis_step", "cycle", "cycles", "contact", "dissipation", "settling_dissipation", "worn_volume",
-                  "max_wear_depth"]
+                  "max_wear_depth", "jump_limit_share"]
 WEAR_COLUMNS = ["analysis_step", "cycles", "s", "x", "y", "wear_a", "wear_b", "wear_depth"]
 POINT_LOOPS_COLUMNS = ["frame", "analysis_step", "cycle", "cycles", "step_time", "point", "x", "y", "shear_stress",
                        "normal_stress", "tangential_displacement", "plastic_slip"]

@@ -86,6 +86,23 @@ def case_section(case: dict, case_file: str, case_text: str) -> str:
     return about + "\n".join(lines) + "\n\nSteps:\n\n" + steps
 
 
+def jump_sentence(rows: dict[str, np.ndarray], contact: str) -> str:
+    """How close the wear jumps of a contact came to their stability limit, and the jump that
+    limit would allow (the share grows about linearly with the cycles a jump adds)."""
+    share = rows["jump_limit_share"]
+    if not share.any():
+        return ""
+    i = int(np.argmax(share))
+    jumped = rows["cycles"][i] - rows["cycles"][i - 1] if i > 0 else 1.0
+    text = (f"\n\nContact `{contact}`: the wear jumps added at most {100 * share[i]:.3g} % of the stability limit "
+            f"(`jump_limit`) at a point (cycle ending at N = {rows['cycles'][i]:.0f})")
+    if share[i] < 0.5 and jumped > 1:
+        allowed = 1 + (jumped - 1) / share[i]
+        text += (f"; the limit would allow jumps of about {allowed:.3g} cycles instead of {jumped:.0f} — check a "
+                 f"larger `cycles_per_jump` against a run with half of it")
+    return text + "."
+
+
 def dissipation_section(cycles: dict[str, np.ndarray], contact: str) -> str:
     """The per-cycle table of one contact and what it shows: the first against the last
     simulated cycle, and how many times the dissipation fell from one cycle to the next."""
@@ -102,6 +119,7 @@ def dissipation_section(cycles: dict[str, np.ndarray], contact: str) -> str:
                                                  rows["max_wear_depth"])])
     if len(d) < 2:
         return body
+    body += jump_sentence(rows, contact)
     change = (d[-1] - d[0]) / d[0] if d[0] else float("nan")
     falls = int(np.sum(np.diff(d) < 0))
     trend = "fell" if d[-1] < d[0] else "rose" if d[-1] > d[0] else "stayed"

@@ -91,7 +91,7 @@ def synthetic_run(out: Path) -> None:
                       for k in range(len(s))]
         settling = 0.0 if c == 1 else 0.2  # the re-equilibrium after a jump
         cycle_rows.append([2, c, done(c), "cone", 5.0 * (1 - 0.05 * (c - 1)), settling,
-                           np.trapezoid(2 * math.pi * x * depth, s), depth.max()])
+                           np.trapezoid(2 * math.pi * x * depth, s), depth.max(), 0.0 if c == 1 else 0.3])
     _write_csv(out / "wear_cone.csv", WEAR_COLUMNS, wear_rows)
     _write_csv(out / "cycles.csv", CYCLES_COLUMNS, cycle_rows)
     friction = sum(r[4] + r[5] for r in cycle_rows)
@@ -146,6 +146,8 @@ MUTATIONS = {
     "a traced point's row missing": (lambda o: _write_csv(o / "point_loops_cone.csv", POINT_LOOPS_COLUMNS,
                                                           list(csv.reader(open(o / "point_loops_cone.csv")))[1:-1]),
                                      "one per frame and point"),
+    "a jump beyond its limit": (lambda o: _edit_csv(o / "cycles.csv", 3, "jump_limit_share", 4.0),
+                                "jump_limit_share within [0, 1]"),
     "a traced point moving": (lambda o: _edit_csv(o / "point_loops_cone.csv", 4, "x", 1.01), "keeps its position"),
     "wear depth healing": (lambda o: _edit_csv(o / "wear_cone.csv", 30, "wear_depth", 0.5), "no point's depth decreased"),
     "per-cycle friction off cycles.csv": (lambda o: _edit_energy(o, "cycle", "friction_dissipation", 0.05, True),
@@ -195,7 +197,7 @@ def main() -> None:
         pressed = Path(tmp) / "press_in_row"
         shutil.copytree(base, pressed)
         rows = list(csv.reader(open(pressed / "cycles.csv")))[1:]
-        _write_csv(pressed / "cycles.csv", CYCLES_COLUMNS, [[1, 1, 1, "cone", 3.0, 0.0, 0.0, 0.0], *rows])
+        _write_csv(pressed / "cycles.csv", CYCLES_COLUMNS, [[1, 1, 1, "cone", 3.0, 0.0, 0.0, 0.0, 0.0], *rows])
         found = quiet(check_run, pressed, 1e-3)
         report = quiet(write, pressed).read_text()
         expect(not found and "fell from 5 N·mm in the first simulated cycle" in report,

@@ -154,8 +154,9 @@ pub fn trace_point(
 /// ∫ (dissipation of the cycle) dA (N·mm), the friction work of the re-equilibrium after its
 /// wear jump (N·mm: the bodies re-seat on the worn faces, a slip spread over the jumped
 /// cycles in reality; 0 without a jump), the worn volume ∫ (h_A + h_B) dA (mm³, with 2πr in
-/// axisymmetry) and the largest depth (mm) after the cycle (and its jump).
-pub const CYCLES: [&str; 8] = [
+/// axisymmetry) and the largest depth (mm) after the cycle (and its jump), and the largest
+/// share of the stability limit the jump added at a point (0 without a jump; at most 1).
+pub const CYCLES: [&str; 9] = [
     "analysis_step",
     "cycle",
     "cycles",
@@ -164,6 +165,7 @@ pub const CYCLES: [&str; 8] = [
     "settling_dissipation",
     "worn_volume",
     "max_wear_depth",
+    "jump_limit_share",
 ];
 
 /// Columns of `wear_<pair>.csv`: the profile along side A at each cycle end.
@@ -303,6 +305,7 @@ impl FrettingTables {
                 s.settling_dissipation,
                 s.worn_volume,
                 s.max_depth,
+                step.solution.jump_use.get(p).copied().unwrap_or(0.0),
             ]);
             self.cycles.push(row);
         }

@@ -69,7 +69,7 @@ fn restart_trackers(s: &mut InterfaceState) {
 /// worn gaps no longer match the converged displacements: the caller re-equilibrates).
 pub fn end_cycle(model: &Model, solution: &mut Solution, jump_cycles: f64) -> Result<bool> {
     let extra = (jump_cycles - 1.0).max(0.0);
-    check_jump(model, &solution.interface_committed, jump_cycles, extra)?;
+    solution.jump_use = check_jump(model, &solution.interface_committed, jump_cycles, extra)?;
     let mut worn = false;
     for (point, s) in solution.interface_committed.iter_mut().enumerate() {
         let [a, b] = cycle_wear(&s.history);
@@ -108,13 +108,16 @@ fn close_cycle(h: &mut PointHistory, extra: f64) {
 }
 
 /// The stability limit and the wear-through depth at every point of a pair that wears.
+/// Returns, per pair, the largest share depth / limit of a point (0 for a pair that does not
+/// wear or a cycle without a jump).
 fn check_jump(
     model: &Model,
     states: &[InterfaceState],
     jump_cycles: f64,
     extra: f64,
-) -> Result<()> {
+) -> Result<Vec<f64>> {
     let interface = &model.interface;
+    let mut shares = vec![0.0; interface.pairs.len()];
     for (j, pair) in interface.pairs.iter().enumerate() {
         let Some(wear) = pair.wear() else { continue };
         for e in pair.elements.clone() {
@@ -123,6 +126,9 @@ fn check_jump(
                 let [a, b] = cycle_wear(h);
                 let depth = extra * (a + b);
                 let limit = wear.jump_limit * h.cycle_elastic_closure;
+                if depth > 0.0 {
+                    shares[j] = f64::max(shares[j], depth / limit);
+                }
                 if depth > limit {
                     return Err(Error::WearJump {
                         contact: pair.name.clone(),
@@ -149,5 +155,5 @@ fn check_jump(
             }
         }
     }
-    Ok(())
+    Ok(shares)
 }

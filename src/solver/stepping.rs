@@ -37,6 +37,11 @@ pub struct Solution {
     pub interface_trial: Vec<InterfaceState>,
     /// Energy totals of the converged increments.
     pub energy: EnergyLedger,
+    /// Per contact pair, the largest share of its stability limit that the last cycle's wear
+    /// jump added at a point (0 without a jump or wear; ≤ 1, or the jump was refused). Set by
+    /// [`crate::solver::cycles::end_cycle`] for the cycle-end output; not part of the state a
+    /// run continues from.
+    pub jump_use: Vec<f64>,
 }
 
 impl Solution {
@@ -51,6 +56,7 @@ impl Solution {
             interface_committed: vec![InterfaceState::default(); interface],
             interface_trial: vec![InterfaceState::default(); interface],
             energy: EnergyLedger::default(),
+            jump_use: vec![0.0; model.interface.pairs.len()],
         }
     }
 
