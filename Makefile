@@ -26,7 +26,7 @@ SIZE    ?= 1
 
 .PHONY: all deps gmsh venv build test mesh bench examples tapered_joint plane_punch indentation thick_cylinder shrink_fit prandtl clean
 .PHONY: convergence bench-calculix bench-scale
-.PHONY: fit-example sweep-test gnu-parallel
+.PHONY: fit-example sweep-test gnu-parallel doc
 .PHONY: fuzz
 .PHONY: fretting
 
@@ -115,6 +115,10 @@ test: deps
 	$(PYTHON) pipelines/fretting/check_fretting.py --quick build/test/fretting >build/test/fretting.txt || { cat build/test/fretting.txt; exit 1; }
 	$(call convergence_studies,3,3,build/test/convergence,$(CONVERGENCE_SUMMARY))
 	@$(MAKE) --no-print-directory sweep-test fit-example OUT_FIT=build/test/fit
+
+# `make doc`: the library's API documentation (target/doc/asperity), failing on a broken link.
+doc:
+	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --no-deps
 
 ## --- fitting and sweeps --------------------------------------------------------
 # `make fit-example`: the README's worked example (pipelines/fit/joint.toml) -> out/fit/joint.

@@ -439,7 +439,7 @@ const RUN_FILES: [&str; 6] = [
     RESTART_FILE,
 ];
 
-/// Whether `name` is a file a run writes: one of [`RUN_FILES`], a step's file
+/// Whether `name` is a file a run writes: one of `RUN_FILES`, a step's file
 /// (`bodies_NNNN.vtu`, `interface_NNNN.vtu`, `contact_<pair>_NNNN.csv`), or the hidden
 /// temporary file of one of these that a killed run left (`.NAME.XXXXXX.tmp`).
 pub fn is_run_file(name: &str) -> bool {

@@ -8,7 +8,7 @@
 //!   closure found by bisection on the law's normal response), then sheared through the
 //!   measured tangential displacements (column `displacement`, monotonic or cyclic); the
 //!   shear stress (Eqs. 3–5, return map) is compared with column `shear`.
-//! - **model**: a full case file of a specimen; see [`super::specimen`].
+//! - **model**: a full case file of a specimen; see the `specimen` module.
 //!
 //! Each residual is (simulated − measured) / σ with σ = `error` + `relative_error` · |measured|.
 

@@ -20,7 +20,7 @@
 //! contact forces the bodies carry), the total internal force otherwise. q̃ is the mean of q̄
 //! over the run's converged increments with non-zero flux and the present iteration (zero
 //! flux in the first increment is judged against the mean q̄ of its iterations so far;
-//! [`FluxHistory`]; a user's `average_force` replaces q̃). Before the first solve of an increment only r_max ≤ R_l q̃
+//! `FluxHistory`; a user's `average_force` replaces q̃). Before the first solve of an increment only r_max ≤ R_l q̃
 //! is accepted, so small load changes are never skipped.
 //!
 //! If the case sets the older relative-norm tolerances, they are required as well:
@@ -84,7 +84,7 @@ pub struct NewtonSettings {
     /// The linear solver of models with contact pairs (models without use Cholesky).
     pub linear_solver: LinearSolver,
     /// Whether an increment proportional to the last converged one starts from the
-    /// extrapolated displacements ([`Predictor`]).
+    /// extrapolated displacements (`Predictor`).
     pub extrapolate: bool,
 }
 
