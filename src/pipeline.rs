@@ -42,7 +42,7 @@ use crate::output::atomic::write_text;
 use crate::output::csv::{CsvTable, GrowingCsv};
 use crate::output::pvd::PvdEntry;
 use crate::output::restart::{
-    Content, OutputState, RESTART_FILE, Record, RecordWriter, read_record,
+    Content, OutputView, RESTART_FILE, Record, RecordWriter, read_record,
 };
 use crate::output::summary::{
     ContactResultant, EnergyMark, Force, ModelSize, Named, Status, StepSummary, Summary,
@@ -1279,11 +1279,12 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         let Some(case_text) = self.case_text else {
             return Ok(());
         };
-        let mut tables = vec![self.history.rows.clone(), self.energy_rows()];
-        tables.extend(self.fretting.rows());
-        let output = OutputState {
+        let energy = self.energy_rows();
+        let mut tables = vec![self.history.rows.as_slice(), energy.as_slice()];
+        tables.extend(self.fretting.tables());
+        let output = OutputView {
             tables,
-            series: self.series.clone(),
+            series: &self.series,
         };
         self.records.queue_record(
             &self.out_dir.join(RESTART_FILE),

@@ -135,7 +135,14 @@ fn a_record_gives_back_every_bit() {
     };
     let mut writer = RecordWriter::default();
     writer
-        .write(&path, "case text", &state(), &stats, &original, &output)
+        .write(
+            &path,
+            "case text",
+            &state(),
+            &stats,
+            &original,
+            &output.view(),
+        )
         .unwrap();
     writer.finish().unwrap();
     let template = Solution {
@@ -390,7 +397,7 @@ fn a_multi_step_cyclic_run_resumed_from_any_frame_is_bit_identical() {
         let output = OutputState::default();
         let (state, stats, solution) = (&resume.state, &resume.stats, &resume.solution);
         writer
-            .write(&path, &text, state, stats, solution, &output)
+            .write(&path, &text, state, stats, solution, &output.view())
             .unwrap();
         writer.finish().unwrap();
         let record = read_record(&path, &text, &Solution::new(&model)).unwrap();

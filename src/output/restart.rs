@@ -47,6 +47,25 @@ pub struct OutputState {
     pub series: Vec<PvdEntry>,
 }
 
+/// The output's state as a record is written from it, borrowed from the output's own tables
+/// (cloning every row for every record made the records of a long run cost quadratic time in
+/// allocations).
+#[derive(Clone, Debug, Default)]
+pub struct OutputView<'a> {
+    pub tables: Vec<&'a [Vec<f64>]>,
+    pub series: &'a [PvdEntry],
+}
+
+impl OutputState {
+    /// The state as a record is written from it.
+    pub fn view(&self) -> OutputView<'_> {
+        OutputView {
+            tables: self.tables.iter().map(Vec::as_slice).collect(),
+            series: &self.series,
+        }
+    }
+}
+
 /// A record read back: the run to continue and the output's state.
 #[derive(Clone, Debug)]
 pub struct Record {
@@ -87,22 +106,32 @@ impl Content {
 /// were queued, on one thread, one commit at a time.
 ///
 /// The caller queues a commit's files ([`RecordWriter::queue`],
-/// [`RecordWriter::queue_record`]), then [`RecordWriter::commit`]s them: that waits for the
-/// previous commit's files and hands these to the writer thread, so that encoding and
-/// writing a step's files (~10 MB of VTU data and ~10 MB of record for a 60k-unknown model)
-/// overlaps the next increment instead of adding to the run's time. Within a commit the files are written
-/// in order and the first error stops it, so a step's record and index entries are never on
-/// disk without its files; that error (an [`Error::Io`] naming the file) is returned by the
-/// next `commit` or by [`RecordWriter::finish`], which stops the run.
+/// [`RecordWriter::queue_record`]), then [`RecordWriter::commit`]s them: when the writer
+/// thread is idle, that hands them to it, so that encoding and writing a step's files (~10 MB
+/// of VTU data and ~10 MB of record for a 60k-unknown model) overlaps the next increment
+/// instead of adding to the run's time. When it is still writing an earlier commit, the new
+/// files wait, merged with those of the commits that came after that one: a file queued
+/// again (the record, `history.csv`, the growing tables, the indexes) keeps only its latest
+/// content, so a thread that falls behind (thousands of short increments, each rewriting
+/// tables that grow with the run) skips the versions that a later commit replaces instead of
+/// making the run wait for each. The merged files keep their order (each file where its
+/// latest commit put it, after the files of earlier commits), so the record and the indexes
+/// still come after the step files they refer to. Within a commit the files are written in
+/// order and the first error stops it, so a step's record and index entries are never on
+/// disk without its files; that error (an [`Error::Io`] naming the file) is returned by a
+/// later `commit` or by [`RecordWriter::finish`], which writes what waits and stops the run.
 ///
-/// A commit may thus still be in flight when a run is killed: its files are then absent or
-/// complete (each is written atomically), the index lists only complete steps, and a
-/// resumed run repeats the increments after the record on disk bit for bit, rewriting their
-/// files and index rows identically.
+/// A run killed while commits are in flight or waiting has only complete files (each is
+/// written atomically), the index lists only complete steps, and a resumed run repeats the
+/// increments after the record on disk bit for bit, rewriting their files and index rows
+/// identically.
 #[derive(Debug, Default)]
 pub struct RecordWriter {
     /// The files of the next commit, in order.
     queued: Vec<(PathBuf, Content)>,
+    /// Committed files waiting for the writer thread to finish the commit in flight, merged
+    /// (the latest content of each path, in order).
+    waiting: Vec<(PathBuf, Content)>,
     /// The writer thread, started at the first commit.
     worker: Option<Worker>,
     /// Whether a commit is being written (its outcome not yet received).
@@ -163,7 +192,7 @@ impl RecordWriter {
         path: &Path,
         case: &str,
         progress: &Progress,
-        output: &OutputState,
+        output: &OutputView,
     ) -> Result<()> {
         let mut buffer = std::mem::take(&mut self.spare);
         encode_record(&mut buffer, case, progress, output).map_err(|e| Error::io(path, e))?;
@@ -171,12 +200,35 @@ impl RecordWriter {
         Ok(())
     }
 
-    /// Waits for the previous commit, then starts writing the queued files.
+    /// Commits the queued files: hands them to the writer thread if it is idle, else merges
+    /// them into the files waiting for it. Returns the error of a finished commit.
     pub fn commit(&mut self) -> Result<()> {
-        self.finish()?;
         let files = std::mem::take(&mut self.queued);
-        if files.is_empty() {
+        self.merge(files);
+        if self.in_flight && !self.poll()? {
             return Ok(());
+        }
+        self.send_waiting();
+        Ok(())
+    }
+
+    /// Adds `files` to the waiting ones: a path already waiting is replaced (its superseded
+    /// record buffer kept for reuse) and takes its new place in the order.
+    fn merge(&mut self, files: Vec<(PathBuf, Content)>) {
+        for (path, content) in files {
+            let earlier = self.waiting.iter().position(|(p, _)| *p == path);
+            if let Some((_, Content::Record(bytes))) = earlier.map(|i| self.waiting.remove(i)) {
+                self.keep_spare(bytes);
+            }
+            self.waiting.push((path, content));
+        }
+    }
+
+    /// Hands the waiting files, if any, to the writer thread (started at the first commit).
+    fn send_waiting(&mut self) {
+        let files = std::mem::take(&mut self.waiting);
+        if files.is_empty() {
+            return;
         }
         let worker = self.worker.get_or_insert_with(Worker::start);
         if worker.commits.send(files).is_err() {
@@ -186,7 +238,14 @@ impl RecordWriter {
             }
         }
         self.in_flight = true;
-        Ok(())
+    }
+
+    /// A record buffer for the next encoding, if larger than the one kept.
+    fn keep_spare(&mut self, mut bytes: Vec<u8>) {
+        if bytes.capacity() > self.spare.capacity() {
+            bytes.clear();
+            self.spare = bytes;
+        }
     }
 
     /// Queues and commits the record of a converged increment.
@@ -197,7 +256,7 @@ impl RecordWriter {
         state: &LoopState,
         stats: &RunStatistics,
         solution: &Solution,
-        output: &OutputState,
+        output: &OutputView,
     ) -> Result<()> {
         let progress = Progress {
             state: *state,
@@ -208,27 +267,53 @@ impl RecordWriter {
         self.commit()
     }
 
-    /// Waits for the commit being written and reports its error, if any.
+    /// Writes everything committed: waits for the commit in flight, then for the files
+    /// waiting behind it; reports the first error.
     pub fn finish(&mut self) -> Result<()> {
-        let Some(worker) = self.worker.as_ref().filter(|_| self.in_flight) else {
-            return Ok(());
-        };
-        self.in_flight = false;
         let start = std::time::Instant::now();
-        let outcome = worker.outcomes.recv();
+        self.wait()?;
+        self.send_waiting();
+        self.wait()?;
         tracing::debug!(
             seconds = start.elapsed().as_secs_f64(),
             "waited for the background writer"
         );
+        Ok(())
+    }
+
+    /// Whether the commit in flight is done (then its outcome is taken: its error returned,
+    /// its record buffer kept), without waiting.
+    fn poll(&mut self) -> Result<bool> {
+        let Some(worker) = self.worker.as_ref().filter(|_| self.in_flight) else {
+            return Ok(true);
+        };
+        match worker.outcomes.try_recv() {
+            Ok(outcome) => self.take_outcome(Some(outcome)).map(|()| true),
+            Err(mpsc::TryRecvError::Empty) => Ok(false),
+            Err(mpsc::TryRecvError::Disconnected) => self.take_outcome(None).map(|()| true),
+        }
+    }
+
+    /// Waits for the commit in flight, if any, and takes its outcome.
+    fn wait(&mut self) -> Result<()> {
+        let Some(worker) = self.worker.as_ref().filter(|_| self.in_flight) else {
+            return Ok(());
+        };
+        let outcome = worker.outcomes.recv().ok();
+        self.take_outcome(outcome)
+    }
+
+    /// The outcome of the commit in flight (None: the thread panicked). After an error the
+    /// waiting files are dropped: their record and indexes may refer to the files that failed.
+    fn take_outcome(&mut self, outcome: Option<Result<Vec<u8>>>) -> Result<()> {
+        self.in_flight = false;
         match outcome {
-            Ok(outcome) => {
-                let spare = outcome?;
-                if spare.capacity() > self.spare.capacity() {
-                    self.spare = spare;
-                }
+            Some(Err(e)) => {
+                self.waiting.clear();
+                return Err(e);
             }
-            // No outcome: the thread panicked.
-            Err(_) => {
+            Some(Ok(spare)) => self.keep_spare(spare),
+            None => {
                 if let Some(worker) = self.worker.take() {
                     worker.stop();
                 }
@@ -281,7 +366,7 @@ fn encode_record(
         stats,
         solution,
     }: &Progress,
-    output: &OutputState,
+    output: &OutputView,
 ) -> io::Result<()> {
     // Encoded into memory first (a record is mostly integration-point states: ~10 MB for a
     // 60k-unknown model), then written with one call: encoding value by value through the
@@ -307,12 +392,12 @@ fn encode_record(
     e.len(output.tables.len())?;
     for table in &output.tables {
         e.len(table.len())?;
-        for row in table {
+        for row in table.iter() {
             e.floats(row)?;
         }
     }
     e.len(output.series.len())?;
-    for entry in &output.series {
+    for entry in output.series {
         e.f64(entry.time)?;
         e.u64(u64::from(entry.part))?;
         e.text(&entry.name)?;
@@ -807,7 +892,7 @@ mod tests {
     /// A folder where a file should go makes its rename fail, as a full or read-only disk
     /// would make a write fail.
     #[test]
-    fn a_failed_write_stops_its_commit_and_the_next_commit_reports_it_naming_the_file() {
+    fn a_failed_write_stops_its_commit_and_a_later_commit_or_finish_reports_it_naming_the_file() {
         let dir = tempfile::tempdir().unwrap();
         let path = |name: &str| dir.path().join(name);
         std::fs::create_dir(path("b.csv")).unwrap();
@@ -818,7 +903,12 @@ mod tests {
         }
         writer.commit().unwrap();
         writer.queue(path("d.csv"), table(2.0));
-        let err = writer.commit().unwrap_err();
+        // The next commit reports the failure if the thread is done by then; else its files
+        // wait and `finish` reports it (and drops them).
+        let err = match writer.commit() {
+            Err(e) => e,
+            Ok(()) => writer.finish().unwrap_err(),
+        };
         assert!(
             matches!(&err, Error::Io { path: p, .. } if p == &path("b.csv")),
             "{err}"
@@ -829,6 +919,38 @@ mod tests {
         assert_eq!(std::fs::read_to_string(path("a.csv")).unwrap(), "x\n1\n");
         assert!(!path("c.csv").exists() && !path("d.csv").exists());
         writer.finish().unwrap();
+    }
+
+    #[test]
+    fn commits_waiting_for_the_thread_keep_the_latest_content_of_each_file_in_order() {
+        let name = |n: &str| PathBuf::from(n);
+        let mut writer = RecordWriter::default();
+        let batch = |step: &str, x: f64| {
+            vec![
+                (name(step), table(x)),
+                (name("restart.bin"), Content::Record(vec![x as u8])),
+                (name("results.pvd"), table(x)),
+            ]
+        };
+        writer.merge(batch("bodies_0001.vtu", 1.0));
+        writer.merge(batch("bodies_0002.vtu", 2.0));
+        let order: Vec<&str> = writer
+            .waiting
+            .iter()
+            .map(|(p, _)| p.to_str().unwrap())
+            .collect();
+        // Both steps' files, then the latest record and index: the index still comes last.
+        assert_eq!(
+            order,
+            [
+                "bodies_0001.vtu",
+                "bodies_0002.vtu",
+                "restart.bin",
+                "results.pvd"
+            ]
+        );
+        assert!(matches!(&writer.waiting[2].1, Content::Record(b) if b == &[2]));
+        writer.waiting.clear();
     }
 
     #[test]

@@ -354,14 +354,21 @@ impl FrettingTables {
         Ok(())
     }
 
-    /// The rows for a restart record: the hysteresis tables, the cycle table, the wear
-    /// tables, the traced points' tables.
+    /// The tables of a restart record, in order: the hysteresis tables, the cycle table, the
+    /// wear tables, the traced points' tables.
+    pub fn tables(&self) -> impl Iterator<Item = &[Vec<f64>]> {
+        let hysteresis = self.hysteresis.iter().map(Vec::as_slice);
+        let wear = self.wear.iter().map(Vec::as_slice);
+        let points = self.points.iter().map(Vec::as_slice);
+        hysteresis
+            .chain(std::iter::once(self.cycles.as_slice()))
+            .chain(wear)
+            .chain(points)
+    }
+
+    /// [`Self::tables`] as owned rows (what a record gives back).
     pub fn rows(&self) -> Vec<Vec<Vec<f64>>> {
-        let mut out = self.hysteresis.clone();
-        out.push(self.cycles.clone());
-        out.extend(self.wear.iter().cloned());
-        out.extend(self.points.iter().cloned());
-        out
+        self.tables().map(<[Vec<f64>]>::to_vec).collect()
     }
 
     /// Takes over the rows of a restart record ([`Self::rows`]); `None` (nothing changed)
