@@ -326,6 +326,7 @@ name = \"joint\"
 side_a = \"lower_top\"
 side_b = \"upper_bottom\"
 law = { type = \"linear_coulomb\", normal_stiffness = 1e4, tangential_stiffness = 1e4, friction = 0.2 }
+wear = { model = \"archard\", coefficient = 1e-5 }
 [[step]]
 name = \"press\"
 increments = 2

@@ -37,7 +37,7 @@ use crate::{Error, Result};
 pub const RESTART_FILE: &str = "restart.bin";
 
 /// First bytes of a record; the trailing digit is the format version.
-const MAGIC: &[u8; 16] = b"asperity-rst-v1\n";
+const MAGIC: &[u8; 16] = b"asperity-rst-v2\n";
 
 /// What a record holds besides the solver's state: the output's tables (rows of numbers,
 /// e.g. `history.csv`) and the PVD series.
@@ -125,6 +125,11 @@ impl Content {
 /// written atomically), the index lists only complete steps, and a resumed run repeats the
 /// increments after the record on disk bit for bit, rewriting their files and index rows
 /// identically.
+/// Files that may wait for the writer thread before a commit waits for it: a few steps'
+/// files (each step writes its VTU files and a table per contact pair) besides the record and
+/// the tables that every commit rewrites.
+const MAX_WAITING_FILES: usize = 32;
+
 #[derive(Debug, Default)]
 pub struct RecordWriter {
     /// The files of the next commit, in order.
@@ -206,7 +211,12 @@ impl RecordWriter {
         let files = std::mem::take(&mut self.queued);
         self.merge(files);
         if self.in_flight && !self.poll()? {
-            return Ok(());
+            if self.waiting.len() <= MAX_WAITING_FILES {
+                return Ok(());
+            }
+            // Files that no later commit replaces (each step's VTU and contact tables) pile
+            // up while the thread is behind: wait for it rather than hold them all in memory.
+            self.wait()?;
         }
         self.send_waiting();
         Ok(())

@@ -180,6 +180,9 @@ pub const WEAR: [&str; 8] = [
     "wear_depth",
 ];
 
+/// Index of `point` in [`POINT_LOOPS`].
+const POINT: usize = 5;
+
 /// Index of `contact` in [`CYCLES`] (kept as the pair's index in the rows).
 const CONTACT: usize = 3;
 
@@ -382,14 +385,20 @@ impl FrettingTables {
         let wear = rows.split_off(pairs + 1);
         let cycles = rows.pop()?;
         let fits = |table: &[Vec<f64>], width: usize| table.iter().all(|r| r.len() == width);
-        // Each frame adds one row per traced point.
-        let traced_fit = points.iter().zip(&self.traced).all(|(table, traced)| {
-            fits(table, POINT_LOOPS.len())
-                && match traced.len() {
-                    0 => table.is_empty(),
-                    n => table.len() % n == 0,
-                }
-        });
+        // Each frame adds one row per traced point, numbered 1..n.
+        let traced_fit =
+            points
+                .iter()
+                .zip(&rows)
+                .zip(&self.traced)
+                .all(|((table, loop_rows), traced)| {
+                    fits(table, POINT_LOOPS.len())
+                        && table.len() == traced.len() * loop_rows.len()
+                        && table
+                            .iter()
+                            .enumerate()
+                            .all(|(i, r)| r[POINT] == (i % traced.len().max(1) + 1) as f64)
+                });
         let ok = rows.iter().all(|t| fits(t, HYSTERESIS.len()))
             && fits(&cycles, CYCLES.len())
             && cycles.iter().all(|r| (r[CONTACT] as usize) < pairs)
@@ -398,8 +407,10 @@ impl FrettingTables {
         if !ok {
             return None;
         }
-        self.hysteresis_text = grown(&rows, hysteresis_csv)?;
-        self.points_text = grown(&points, point_loops_csv)?;
+        let hysteresis_text = grown(&rows, hysteresis_csv)?;
+        let points_text = grown(&points, point_loops_csv)?;
+        self.hysteresis_text = hysteresis_text;
+        self.points_text = points_text;
         self.hysteresis = rows;
         self.cycles = cycles;
         self.wear = wear;

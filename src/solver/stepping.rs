@@ -391,17 +391,25 @@ pub fn run_steps_from(
             None => Ok(()),
             Some(jump) => match cycles::end_cycle(model, &mut solution, jump as f64) {
                 Ok(true) => {
-                    settle_after_jump(model, &mut newton, &mut solution, &f_ext, state.force_floor)
-                        .map(|log| {
-                            stats.add(&log);
-                            state.iterations += log.iterations;
-                            converged_u.copy_from_slice(&solution.u);
-                        })
-                        .map_err(|reason| Error::JumpSettling {
-                            step_index: None,
-                            jump_cycles: jump as f64,
-                            reason,
-                        })
+                    let floor = state.force_floor;
+                    settle_after_jump(
+                        model,
+                        &mut newton,
+                        &mut solution,
+                        &mut converged_u,
+                        &f_ext,
+                        floor,
+                    )
+                    .map(|log| {
+                        stats.add(&log);
+                        state.iterations += log.iterations;
+                        state.force_average = newton.force_average();
+                    })
+                    .map_err(|reason| Error::JumpSettling {
+                        step_index: None,
+                        jump_cycles: jump as f64,
+                        reason,
+                    })
                 }
                 Ok(false) => Ok(()),
                 Err(e) => Err(e),
@@ -415,8 +423,24 @@ pub fn run_steps_from(
         state.force_floor = state.force_floor.max(1e-3 * norm(internal_force));
         stats.steps += 1;
         stats.last_residual = *log.residuals.last().unwrap_or(&0.0);
+        if let Err(e @ Error::JumpSettling { .. }) = cycle_end {
+            // The solution is the converged one before the jump's re-equilibrium, with the
+            // jumped wear: its forces are re-evaluated for the files kept.
+            report_partial(
+                model,
+                &mut solution,
+                &converged_u,
+                &state,
+                settings,
+                observer,
+            )?;
+            return Err(e);
+        }
+        let mut frame = schedule.timeline().frame(target);
+        // A cycle whose end failed (jump refused, worn through) is no completed cycle.
+        frame.cycle_end &= cycle_end.is_ok();
         let result = StepResult {
-            frame: schedule.timeline().frame(target),
+            frame,
             step,
             load_factor: schedule.load_factor(step),
             newton: NewtonLog {
@@ -451,20 +475,56 @@ pub fn run_steps_from(
 }
 
 /// Re-equilibrates the bodies after a wear jump, under the loads of the converged state (one
-/// solve, no load change), and commits the result. The jump deepened the gaps by the wear
-/// of the cycles it stands for; in reality the bodies follow that wear gradually (a loaded
-/// cone sinks deeper into its seat), and that re-seating belongs to the jumped cycles. Left
-/// to the next simulated cycle it would be counted as that cycle's slip and dissipation,
-/// biased by a re-seating that grows with the jump. Its slip still dissipates and wears,
-/// in the run's totals. Errs with the solver's reason when the solve does not converge.
+/// solve, no load change), and commits the result (`converged_u` follows). The jump deepened
+/// the gaps by the wear of the cycles it stands for; in reality the bodies follow that wear
+/// gradually (a loaded cone sinks deeper into its seat), and that re-seating belongs to the
+/// jumped cycles. Left to the next simulated cycle it would be counted as that cycle's slip
+/// and dissipation, biased by a re-seating that grows with the jump. Its slip still
+/// dissipates and wears, in the run's totals. A solve that does not converge is tried once
+/// more with the slipping points released ([`release_slip`]); if that fails too, the solution
+/// is left as it was before the solve and the solver's reason is returned.
 fn settle_after_jump(
     model: &Model,
     newton: &mut Newton,
     solution: &mut Solution,
+    converged_u: &mut [f64],
     external_force: &[f64],
     force_floor: f64,
 ) -> std::result::Result<NewtonLog, String> {
-    let u_before = solution.u.clone();
+    let mut solve = |solution: &mut Solution| {
+        let outcome = settle_once(
+            model,
+            newton,
+            solution,
+            converged_u,
+            external_force,
+            force_floor,
+        );
+        if outcome.is_err() {
+            solution.u.copy_from_slice(converged_u);
+            solution.trial.copy_from_slice(&solution.committed);
+            solution
+                .interface_trial
+                .copy_from_slice(&solution.interface_committed);
+        }
+        outcome
+    };
+    solve(solution).or_else(|_| {
+        let statuses = solution.interface_committed.clone();
+        release_slip(&mut solution.interface_committed);
+        solve(solution).inspect_err(|_| solution.interface_committed = statuses)
+    })
+}
+
+/// One re-equilibrium solve of [`settle_after_jump`]; commits it when it converges.
+fn settle_once(
+    model: &Model,
+    newton: &mut Newton,
+    solution: &mut Solution,
+    converged_u: &mut [f64],
+    external_force: &[f64],
+    force_floor: f64,
+) -> std::result::Result<NewtonLog, String> {
     let (u, mut problem) = solution.split(model);
     let log = match newton.solve_increment(&mut problem, u, external_force, force_floor) {
         Ok(log) if log.converged => log,
@@ -478,8 +538,9 @@ fn settle_after_jump(
         Err(e) => return Err(e.to_string()),
     };
     let internal_force = newton.system().internal_force.as_slice();
-    energy::record(model, solution, &u_before, external_force, internal_force);
+    energy::record(model, solution, converged_u, external_force, internal_force);
     solution.commit();
+    converged_u.copy_from_slice(&solution.u);
     tracing::info!(
         iterations = log.iterations,
         "re-equilibrated after the wear jump"
@@ -548,8 +609,11 @@ fn report_partial(
     );
     let mut external = vec![0.0; model.dofs.dof_count()];
     model.external_force(state.time, &mut external);
+    let mut frame = model.schedule.timeline().frame(state.time);
+    // A step that failed completed no cycle (its files carry no cycle results).
+    frame.cycle_end = false;
     let result = StepResult {
-        frame: model.schedule.timeline().frame(state.time),
+        frame,
         step: state.step,
         load_factor: model.schedule.load_factor_at(state.time),
         newton: NewtonLog {
