@@ -95,6 +95,13 @@ pub struct InterfaceElement {
     pub body_compliance: f64,
 }
 
+/// Length (mm) of an interface element with B-side coordinates `b` (line order: ends, then
+/// mid node): the chord between its end nodes.
+pub fn chord_length(b: &[[f64; 2]; 3]) -> f64 {
+    let [b0, b1, _] = b;
+    (b1[0] - b0[0]).hypot(b1[1] - b0[1])
+}
+
 /// Normal compliance (mm/MPa) of the surfaces of two bodies with moduli `surface_moduli`
 /// (each E / (1 − ν²), or E in plane stress) to a pressure wave of wavelength `wavelength`:
 /// the faces approach by λ / (π E*) per unit pressure amplitude, 1/E* = 1/E'_A + 1/E'_B

@@ -20,7 +20,9 @@ pub use spec::{
 use crate::assembly::{Coloring, DofMap, SparsityPattern};
 use crate::element::Analysis;
 use crate::element::continuum::min_jacobian;
-use crate::element::interface6::{InterfaceElement, InterfaceRule, surface_compliance};
+use crate::element::interface6::{
+    InterfaceElement, InterfaceRule, chord_length, surface_compliance,
+};
 use crate::element::set::{ContactPair, ContinuumCell, ContinuumSet, ElementSet, InterfaceSet};
 use crate::error::{GroupKind, GroupProblem, TopologyProblem};
 use crate::mesh::interface::{InterfaceTopology, insert_interface};
@@ -161,10 +163,8 @@ impl BodySurfaces<'_> {
     /// coordinates `b_coords`: the shortest pressure wave its quadratic faces resolve
     /// alternates from node to node (spacing ℓ/2), wavelength ℓ = the element's length.
     fn compliance(&self, nodes: &[u32; 6], b_coords: &[[f64; 2]; 3]) -> f64 {
-        let [b0, b1, _] = b_coords;
-        let length = (b1[0] - b0[0]).hypot(b1[1] - b0[1]);
         let moduli = [self.modulus(nodes[0]), self.modulus(nodes[3])];
-        surface_compliance(moduli, length)
+        surface_compliance(moduli, chord_length(b_coords))
     }
 }
 

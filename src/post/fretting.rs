@@ -7,7 +7,7 @@
 //! `wear_<pair>.csv`.
 
 use crate::contact::{ContactStatus, InterfaceState};
-use crate::element::interface6::interface_point;
+use crate::element::interface6::{chord_length, interface_point};
 use crate::element::set::{ContactPair, INTERFACE_POINTS};
 use crate::model::Model;
 use std::path::Path;
@@ -128,8 +128,7 @@ pub fn trace_point(
     let interface = &model.interface;
     let mut best = (f64::INFINITY, 0, [0.0; 2], 0.0);
     for e in interface.pairs[pair].elements.clone() {
-        let [b0, b1, _] = interface.elements[e].b_coords;
-        let length = (b1[0] - b0[0]).hypot(b1[1] - b0[1]);
+        let length = chord_length(&interface.elements[e].b_coords);
         for g in 0..INTERFACE_POINTS {
             let x = interface.point_position(e, g);
             let distance = (x[0] - wanted[0]).hypot(x[1] - wanted[1]);
