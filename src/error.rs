@@ -169,6 +169,15 @@ pub enum Error {
         files: usize,
         example: String,
     },
+    /// A file in the output folder that the run must not overwrite or write through: one it
+    /// would write but that no run manifest lists as asperity's, a symbolic link, a foreign
+    /// manifest ([`crate::run::folder`]).
+    #[error("{}: refusing to use the output folder: {}: {reason}", dir.display(), file.display())]
+    OutputForeign {
+        dir: PathBuf,
+        file: PathBuf,
+        reason: String,
+    },
     /// A restart record cannot be used to continue a run: `reason` says why (corrupt, made
     /// by another case or program version, arc-length control).
     #[error("{}: cannot resume: {reason}", path.display())]
@@ -261,7 +270,7 @@ impl Error {
             | Error::WearJump { .. }
             | Error::WornThrough { .. }
             | Error::JumpSettling { .. } => 1,
-            Error::OutputExists { .. } => 2,
+            Error::OutputExists { .. } | Error::OutputForeign { .. } => 2,
             Error::Mesh { .. }
             | Error::Case { .. }
             | Error::InvalidParameter { .. }

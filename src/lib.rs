@@ -9,7 +9,7 @@
 //! Data flows one way: gmsh geometry → [`mesh::Mesh`] (MSH 4.1 reader) → [`model::Model`]
 //! (bodies, materials, supports, loads, degrees of freedom) → [`solver`] (incremental
 //! Newton-Raphson over load steps, sparse Cholesky from `faer`) → [`output`] (VTU/PVD, CSV).
-//! [`pipeline::run`] strings these together for a [`config::Case`] file; [`study`] runs a
+//! [`run::run`] strings these together for a [`config::Case`] file; [`study`] runs a
 //! case at several mesh sizes and checks the convergence of quantities of interest.
 //! `ARCHITECTURE.md` says what each module owns.
 //!
@@ -34,8 +34,8 @@ pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod output;
-pub mod pipeline;
 pub mod post;
+pub mod run;
 pub mod solver;
 pub mod study;
 pub mod sweep;

@@ -1,22 +1,21 @@
 //! `asperity`: the command-line front end. All work is done by the library; this file only
 //! parses arguments, sets up logging and prints results.
 
-use std::fs::File;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::{Arc, Mutex, MutexGuard};
 
 use clap::{Parser, Subcommand};
 use tracing_subscriber::filter::LevelFilter;
-use tracing_subscriber::fmt::MakeWriter;
 use tracing_subscriber::prelude::*;
 
 use asperity::config::{Case, QuantitySpec};
 use asperity::mesh::msh;
 use asperity::model::{Model, ModelSpec};
 use asperity::output::summary::ModelReport;
-use asperity::pipeline;
+use asperity::run;
+use asperity::run::folder::{OutputFolder, OutputMode};
+use asperity::run::progress::{LogFile, LogToStderr};
 use asperity::study;
 
 /// Finite-element analysis of 2D plane and axisymmetric contact with interface compliance
@@ -163,59 +162,6 @@ enum SweepAction {
     },
 }
 
-/// The run's `log.txt`: a log sink that records nothing until [`LogFile::open`] is called with
-/// the output folder (known only once the case is read), then the same lines as stderr, at
-/// INFO level or more detailed, whatever `-q` says.
-#[derive(Clone, Default)]
-struct LogFile(Arc<Mutex<Option<File>>>);
-
-impl LogFile {
-    /// Starts writing `dir/log.txt` (created, or truncated unless `append`).
-    /// A resumed run appends to the log of the run it continues.
-    fn open(&self, dir: &Path, append: bool) -> asperity::Result<()> {
-        let path = dir.join("log.txt");
-        std::fs::create_dir_all(dir).map_err(|e| asperity::Error::io(dir, e))?;
-        let file = File::options()
-            .write(true)
-            .create(true)
-            .append(append)
-            .truncate(!append)
-            .open(&path)
-            .map_err(|e| asperity::Error::io(&path, e))?;
-        *self.lock() = Some(file);
-        Ok(())
-    }
-
-    fn lock(&self) -> MutexGuard<'_, Option<File>> {
-        // A panic while logging leaves the file usable: it only ever holds whole lines.
-        self.0.lock().unwrap_or_else(|e| e.into_inner())
-    }
-}
-
-/// One event's write into [`LogFile`] (the fmt layer writes a whole line at once).
-struct LogFileWriter<'a>(MutexGuard<'a, Option<File>>);
-
-impl Write for LogFileWriter<'_> {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        match self.0.as_mut() {
-            Some(f) => f.write(buf),
-            None => Ok(buf.len()),
-        }
-    }
-
-    fn flush(&mut self) -> std::io::Result<()> {
-        self.0.as_mut().map_or(Ok(()), Write::flush)
-    }
-}
-
-impl<'a> MakeWriter<'a> for LogFile {
-    type Writer = LogFileWriter<'a>;
-
-    fn make_writer(&'a self) -> Self::Writer {
-        LogFileWriter(self.lock())
-    }
-}
-
 /// Sets up logging: stderr at the level of `-q`/`-v` (ANSI colours only on a terminal, so
 /// piped and redirected logs stay plain text) and the returned `log.txt` sink at INFO or
 /// more. Both print the spans an event is in (e.g. `step{step=3}:`), so Newton iteration
@@ -229,7 +175,7 @@ fn init_logging(cli: &Cli) -> LogFile {
     };
     let log_file = LogFile::default();
     let stderr = tracing_subscriber::fmt::layer()
-        .with_writer(|| asperity::pipeline::LogToStderr)
+        .with_writer(|| LogToStderr)
         .with_ansi(std::io::stderr().is_terminal())
         .with_target(false)
         .with_filter(level);
@@ -446,7 +392,7 @@ fn check(case: &Path) -> asperity::Result<String> {
     let parsed = Case::from_file(case)?;
     let spec = ModelSpec::new(&parsed)?;
     let scratch = tempfile::tempdir().map_err(|e| asperity::Error::io(std::env::temp_dir(), e))?;
-    let mesh = pipeline::load_mesh(&parsed, scratch.path())?;
+    let mesh = run::load_mesh(&parsed, &OutputFolder::scratch(scratch.path())?)?;
     let model = Model::build(mesh, spec)?;
     Ok(format!(
         "{}\ncase {}: ok",
@@ -464,16 +410,16 @@ fn execute(command: Command, log_file: &LogFile) -> asperity::Result<()> {
             resume,
         } => {
             let parsed = Case::from_file(&case)?;
-            let out_dir = out.unwrap_or_else(|| pipeline::default_out_dir(&parsed));
-            let options = pipeline::RunOptions {
+            let out_dir = out.unwrap_or_else(|| run::default_out_dir(&parsed));
+            let options = run::RunOptions {
                 progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
-                mode: pipeline::OutputMode::from_flags(force, resume),
+                mode: OutputMode::from_flags(force, resume),
                 command_line: std::env::args().collect(),
             };
             // log.txt belongs to the run: opened once the folder is the run's (after the
             // refusal of an earlier run's results, or their removal by --force).
-            let summary = pipeline::run_with(&parsed, &out_dir, &options, |dir| {
-                log_file.open(dir, resume)
+            let summary = run::run_with(&parsed, &out_dir, &options, |folder| {
+                log_file.open(folder, folder.resumable())
             })?;
             say!("{summary}");
         }

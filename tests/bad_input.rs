@@ -1,6 +1,6 @@
 //! The bad-input suite: malformed meshes, case files with values out of range, and names and
 //! paths that would write outside the output folder. Every case is run as `asperity run`
-//! runs it (read the case, then [`pipeline::run`]) on a small valid mesh with one thing
+//! runs it (read the case, then [`run::run`]) on a small valid mesh with one thing
 //! broken, and must give the expected [`Error`] variant (and for mesh errors the expected
 //! [`MeshProblem`], for parameters the case-file key), and leave no result file behind: the
 //! output folder may hold only the `summary.json` of the failed run, and nothing may be
@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 use asperity::config::Case;
 use asperity::error::MeshProblem;
-use asperity::{Error, pipeline};
+use asperity::{Error, run};
 
 /// One quad8 [0,2]×[0,1] (surface "plate"), its bottom edge "bottom" and top edge "top".
 const MESH: &str = "$MeshFormat
@@ -111,7 +111,7 @@ fn run(case: &str, mesh: Option<&[u8]>) -> (Result<(), Error>, tempfile::TempDir
     std::fs::write(&case_path, case).unwrap();
     let out = dir.path().join("out");
     let result =
-        Case::from_file(&case_path).and_then(|case| pipeline::run(&case, &out, false).map(drop));
+        Case::from_file(&case_path).and_then(|case| run::run(&case, &out, false).map(drop));
     (result, dir)
 }
 
@@ -152,13 +152,14 @@ fn check(label: &str, case: &str, mesh: Option<&[u8]>, expected: Expected) {
     for file in files(dir.path()) {
         let name = file.strip_prefix(dir.path()).unwrap();
         // A run that stopped after reading its case records it: run.json (status failed),
-        // summary.json (status failed) and its log.
+        // summary.json (status failed), its log, and the manifest listing them.
         let allowed = [
             "case.toml",
             "m.msh",
             "out/summary.json",
             "out/run.json",
             "out/log.txt",
+            "out/run_files.txt",
         ];
         assert!(
             allowed.iter().any(|a| Path::new(a) == name),

@@ -202,7 +202,11 @@ fn solve(n: usize, size: f64) -> Run {
     case.mesh.parameters.insert("n".into(), n as f64);
     let width = 2.0 * case.mesh.parameters["w"];
     let dir = tempfile::tempdir().unwrap();
-    let mesh = asperity::pipeline::load_mesh(&case, dir.path()).expect("gmsh meshes the case");
+    let mesh = asperity::run::load_mesh(
+        &case,
+        &asperity::run::folder::OutputFolder::scratch(dir.path()).unwrap(),
+    )
+    .expect("gmsh meshes the case");
     let model = common::model(mesh, &case).expect("the model builds");
     let mut frames = Vec::new();
     run_steps(&model, &common::settings(&case), |step| {
@@ -441,7 +445,7 @@ fn cyclic_case_reports_the_analytic_dissipation_per_cycle() {
     let setup = Setup::new(&Case::from_file(&data("cattaneo_mindlin.toml")).unwrap());
     let w = setup.cycle_dissipation();
     let out = tempfile::tempdir().unwrap();
-    asperity::pipeline::run(&case, out.path(), false).expect("the cyclic case runs");
+    asperity::run::run(&case, out.path(), false).expect("the cyclic case runs");
     let mut reader = csv::Reader::from_path(out.path().join("cycles.csv")).unwrap();
     let header = reader.headers().unwrap().clone();
     let column = |name: &str| header.iter().position(|h| h == name).unwrap();
@@ -555,7 +559,7 @@ fn dissipation_from_the_contact_tables_matches_the_analytic_value() {
     let case = Case::from_file(&data("cattaneo_mindlin.toml")).unwrap();
     let setup = Setup::new(&case);
     let out = tempfile::tempdir().unwrap();
-    asperity::pipeline::run(&case, out.path(), false).expect("the case runs");
+    asperity::run::run(&case, out.path(), false).expect("the case runs");
     let (start, _, end) = setup.cycle();
     let mut w_csv = 0.0;
     let mut before = contact_table(out.path(), start - 1);

@@ -156,9 +156,10 @@ fn series_steps(pvd: &str, dir: &Path) -> Vec<usize> {
 
 /// The per-contact fretting tables, which like `history.csv` grow by a row per frame
 /// (`hysteresis_<pair>.csv`, `point_loops_<pair>.csv`) or per cycle (`cycles.csv`,
-/// `wear_<pair>.csv`).
+/// `wear_<pair>.csv`), and the run's manifest, a line per file.
 fn is_growing_table(name: &str) -> bool {
     name == "cycles.csv"
+        || name == "run_files.txt"
         || (name.ends_with(".csv")
             && ["hysteresis_", "point_loops_", "wear_"]
                 .iter()

@@ -324,7 +324,15 @@ fn summary_and_history_report_the_balance() {
         .case();
     let dir = tempfile::tempdir().unwrap();
     let mesh = rectangle(l, h, 4, 2, 0.0, false);
-    asperity::pipeline::run_mesh(&case, mesh, 0.0, dir.path(), false, |_, _| Ok(())).unwrap();
+    asperity::run::run_mesh(
+        &case,
+        mesh,
+        0.0,
+        &asperity::run::folder::OutputFolder::scratch(dir.path()).unwrap(),
+        false,
+        |_, _| Ok(()),
+    )
+    .unwrap();
     let text = std::fs::read_to_string(dir.path().join("summary.json")).unwrap();
     let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
     let energy = &summary["energy"];
@@ -403,7 +411,8 @@ fn summary_and_history_report_the_balance() {
 /// without external work, which the interface energy balances.
 #[test]
 fn resume_keeps_the_energy_report() {
-    use asperity::pipeline::{OutputMode, RunOptions, run_with};
+    use asperity::run::folder::OutputMode;
+    use asperity::run::{RunOptions, run_with};
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/shrink_fit.toml");
     let case = Case::from_file(&path).unwrap();
     let dir = tempfile::tempdir().unwrap();

@@ -12,7 +12,7 @@ use std::path::Path;
 
 use asperity::config::Case;
 use asperity::model::Model;
-use asperity::pipeline;
+use asperity::run::{self, folder::OutputFolder};
 use asperity::solver::stepping::StepResult;
 
 /// One quad8 [0,2]×[0,1] (surface "plate") with its four edges.
@@ -118,9 +118,10 @@ fn run(case: &str) -> (Vec<Seen>, tempfile::TempDir) {
     std::fs::write(&path, case).unwrap();
     let case = Case::from_file(&path).unwrap();
     let out = dir.path().join("out");
-    let mesh = pipeline::load_mesh(&case, &out).unwrap();
+    let folder = OutputFolder::scratch(&out).unwrap();
+    let mesh = run::load_mesh(&case, &folder).unwrap();
     let mut seen = Vec::new();
-    pipeline::run_mesh(&case, mesh, 0.0, &out, false, |model, step| {
+    run::run_mesh(&case, mesh, 0.0, &folder, false, |model, step| {
         seen.push(observe(model, step));
         Ok(())
     })

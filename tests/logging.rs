@@ -138,7 +138,7 @@ fn newton_lines_name_their_step() {
 /// after it, so the two never share a line; without a bar the line is written as it is.
 #[test]
 fn log_lines_go_through_the_progress_bar() {
-    use asperity::pipeline::write_log_line;
+    use asperity::run::progress::write_log_line;
     use indicatif::{ProgressBar, ProgressDrawTarget, TermLike};
     use std::io::Write;
     use std::sync::{Arc, Mutex};

@@ -432,7 +432,7 @@ fn last_row(path: &Path) -> std::collections::HashMap<String, f64> {
 fn a_converged_run_writes_its_summary() {
     let dir = tempfile::tempdir().unwrap();
     let case = shrink_fit();
-    let run = asperity::pipeline::run(&case, dir.path(), false).unwrap();
+    let run = asperity::run::run(&case, dir.path(), false).unwrap();
     let s = read_json(&dir.path().join("summary.json"));
     println!("{s:#}");
     assert_eq!(s["program"], "asperity");
@@ -496,8 +496,9 @@ fn a_converged_run_writes_its_summary() {
 fn a_failed_run_writes_its_summary_with_the_converged_steps() {
     let dir = tempfile::tempdir().unwrap();
     let case = shrink_fit();
-    let (mesh, mesh_seconds) = asperity::pipeline::mesh_case(&case, dir.path()).unwrap();
-    let err = asperity::pipeline::run_mesh(&case, mesh, mesh_seconds, dir.path(), false, |_, _| {
+    let folder = asperity::run::folder::OutputFolder::scratch(dir.path()).unwrap();
+    let (mesh, mesh_seconds) = asperity::run::mesh_case(&case, &folder).unwrap();
+    let err = asperity::run::run_mesh(&case, mesh, mesh_seconds, &folder, false, |_, _| {
         Err(asperity::Error::io(
             "evaluation",
             std::io::Error::other("stopped by the test"),
@@ -520,7 +521,11 @@ fn a_failed_run_writes_its_summary_with_the_converged_steps() {
     let out = dir.path().join("no_mesh");
     let mut case = case;
     case.mesh.file = Some(dir.path().join("missing.msh"));
-    let err = asperity::pipeline::mesh_case(&case, &out).unwrap_err();
+    let err = asperity::run::mesh_case(
+        &case,
+        &asperity::run::folder::OutputFolder::scratch(&out).unwrap(),
+    )
+    .unwrap_err();
     let s = read_json(&out.join("summary.json"));
     assert_eq!(s["status"], "failed");
     assert_eq!(s["error"], err.to_string());

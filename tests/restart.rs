@@ -380,7 +380,7 @@ fn a_multi_step_cyclic_run_resumed_from_any_frame_is_bit_identical() {
         fixture.display().to_string()
     );
     let case = asperity::config::Case::from_toml(&text, Path::new("case.toml")).unwrap();
-    let settings = asperity::pipeline::newton_settings(&case.solver);
+    let settings = asperity::run::newton_settings(&case.solver);
     let model = Model::build(
         asperity::mesh::msh::read_msh(&fixture).unwrap(),
         ModelSpec::new(&case).unwrap(),

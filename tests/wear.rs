@@ -16,6 +16,7 @@ use asperity::model::Model;
 use asperity::model::timeline::Frame;
 use asperity::post::fretting::{CYCLES, FrettingTables, HYSTERESIS, POINT_LOOPS, WEAR};
 use asperity::post::interface::{FRETTING, InterfaceOutput};
+use asperity::run::folder::RunFile;
 use asperity::solver::cycles::{end_cycle, start_cycle};
 use asperity::solver::newton::NewtonLog;
 use asperity::solver::stepping::StepResult;
@@ -628,7 +629,10 @@ fn hysteresis_cycle_and_wear_tables_hold_the_pair_integrals() {
         .record(&d.model, &interface, &frame_of(&d, frame(true), &zero), 2.0)
         .unwrap();
     let files = tables.files(&d.model);
-    let names: Vec<&str> = files.iter().map(|(n, _)| n.as_str()).collect();
+    let names: Vec<String> = files
+        .iter()
+        .map(|(t, _)| RunFile::Fretting(*t).name())
+        .collect();
     assert_eq!(
         names,
         ["hysteresis_joint.csv", "cycles.csv", "wear_joint.csv"]
@@ -833,7 +837,10 @@ fn a_hysteresis_point_off_the_contact_is_refused_naming_its_key() {
 fn without_wear_a_pair_has_its_loop_and_cycles_but_no_wear_profile() {
     let d = Driver::new(linear_coulomb(KN, KT, MU), None, CLOSURE);
     let files = FrettingTables::new(&d.model).files(&d.model);
-    let names: Vec<&str> = files.iter().map(|(name, _)| name.as_str()).collect();
+    let names: Vec<String> = files
+        .iter()
+        .map(|(t, _)| RunFile::Fretting(*t).name())
+        .collect();
     assert_eq!(names, ["hysteresis_joint.csv", "cycles.csv"]);
 }
 

@@ -9,7 +9,7 @@ use std::path::Path;
 use super::params::LawKind;
 use crate::config::Case;
 use crate::mesh::Mesh;
-use crate::pipeline;
+use crate::run::{self, folder::OutputFolder};
 use crate::sweep::keys;
 use crate::{Error, Result};
 
@@ -71,7 +71,7 @@ impl Specimen {
             .collect::<Result<Vec<_>>>()?;
         case.output.vtu = false;
         let tmp = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
-        let mesh = pipeline::load_mesh(&case, tmp.path())?;
+        let mesh = run::load_mesh(&case, &OutputFolder::scratch(tmp.path())?)?;
         let tree = toml::from_str(&text).map_err(|e| Error::Case {
             path: path.to_path_buf(),
             message: e.to_string(),
@@ -116,9 +116,8 @@ impl Specimen {
     pub fn simulate(&self, x: &[f64], kind: LawKind) -> Result<Vec<f64>> {
         let case = self.case_with(x, kind)?;
         let tmp = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
-        pipeline::run_mesh(&case, self.mesh.clone(), 0.0, tmp.path(), false, |_, _| {
-            Ok(())
-        })?;
+        let folder = OutputFolder::scratch(tmp.path())?;
+        run::run_mesh(&case, self.mesh.clone(), 0.0, &folder, false, |_, _| Ok(()))?;
         let file = tmp.path().join("summary.json");
         let text = std::fs::read_to_string(&file).map_err(|e| Error::io(&file, e))?;
         let summary: serde_json::Value =

@@ -18,12 +18,23 @@ use crate::output::restart::Content;
 use crate::post::interface::InterfaceOutput;
 use crate::solver::stepping::StepResult;
 
-/// The cycle table's file name.
-pub const CYCLES_FILE: &str = "cycles.csv";
+/// A fretting table of a run; the output folder names its file
+/// ([`crate::run::folder::RunFile::Fretting`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrettingTable<'a> {
+    /// The hysteresis loop of the pair of this name.
+    Hysteresis(&'a str),
+    /// The local loops of the traced points of the pair of this name.
+    PointLoops(&'a str),
+    /// The results of every simulated load cycle, all pairs.
+    Cycles,
+    /// The wear-depth profile of the pair of this name.
+    Wear(&'a str),
+}
 
-/// The hysteresis table's file name of pair `pair`.
-pub fn hysteresis_file(pair: &str) -> String {
-    format!("hysteresis_{pair}.csv")
+/// What names a table's rows in an error about a value that is not finite.
+fn table_label(table: &str, pair: &str) -> std::path::PathBuf {
+    format!("{table} table of contact '{pair}'").into()
 }
 
 /// A table of numbers as cells.
@@ -42,28 +53,9 @@ fn hysteresis_csv() -> GrowingCsv {
     GrowingCsv::new(&HYSTERESIS.map(String::from))
 }
 
-/// The traced points' hysteresis table's file name of pair `pair`.
-pub fn point_loops_file(pair: &str) -> String {
-    format!("point_loops_{pair}.csv")
-}
-
 /// An empty table of traced points' text.
 fn point_loops_csv() -> GrowingCsv {
     GrowingCsv::new(&POINT_LOOPS.map(String::from))
-}
-
-/// The wear-profile table's file name of pair `pair`.
-pub fn wear_file(pair: &str) -> String {
-    format!("wear_{pair}.csv")
-}
-
-/// Whether `name` is one of the fretting tables' files.
-pub fn is_fretting_file(name: &str) -> bool {
-    name == CYCLES_FILE
-        || ["hysteresis_", "point_loops_", "wear_"].iter().any(|p| {
-            name.strip_prefix(p)
-                .is_some_and(|r| r.len() > 4 && r.ends_with(".csv"))
-        })
 }
 
 /// Columns of `hysteresis_<pair>.csv`: the frame (pseudo-time of the output), where it lies
@@ -292,7 +284,7 @@ impl FrettingTables {
             let mut row = vec![time];
             row.extend(position);
             row.extend([frame.step_time, s.tangential_force, s.normal_force, slip]);
-            text.push(Path::new(&hysteresis_file(&pair.name)), &row)?;
+            text.push(&table_label("hysteresis", &pair.name), &row)?;
             rows.push(row);
         }
         self.record_points(model, step, time)?;
@@ -349,7 +341,7 @@ impl FrettingTables {
                     s.relative[0],
                     s.plastic_slip,
                 ];
-                text.push(Path::new(&point_loops_file(&pair.name)), &row)?;
+                text.push(&table_label("point loops", &pair.name), &row)?;
                 rows.push(row);
             }
         }
@@ -419,15 +411,18 @@ impl FrettingTables {
 
     /// The tables' files: (file name, table) of every pair of `model`; a wear table only for
     /// a pair that wears.
-    pub fn files(&self, model: &Model) -> Vec<(String, CsvTable<Cell>)> {
+    pub fn files<'m>(&self, model: &'m Model) -> Vec<(FrettingTable<'m>, CsvTable<Cell>)> {
         let pairs = &model.interface.pairs;
         let hysteresis = pairs.iter().zip(&self.hysteresis);
-        let mut out: Vec<(String, CsvTable<Cell>)> = hysteresis
-            .map(|(p, rows)| (hysteresis_file(&p.name), cell_table(&HYSTERESIS, rows)))
+        let mut out: Vec<(FrettingTable, CsvTable<Cell>)> = hysteresis
+            .map(|(p, rows)| {
+                let table = cell_table(&HYSTERESIS, rows);
+                (FrettingTable::Hysteresis(&p.name), table)
+            })
             .collect();
         let points = self.traced_pairs(model).map(|(p, rows, _)| {
             let table = cell_table(&POINT_LOOPS, rows);
-            (point_loops_file(&p.name), table)
+            (FrettingTable::PointLoops(&p.name), table)
         });
         out.extend(points.collect::<Vec<_>>());
         out.extend(self.cycle_files(model));
@@ -435,10 +430,10 @@ impl FrettingTables {
     }
 
     /// The pairs with traced points, with their rows and text.
-    fn traced_pairs<'a>(
+    fn traced_pairs<'a, 'm>(
         &'a self,
-        model: &'a Model,
-    ) -> impl Iterator<Item = (&'a ContactPair, &'a Vec<Vec<f64>>, &'a GrowingCsv)> {
+        model: &'m Model,
+    ) -> impl Iterator<Item = (&'m ContactPair, &'a Vec<Vec<f64>>, &'a GrowingCsv)> {
         let tables = self.points.iter().zip(&self.points_text);
         let pairs = model.interface.pairs.iter().zip(&self.traced);
         pairs
@@ -449,20 +444,18 @@ impl FrettingTables {
 
     /// [`Self::files`] as the writer takes them: the hysteresis tables as the text grown
     /// frame by frame, the per-cycle tables as tables.
-    pub fn contents(&self, model: &Model) -> Vec<(String, Content)> {
+    pub fn contents<'m>(&self, model: &'m Model) -> Vec<(FrettingTable<'m>, Content)> {
         let pairs = &model.interface.pairs;
         let hysteresis = pairs.iter().zip(&self.hysteresis_text);
-        let mut out: Vec<(String, Content)> = hysteresis
+        let mut out: Vec<(FrettingTable, Content)> = hysteresis
             .map(|(p, text)| {
-                (
-                    hysteresis_file(&p.name),
-                    Content::Text(text.bytes().to_vec()),
-                )
+                let content = Content::Text(text.bytes().to_vec());
+                (FrettingTable::Hysteresis(&p.name), content)
             })
             .collect();
         out.extend(self.traced_pairs(model).map(|(p, _, text)| {
             let content = Content::Text(text.bytes().to_vec());
-            (point_loops_file(&p.name), content)
+            (FrettingTable::PointLoops(&p.name), content)
         }));
         let cycle_files = self.cycle_files(model).into_iter();
         out.extend(cycle_files.map(|(name, table)| (name, Content::Table(table))));
@@ -471,7 +464,7 @@ impl FrettingTables {
 
     /// The per-cycle tables: `cycles.csv` (when the model has pairs) and the wear profile
     /// of each pair that wears.
-    fn cycle_files(&self, model: &Model) -> Vec<(String, CsvTable<Cell>)> {
+    fn cycle_files<'m>(&self, model: &'m Model) -> Vec<(FrettingTable<'m>, CsvTable<Cell>)> {
         let table = cell_table;
         let pairs = &model.interface.pairs;
         let mut out = Vec::new();
@@ -480,11 +473,11 @@ impl FrettingTables {
             for (row, numbers) in cycles.rows.iter_mut().zip(&self.cycles) {
                 row[CONTACT] = Cell::Text(pairs[numbers[CONTACT] as usize].name.clone());
             }
-            out.push((CYCLES_FILE.to_string(), cycles));
+            out.push((FrettingTable::Cycles, cycles));
         }
         for (p, rows) in pairs.iter().zip(&self.wear) {
             if p.wear().is_some() {
-                out.push((wear_file(&p.name), table(&WEAR, rows)));
+                out.push((FrettingTable::Wear(&p.name), table(&WEAR, rows)));
             }
         }
         out

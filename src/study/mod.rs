@@ -60,8 +60,8 @@ pub use schedule::{BYTES_PER_UNKNOWN, available_memory};
 use crate::config::{Case, QuantitySpec};
 use crate::mesh::Mesh;
 use crate::model::ModelSpec;
-use crate::pipeline;
 use crate::post::quantities::evaluate;
+use crate::run::{self, folder::OutputFolder};
 use crate::{Error, Result};
 use report::{plot, write_table};
 use schedule::Gate;
@@ -243,7 +243,7 @@ struct Meshed {
     level: usize,
     case: Case,
     spec: ModelSpec,
-    dir: PathBuf,
+    folder: OutputFolder,
     mesh: Mesh,
     mesh_seconds: f64,
 }
@@ -259,12 +259,13 @@ fn mesh_level(case: &Case, options: &Options, k: usize) -> Result<Meshed> {
     case.solver.relative_norms = true;
     let dir = options.out.join(format!("level_{k}"));
     let spec = ModelSpec::new(&case)?; // bad parameters fail before gmsh runs
-    let (mesh, mesh_seconds) = pipeline::mesh_case(&case, &dir)?;
+    let folder = OutputFolder::scratch(&dir)?;
+    let (mesh, mesh_seconds) = run::mesh_case(&case, &folder)?;
     Ok(Meshed {
         level: k,
         case,
         spec,
-        dir,
+        folder,
         mesh,
         mesh_seconds,
     })
@@ -278,17 +279,17 @@ fn solve_level(meshed: Meshed, quantities: &[QuantitySpec]) -> Result<Level> {
         level,
         case,
         spec,
-        dir,
+        folder,
         mesh,
         mesh_seconds,
     } = meshed;
     let mut values = None;
-    let summary = pipeline::run_model(
+    let summary = run::run_model(
         &case,
         spec,
         mesh,
         mesh_seconds,
-        &dir,
+        &folder,
         false,
         |model, step| {
             if step.step == model.schedule.steps() {

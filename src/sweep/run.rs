@@ -10,7 +10,8 @@ use super::{Manifest, keys};
 use crate::config::Case;
 use crate::output::csv::{Cell, CsvTable, write_csv};
 use crate::output::summary::Summary;
-use crate::pipeline;
+use crate::run;
+use crate::run::folder::{OutputFolder, RunFile};
 use crate::study::available_memory;
 use crate::{Error, Result};
 
@@ -53,7 +54,7 @@ pub fn run_task(study: &Path, k: usize, retry_failed: bool) -> Result<bool> {
         return Ok(false);
     }
     let case_path = dir.join("case.toml");
-    let result = Case::from_file(&case_path).and_then(|case| pipeline::run(&case, &dir, false));
+    let result = Case::from_file(&case_path).and_then(|case| run::run(&case, &dir, false));
     if let Err(e) = result {
         // Errors before the model exists leave no summary: record them, so that `collect`
         // reports the run with its error.
@@ -106,11 +107,10 @@ pub fn run_local(
             && let Some(k) = pending.pop()
         {
             let dir = study.join(&manifest.runs[k].dir);
-            let log = std::fs::File::create(dir.join("log.txt"))
-                .map_err(|e| Error::io(dir.join("log.txt"), e))?;
-            let err = log
-                .try_clone()
-                .map_err(|e| Error::io(dir.join("log.txt"), e))?;
+            // The run's log, listed in the run folder's manifest like the run's own files.
+            let log_path = OutputFolder::scratch(&dir)?.path(RunFile::Log)?;
+            let log = std::fs::File::create(&log_path).map_err(|e| Error::io(&log_path, e))?;
+            let err = log.try_clone().map_err(|e| Error::io(&log_path, e))?;
             let mut command = Command::new(exe);
             command
                 .args(["sweep", "run"])

@@ -241,5 +241,5 @@ pub fn model(mesh: Mesh, case: &Case) -> asperity::Result<Model> {
 
 /// The Newton settings of `case`.
 pub fn settings(case: &Case) -> NewtonSettings {
-    asperity::pipeline::newton_settings(&case.solver)
+    asperity::run::newton_settings(&case.solver)
 }

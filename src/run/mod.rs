@@ -1,0 +1,442 @@
+//! The whole run of a case: mesh (gmsh or an .msh file) → model → load steps → output files.
+//! Each phase is timed under its name; the numbers end up in the [`RunSummary`].
+//!
+//! The jobs are split by what they own: [`folder`] every file name of a run and the manifest
+//! of what it wrote (the only place that creates, lists or removes run files), `writer` the
+//! files of each converged step, `history` the columns of `history.csv`, `summary`
+//! `summary.json`, `info` `run.json`, [`progress`] the progress bar and the log sinks; this
+//! file strings mesh, model, stepping and writer together.
+//!
+//! Files written to the output folder (README "Output"):
+//! - `run_files.txt`: the manifest, every file below that the run wrote (see [`folder`]);
+//! - `log.txt`: the log, at INFO level or more detailed;
+//! - `run.json`: what made the results — the case file's text, program version,
+//!   command line, start and end, host, threads;
+//! - `mesh.msh` when the case meshes a `.geo` script;
+//! - `bodies_NNNN.vtu` per converged step and `results.pvd` listing them (time = step
+//!   number, since load factors may go down again when unloading), with the nodal reaction
+//!   forces and the step's FieldData (`TimeValue`, `step`, `load_factor`), see
+//!   [`crate::post::step_grids`];
+//! - `interface_NNNN.vtu` (when the case has contact pairs): the contact fields and the
+//!   side-B displacement on the interface, listed in `results.pvd` as a second part;
+//! - `contact_<pair>_NNNN.csv`: the contact fields along each pair's curve;
+//! - `history.csv`: a step-0 row, then per step the pseudo-time, the global and per-load
+//!   factors, increments, cut-backs, Newton iterations, final residual, the reaction force
+//!   of every support, the resultant forces of every contact pair and the case's
+//!   `[[history]]` quantities;
+//! - `restart.bin` ([`crate::output::restart`]): the state of the last converged increment,
+//!   from which `--resume` continues;
+//! - `hysteresis_<pair>.csv`, `point_loops_<pair>.csv`, `cycles.csv`, `wear_<pair>.csv`: the
+//!   fretting tables ([`crate::post::fretting`]);
+//! - `summary.json` ([`Summary`]): the model size, every converged step, totals and timings,
+//!   and whether the run converged or failed (with the error), for scripts.
+//!
+//! A step's files are committed together: its VTU and CSV files first, then the restart
+//! record, then `history.csv`, and last `results.pvd`, each replaced atomically; a run killed
+//! at any moment leaves complete files, and the indexes list only steps whose files exist.
+//! When a step fails after some of its sub-increments converged, the last of them is written
+//! as that step (its fractional pseudo-time in `history.csv` and `results.pvd` tells it apart).
+
+pub mod folder;
+mod history;
+mod info;
+pub mod progress;
+mod summary;
+mod writer;
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use crate::config::{Case, LinearSolverKind, SolverSpec};
+use crate::mesh::{Mesh, gmsh, msh};
+use crate::model::{Model, ModelSpec};
+use crate::output::restart::{Record, read_record};
+use crate::output::summary::Summary;
+use crate::solver::newton::{LinearSolver, NewtonSettings};
+use crate::solver::stepping::{RunStatistics, Solution, StepResult, run_steps, run_steps_from};
+use crate::{Error, Result};
+use folder::{FolderPlan, OutputFolder, OutputMode, RunFile};
+use info::RunInfo;
+use summary::{
+    analysis_steps, complete_summary, describe_model, write_summary, write_summary_after_failure,
+};
+use writer::{StepWriter, traced_points};
+
+/// What a run did, for the closing summary.
+#[derive(Clone, Debug)]
+pub struct RunSummary {
+    pub out_dir: PathBuf,
+    pub nodes: usize,
+    pub cells: usize,
+    /// Unknowns (free degrees of freedom).
+    pub dofs: usize,
+    pub mesh_seconds: f64,
+    pub model_seconds: f64,
+    pub stats: RunStatistics,
+    /// Reaction of each support at the last step: (name, [F_x, F_y]).
+    pub reactions: Vec<(String, [f64; 2])>,
+}
+
+impl std::fmt::Display for RunSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let s = &self.stats;
+        writeln!(
+            f,
+            "model: {} nodes, {} elements, {} unknowns",
+            self.nodes, self.cells, self.dofs
+        )?;
+        writeln!(
+            f,
+            "steps: {} converged in {} increments ({} cut-backs), {} Newton iterations ({} unsymmetric \
+             solves, {} BiCGSTAB iterations); final relative residual {:.2e}",
+            s.steps,
+            s.increments,
+            s.cutbacks,
+            s.iterations,
+            s.unsymmetric_solves,
+            s.krylov_iterations,
+            s.last_residual
+        )?;
+        writeln!(
+            f,
+            "time [s]: mesh {:.3}, model {:.3}, ordering+symbolic {:.3}, assembly {:.3}, factorisation {:.3}, solve {:.3}, output {:.3}",
+            self.mesh_seconds,
+            self.model_seconds,
+            s.symbolic_seconds,
+            s.assembly_seconds,
+            s.factorization_seconds,
+            s.solve_seconds,
+            s.output_seconds
+        )?;
+        for (name, r) in &self.reactions {
+            writeln!(
+                f,
+                "reaction '{name}': Fx = {:.6e} N, Fy = {:.6e} N",
+                r[0], r[1]
+            )?;
+        }
+        write!(f, "results: {}", self.out_dir.join("results.pvd").display())
+    }
+}
+
+/// Obtains the case's mesh: reads its `.msh` file, or meshes its `.geo` script with gmsh into
+/// the folder's `mesh.msh` first.
+pub fn load_mesh(case: &Case, folder: &OutputFolder) -> Result<Mesh> {
+    let path = match (&case.mesh.file, &case.mesh.geo) {
+        (Some(file), _) => case.resolve(file),
+        (None, Some(geo)) => {
+            let params: Vec<(String, f64)> = case
+                .mesh
+                .parameters
+                .iter()
+                .map(|(k, v)| (k.clone(), *v))
+                .collect();
+            gmsh::mesh_geo(
+                &case.resolve(geo),
+                case.mesh.size,
+                &params,
+                &folder.path(RunFile::Mesh)?,
+            )?
+        }
+        (None, None) => {
+            return Err(Error::Case {
+                path: case.path.clone(),
+                message: "[mesh] has no source".into(),
+            });
+        }
+    };
+    msh::read_msh(&path)
+}
+
+/// The output folder of `case` when the command line names none: its `[output] dir`
+/// (relative to the case file), else `out/<case file stem>` next to the case file, so that
+/// two case files of the same name in different folders never share results.
+pub fn default_out_dir(case: &Case) -> PathBuf {
+    match &case.output.dir {
+        Some(dir) => case.resolve(dir),
+        None => case
+            .base_dir
+            .join("out")
+            .join(case.path.file_stem().unwrap_or_default()),
+    }
+}
+
+/// How [`run_with`] runs a case.
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// Show a progress bar over the steps.
+    pub progress: bool,
+    pub mode: OutputMode,
+    /// The command line, for `run.json`.
+    pub command_line: Vec<String>,
+}
+
+/// Runs `case`, writing results to `out_dir`, which must not hold an earlier run's results
+/// ([`OutputMode::Fresh`]). `progress` shows a progress bar over the steps.
+pub fn run(case: &Case, out_dir: &Path, progress: bool) -> Result<RunSummary> {
+    let options = RunOptions {
+        progress,
+        mode: OutputMode::Fresh,
+        command_line: std::env::args().collect(),
+    };
+    run_with(case, out_dir, &options, |_| Ok(()))
+}
+
+/// What a run of `case` may write into its folder and must not touch there.
+pub fn folder_plan(case: &Case) -> FolderPlan {
+    let inputs = [
+        Some(&case.path),
+        case.mesh.file.as_ref(),
+        case.mesh.geo.as_ref(),
+    ];
+    FolderPlan {
+        pairs: case.contacts.iter().map(|c| c.name()).collect(),
+        inputs: inputs
+            .into_iter()
+            .flatten()
+            .map(|p| case.resolve(p))
+            .collect(),
+        meshes: case.mesh.file.is_none() && case.mesh.geo.is_some(),
+    }
+}
+
+/// Runs `case` into `out_dir` as `options` say: checks the case, takes over the folder
+/// ([`OutputFolder::open`]), writes `run.json`, meshes, solves and writes every converged
+/// increment's files and restart record.
+/// `folder_ready` is called once the folder is the run's (an earlier run's results refused or
+/// removed), before anything else is written: the CLI opens its `log.txt` there.
+pub fn run_with(
+    case: &Case,
+    out_dir: &Path,
+    options: &RunOptions,
+    folder_ready: impl FnOnce(&OutputFolder) -> Result<()>,
+) -> Result<RunSummary> {
+    let spec = ModelSpec::new(case)?; // bad parameters fail before gmsh runs
+    check_history(case)?;
+    let case_text = std::fs::read_to_string(&case.path).map_err(|e| Error::io(&case.path, e))?;
+    let folder = OutputFolder::open(out_dir, options.mode, &folder_plan(case))?;
+    folder_ready(&folder)?;
+    let mut info = RunInfo::new(case, &case_text, options);
+    info.write(&folder)?;
+    let restart = Restart {
+        case_text,
+        resume: folder.resumable(),
+    };
+    let result = mesh_case(case, &folder).and_then(|(mesh, mesh_seconds)| {
+        let session = Session {
+            folder: &folder,
+            progress: options.progress,
+            restart: Some(&restart),
+        };
+        run_session(case, spec, mesh, mesh_seconds, &session, |_, _| Ok(()))
+    });
+    info.finish(&result);
+    if let Err(e) = info.write(&folder) {
+        tracing::warn!("{e}");
+    }
+    result
+}
+
+/// Obtains the case's mesh into `folder` ([`load_mesh`]) and the seconds it took. If that
+/// fails, the folder's `summary.json` says so (status `failed`, the error, no model).
+pub fn mesh_case(case: &Case, folder: &OutputFolder) -> Result<(Mesh, f64)> {
+    let t = Instant::now();
+    match load_mesh(case, folder) {
+        Ok(mesh) => Ok((mesh, t.elapsed().as_secs_f64())),
+        Err(e) => {
+            let mut summary = Summary::new(&case.path);
+            summary.seconds.mesh = t.elapsed().as_secs_f64();
+            summary.seconds.total = summary.seconds.mesh;
+            summary.fail(&e);
+            write_summary_after_failure(&summary, folder);
+            Err(e)
+        }
+    }
+}
+
+/// Runs `case` on an already loaded `mesh` (from [`load_mesh`], which took `mesh_seconds`),
+/// writing results to `folder`, and calls `on_step` with the model and every converged step
+/// once its files are committed to the background writer (e.g. to evaluate quantities in
+/// memory; an error stops the run).
+/// `summary.json` is written whether the run converges or fails. No restart record is kept
+/// (a convergence study's levels are not resumed).
+pub fn run_mesh(
+    case: &Case,
+    mesh: Mesh,
+    mesh_seconds: f64,
+    folder: &OutputFolder,
+    progress: bool,
+    on_step: impl FnMut(&Model, &StepResult) -> Result<()>,
+) -> Result<RunSummary> {
+    let spec = ModelSpec::new(case)?;
+    run_model(case, spec, mesh, mesh_seconds, folder, progress, on_step)
+}
+
+/// [`run_mesh`] with the model's spec already made from `case` (by [`ModelSpec::new`]).
+pub fn run_model(
+    case: &Case,
+    spec: ModelSpec,
+    mesh: Mesh,
+    mesh_seconds: f64,
+    folder: &OutputFolder,
+    progress: bool,
+    on_step: impl FnMut(&Model, &StepResult) -> Result<()>,
+) -> Result<RunSummary> {
+    check_history(case)?;
+    let session = Session {
+        folder,
+        progress,
+        restart: None,
+    };
+    run_session(case, spec, mesh, mesh_seconds, &session, on_step)
+}
+
+/// Where and how a run writes: its folder, the progress bar, and the restart records (none
+/// for a study's levels).
+struct Session<'a> {
+    folder: &'a OutputFolder,
+    progress: bool,
+    restart: Option<&'a Restart>,
+}
+
+/// A run that keeps restart records: the case file's text they are checked against, and
+/// whether to continue from the one on disk.
+struct Restart {
+    case_text: String,
+    resume: bool,
+}
+
+/// Solves and writes the summary, also when the run fails.
+fn run_session(
+    case: &Case,
+    spec: ModelSpec,
+    mesh: Mesh,
+    mesh_seconds: f64,
+    session: &Session,
+    on_step: impl FnMut(&Model, &StepResult) -> Result<()>,
+) -> Result<RunSummary> {
+    let start = Instant::now();
+    let mut summary = Summary::new(&case.path);
+    summary.seconds.mesh = mesh_seconds;
+    let steps = analysis_steps(&spec.schedule);
+    let result = solve(case, spec, mesh, session, &mut summary, on_step);
+    summary.seconds.total = mesh_seconds + start.elapsed().as_secs_f64();
+    match &result {
+        Ok(run) => {
+            complete_summary(&mut summary, run);
+            write_summary(&summary, &steps, session.folder)?;
+        }
+        Err(e) => {
+            summary.fail(e);
+            if let Err(e) = write_summary(&summary, &steps, session.folder) {
+                tracing::warn!("{e}");
+            }
+        }
+    }
+    result
+}
+
+/// The model, the load steps and their files: the work of [`run_session`], which writes the
+/// summary.
+fn solve(
+    case: &Case,
+    spec: ModelSpec,
+    mesh: Mesh,
+    session: &Session,
+    summary: &mut Summary,
+    on_step: impl FnMut(&Model, &StepResult) -> Result<()>,
+) -> Result<RunSummary> {
+    let folder = session.folder;
+    let t = Instant::now();
+    let model = Model::build(mesh, spec)?;
+    let model_seconds = t.elapsed().as_secs_f64();
+    tracing::info!(
+        nodes = model.mesh.nodes.len(),
+        elements = model.continuum.cells.len(),
+        unknowns = model.dofs.free_count(),
+        "model built ({})",
+        model.analysis.name()
+    );
+    describe_model(summary, &model, model_seconds);
+    let record = match session.restart {
+        Some(r) if r.resume => Some(resume_record(&model, folder, &r.case_text)?),
+        _ => None,
+    };
+    if record.is_some() && model.control.arc_length.is_some() {
+        return Err(Error::Restart {
+            path: folder.dir().join(RunFile::Restart.name()),
+            reason: "arc-length runs cannot be resumed yet; run without --resume".into(),
+        });
+    }
+    let settings = newton_settings(&case.solver);
+    let traced = traced_points(case, &model)?;
+    let mut writer = StepWriter::new(case, &model, session, summary, traced, on_step);
+    let resume = match record {
+        Some(record) => Some(writer.restore(record)?),
+        None => {
+            writer.write_start()?;
+            None
+        }
+    };
+    let mut stats = if model.control.arc_length.is_some() {
+        run_steps(&model, &settings, |step| writer.step(step, None))?.1
+    } else {
+        run_steps_from(&model, &settings, resume, &mut writer)?.1
+    };
+    stats.output_seconds += writer.finish()?;
+    writer.bar.finish();
+    Ok(RunSummary {
+        out_dir: folder.dir().to_path_buf(),
+        nodes: model.mesh.nodes.len(),
+        cells: model.continuum.cells.len(),
+        dofs: model.dofs.free_count(),
+        mesh_seconds: writer.summary.seconds.mesh,
+        model_seconds,
+        stats,
+        reactions: model
+            .supports
+            .iter()
+            .map(|s| s.name.clone())
+            .zip(writer.last_reactions)
+            .collect(),
+    })
+}
+
+/// The restart record in `folder` for resuming `model` (the folder has one: it was opened as
+/// [`OutputFolder::resumable`]).
+fn resume_record(model: &Model, folder: &OutputFolder, case_text: &str) -> Result<Record> {
+    let path = folder.dir().join(RunFile::Restart.name());
+    read_record(&path, case_text, &Solution::new(model))
+}
+
+/// Checks the case's `[[history]]` requests as the quantities they are.
+fn check_history(case: &Case) -> Result<()> {
+    crate::config::history::check(case)
+}
+
+/// The Newton settings of a case's `[solver]` table (the numerics never read the case file).
+pub fn newton_settings(spec: &SolverSpec) -> NewtonSettings {
+    NewtonSettings {
+        max_iterations: spec.max_iterations,
+        criteria: crate::solver::newton::Criteria {
+            residual: spec.residual_tolerance,
+            late_residual: spec.late_residual_tolerance,
+            late_iteration: spec.late_iteration,
+            correction: spec.correction_tolerance,
+            zero_flux: spec.zero_flux,
+            zero_flux_correction: spec.zero_flux_correction_tolerance,
+            linear_residual: spec.linear_residual_tolerance,
+            average_force: spec.average_force,
+            relative_norms: spec.relative_norms,
+        },
+        force_tolerance: spec.force_tolerance,
+        displacement_tolerance: spec.displacement_tolerance,
+        max_cutbacks: spec.max_cutbacks,
+        contact_algorithm: spec.contact_algorithm.into(),
+        linear_solver: match spec.linear_solver {
+            LinearSolverKind::Condensed => LinearSolver::Condensed,
+            LinearSolverKind::Krylov => LinearSolver::Krylov,
+        },
+        extrapolate: spec.extrapolate,
+    }
+}
