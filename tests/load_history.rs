@@ -8,67 +8,15 @@
 //! its top and right edges. Its stress is uniform, which the quadratic element represents
 //! exactly, so the corner (2, 1) moves by u_x = 2 (σ_xx − ν σ_yy)/E, u_y = (σ_yy − ν σ_xx)/E.
 
+mod common;
+
 use std::path::Path;
 
 use asperity::config::Case;
 use asperity::model::Model;
 use asperity::pipeline;
 use asperity::solver::stepping::StepResult;
-
-/// One quad8 [0,2]×[0,1] (surface "plate") with its four edges.
-const MESH: &str = "$MeshFormat
-4.1 0 8
-$EndMeshFormat
-$PhysicalNames
-5
-1 1 \"bottom\"
-1 2 \"right\"
-1 3 \"top\"
-1 4 \"left\"
-2 5 \"plate\"
-$EndPhysicalNames
-$Entities
-0 4 1 0
-1 0 0 0 2 0 0 1 1 0
-2 2 0 0 2 1 0 1 2 0
-3 0 1 0 2 1 0 1 3 0
-4 0 0 0 0 1 0 1 4 0
-1 0 0 0 2 1 0 1 5 0
-$EndEntities
-$Nodes
-1 8 1 8
-2 1 0 8
-1
-2
-3
-4
-5
-6
-7
-8
-0 0 0
-2 0 0
-2 1 0
-0 1 0
-1 0 0
-2 0.5 0
-1 1 0
-0 0.5 0
-$EndNodes
-$Elements
-5 5 1 5
-1 1 8 1
-1 1 2 5
-1 2 8 1
-2 2 3 6
-1 3 8 1
-3 3 4 7
-1 4 8 1
-4 4 1 8
-2 1 16 1
-5 1 2 3 4 5 6 7 8
-$EndElements
-";
+use common::PLATE_MSH;
 
 const E: f64 = 1000.0;
 const NU: f64 = 0.3;
@@ -110,10 +58,10 @@ struct Seen {
     cutbacks: usize,
 }
 
-/// Runs `case` on [`MESH`] and returns every frame and the output folder.
+/// Runs `case` on [`PLATE_MSH`] and returns every frame and the output folder.
 fn run(case: &str) -> (Vec<Seen>, tempfile::TempDir) {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("m.msh"), MESH).unwrap();
+    std::fs::write(dir.path().join("m.msh"), PLATE_MSH).unwrap();
     let path = dir.path().join("case.toml");
     std::fs::write(&path, case).unwrap();
     let case = Case::from_file(&path).unwrap();

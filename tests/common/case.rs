@@ -112,6 +112,37 @@ impl CaseBuilder {
         self
     }
 
+    /// Sets `key` of the last table of the array `name` (e.g. a key of the contact pair
+    /// pushed last).
+    pub fn set_last(mut self, name: &str, key: &str, value: impl Into<Value>) -> Self {
+        let last = self
+            .root
+            .get_mut(name)
+            .and_then(Value::as_array_mut)
+            .and_then(|array| array.last_mut())
+            .and_then(Value::as_table_mut)
+            .unwrap_or_else(|| panic!("no [[{name}]] to set `{key}` in"));
+        last.insert(key.into(), value.into());
+        self
+    }
+
+    /// The mesh section: the MSH file at `path`.
+    pub fn mesh_file(mut self, path: &Path) -> Self {
+        let mesh = table(&[("file", path.display().to_string().into())]);
+        self.root.insert("mesh".into(), mesh.into());
+        self
+    }
+
+    /// The mesh section: the gmsh script at `path`, meshed with element size `size`.
+    pub fn mesh_geo(mut self, path: &Path, size: f64) -> Self {
+        let mesh = table(&[
+            ("geo", path.display().to_string().into()),
+            ("size", size.into()),
+        ]);
+        self.root.insert("mesh".into(), mesh.into());
+        self
+    }
+
     /// Sets `key` of the table `section` (`[section]`).
     pub fn set(mut self, section: &str, key: &str, value: impl Into<Value>) -> Self {
         let table = self
@@ -182,6 +213,12 @@ impl CaseBuilder {
     /// The case file's text.
     pub fn text(&self) -> String {
         toml::to_string(&self.root).expect("a case serialises")
+    }
+
+    /// Writes the case file to `path` and returns the path.
+    pub fn write(&self, path: &Path) -> std::path::PathBuf {
+        std::fs::write(path, self.text()).expect("the case file is written");
+        path.to_path_buf()
     }
 
     /// The case, or why it is not valid.

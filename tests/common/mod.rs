@@ -4,8 +4,10 @@
 #![allow(dead_code)]
 
 mod case;
+mod fixtures;
 
 pub use case::*;
+pub use fixtures::*;
 
 use asperity::config::Case;
 use asperity::mesh::{Cell, CellKind, Line3, Mesh, PhysicalGroup, PointElement};
