@@ -21,8 +21,8 @@ use asperity::solver::newton::NewtonLog;
 use asperity::solver::stepping::StepResult;
 use asperity::solver::stepping::{Solution, run_steps};
 use common::{
-    add_curve_group, block_on_base, linear_coulomb, merge, settings, sliding_rough_joint, table,
-    tensor, uniform,
+    CaseBuilder, add_curve_group, block_on_base, linear_coulomb, list, merge, settings,
+    sliding_rough_joint, table, tensor, two_blocks, uniform,
 };
 use toml::{Table, Value};
 
@@ -694,55 +694,27 @@ fn numeric_csv(path: &std::path::Path, columns: &[&str]) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// Two blocks (tests/fixtures/contact_pair.msh, contact at y = 1 for 0 ≤ x ≤ 2) pressed by
-/// 10 MPa and sheared back and forth, with energy wear and `points` as the contact's
+/// Two blocks (`common::two_blocks`, contact at y = 1 for 0 ≤ x ≤ 2) pressed by 10 MPa and
+/// sheared back and forth, with energy wear and `points` as the contact's
 /// `hysteresis_points`.
-fn sheared_pair_case(points: &str) -> String {
-    format!(
-        r#"[mesh]
-file = "{}"
-[analysis]
-type = "plane_strain"
-[[body]]
-group = "lower"
-material = {{ E = 1000.0, nu = 0.3 }}
-[[body]]
-group = "upper"
-material = {{ E = 1000.0, nu = 0.3 }}
-[[support]]
-group = "base"
-ux = 0.0
-uy = 0.0
-[[support]]
-group = "lid"
-ux = 0.2
-factors = [0.5, 1.0, 0.0, -1.0]
-[[load]]
-group = "lid"
-pressure = 10.0
-factors = [1.0, 1.0, 1.0, 1.0]
-[[contact]]
-name = "joint"
-side_a = "lower_top"
-side_b = "upper_bottom"
-law = {{ type = "linear_coulomb", normal_stiffness = 1e4, tangential_stiffness = 1e4, friction = 0.3 }}
-wear = {{ model = "energy", coefficient = 1e-6 }}
-hysteresis_points = {}
-[steps]
-count = 4
-"#,
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/fixtures/contact_pair.msh")
-            .display(),
-        points
-    )
+fn sheared_pair_case(points: &[[f64; 2]]) -> CaseBuilder {
+    let points: Vec<Value> = points.iter().map(|p| list(p)).collect();
+    two_blocks(0.3)
+        .set_last(
+            "contact",
+            "wear",
+            table(&[("model", "energy".into()), ("coefficient", 1e-6.into())]),
+        )
+        .set_last("contact", "hysteresis_points", points)
+        .support_history("lid", &[("ux", 0.2)], &[0.5, 1.0, 0.0, -1.0])
+        .pressure_history("lid", 10.0, &[1.0; 4])
+        .steps(4)
 }
 
 #[test]
 fn a_run_with_contact_writes_its_hysteresis_and_resumes_it_unchanged() {
     let dir = tempfile::tempdir().unwrap();
-    let case = dir.path().join("case.toml");
-    std::fs::write(&case, sheared_pair_case("[[0.6, 1.0], [1.5, 1.0]]")).unwrap();
+    let case = sheared_pair_case(&[[0.6, 1.0], [1.5, 1.0]]).write(&dir.path().join("case.toml"));
     let out = dir.path().join("out");
     let run = |extra: &[&str]| {
         let status = std::process::Command::new(env!("CARGO_BIN_EXE_asperity"))
@@ -810,8 +782,7 @@ fn a_run_with_contact_writes_its_hysteresis_and_resumes_it_unchanged() {
 #[test]
 fn a_hysteresis_point_off_the_contact_is_refused_naming_its_key() {
     let dir = tempfile::tempdir().unwrap();
-    let case = dir.path().join("case.toml");
-    std::fs::write(&case, sheared_pair_case("[[0.6, 1.0], [1.0, 1.9]]")).unwrap();
+    let case = sheared_pair_case(&[[0.6, 1.0], [1.0, 1.9]]).write(&dir.path().join("case.toml"));
     let run = std::process::Command::new(env!("CARGO_BIN_EXE_asperity"))
         .arg("run")
         .arg(&case)

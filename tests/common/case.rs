@@ -36,6 +36,14 @@ pub fn elastic(e: f64, nu: f64) -> Table {
     table(&[("E", e.into()), ("nu", nu.into())])
 }
 
+/// `table` with the numeric `keys` added (a material's plastic parameters, say).
+pub fn with_keys(mut table: Table, keys: &[(&str, f64)]) -> Table {
+    for (k, v) in keys {
+        table.insert(k.to_string(), (*v).into());
+    }
+    table
+}
+
 /// The linear Coulomb interface law.
 pub fn linear_coulomb(normal_stiffness: f64, tangential_stiffness: f64, friction: f64) -> Table {
     table(&[
@@ -49,11 +57,7 @@ pub fn linear_coulomb(normal_stiffness: f64, tangential_stiffness: f64, friction
 /// The rough-joint law (Buczkowski & Kleiber (1994), Eqs. 1–5) with the given parameters
 /// (c_n, m, R, S, mu_m, ...).
 pub fn rough_joint(parameters: &[(&str, f64)]) -> Table {
-    let mut law = table(&[("type", "rough_joint".into())]);
-    for (k, v) in parameters {
-        law.insert(k.to_string(), (*v).into());
-    }
-    law
+    with_keys(table(&[("type", "rough_joint".into())]), parameters)
 }
 
 /// The rough joint used by the sliding-block tests and benches: power-law compliance,

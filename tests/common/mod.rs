@@ -7,6 +7,8 @@ mod case;
 mod fixtures;
 
 pub use case::*;
+// Not every test uses the fixtures, and a test crate warns of a re-export it never uses.
+#[allow(unused_imports)]
 pub use fixtures::*;
 
 use asperity::config::Case;
