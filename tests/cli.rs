@@ -34,8 +34,13 @@ fn run_case(case: CaseBuilder) -> (bool, String) {
     let case = case
         .mesh_file(&fixture("two_bodies_ascii.msh"))
         .write(&dir.path().join("case.toml"));
-    let out = dir.path().join("out");
-    asperity(&[
+    let (code, text) = run_into(&case, &dir.path().join("out"));
+    (code == Some(0), text)
+}
+
+/// `asperity run <case> --out <out>`: the exit code and the output.
+fn run_into(case: &Path, out: &Path) -> (Option<i32>, String) {
+    asperity_code(&[
         "run",
         case.to_str().unwrap(),
         "--out",
@@ -161,12 +166,7 @@ fn friction_capacity_exceeded_is_named() {
         .traction("lid", [5.0, -10.0])
         .write(&dir.path().join("case.toml"));
     let out = dir.path().join("out");
-    let (code, text) = asperity_code(&[
-        "run",
-        case.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (code, text) = run_into(&case, &out);
     assert_eq!(code, Some(1), "{text}");
     assert!(
         text.contains("friction capacity exceeded") && text.contains("contact 'joint'"),
@@ -212,13 +212,8 @@ fn a_successful_run_writes_the_series_and_history() {
         .step_factors(&[0.5, 1.0])
         .write(&dir.path().join("case.toml"));
     let out = dir.path().join("out");
-    let (ok, text) = asperity(&[
-        "run",
-        case.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(ok, "{text}");
+    let (code, text) = run_into(&case, &out);
+    assert_eq!(code, Some(0), "{text}");
     for f in [
         "bodies_0001.vtu",
         "bodies_0002.vtu",
@@ -254,13 +249,8 @@ fn a_step_that_cannot_converge_is_named_and_earlier_results_stay_on_disk() {
         .set("solver", "max_cutbacks", 0)
         .write(&dir.path().join("case.toml"));
     let out = dir.path().join("out");
-    let (ok, text) = asperity(&[
-        "run",
-        case.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(!ok, "{text}");
+    let (code, text) = run_into(&case, &out);
+    assert_ne!(code, Some(0), "{text}");
     assert!(
         text.contains("step 2") && text.contains("did not converge") && text.contains("residuals"),
         "{text}"
@@ -302,12 +292,7 @@ fn plastic_collapse_exits_with_code_5_and_keeps_the_converged_steps() {
         .steps(4)
         .write(&dir.path().join("case.toml"));
     let out = dir.path().join("out");
-    let (code, text) = asperity_code(&[
-        "run",
-        case.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (code, text) = run_into(&case, &out);
     assert_eq!(code, Some(5), "{text}");
     assert!(
         text.contains("plastic collapse") && text.contains("last converged load factor"),

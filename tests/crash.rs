@@ -14,7 +14,7 @@ use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use common::{CaseBuilder, block_material, two_blocks_on, with_keys};
+use common::{CaseBuilder, block_material, file_names, two_blocks_on, with_keys};
 
 /// Dragged plastic contact with unloading: 8 steps, about 30 increments.
 fn case() -> CaseBuilder {
@@ -88,15 +88,6 @@ fn kill_run(case: &Path, out: &Path, k: u64, delay: u64) {
     child.wait().unwrap();
 }
 
-fn files(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
-}
-
 fn read(path: PathBuf) -> String {
     std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
@@ -145,7 +136,7 @@ fn is_growing_table(name: &str) -> bool {
 /// Returns the number of steps the killed run had completed.
 fn check_killed(dir: &Path, reference: &Path) -> usize {
     let mut listed = Vec::new();
-    for name in files(dir) {
+    for name in file_names(dir) {
         let path = dir.join(&name);
         let reference_text = || read(reference.join(&name));
         if name.ends_with(".tmp") {
@@ -208,11 +199,11 @@ fn check_killed(dir: &Path, reference: &Path) -> usize {
 fn check_resumed(dir: &Path, reference: &Path) {
     let own = ["run.json", "summary.json", "restart.bin", "log.txt"];
     assert_eq!(
-        files(dir),
-        files(reference),
+        file_names(dir),
+        file_names(reference),
         "file sets differ after --resume"
     );
-    for name in files(reference)
+    for name in file_names(reference)
         .iter()
         .filter(|n| !own.contains(&n.as_str()))
     {

@@ -14,7 +14,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use common::{CaseBuilder, block_material, fixture, two_blocks, with_keys};
+use common::{CaseBuilder, block_material, file_names, fixture, two_blocks, with_keys};
 
 /// A frictional pair that slips: two bodies pressed together (lid moved down) and sheared
 /// (lid moved sideways) until the tangential force reaches μ times the normal force.
@@ -59,16 +59,6 @@ fn run(dir: &Path, case: &CaseBuilder, threads: usize) -> PathBuf {
     out
 }
 
-/// The file names of `dir`, sorted.
-fn names(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
-}
-
 /// `summary.json` without its timings and the path of the case file (each run has its own).
 fn summary(dir: &Path) -> serde_json::Value {
     let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
@@ -97,14 +87,14 @@ fn check_identical(case: &CaseBuilder) {
     // little. history.csv's first row is the unloaded start (step 0).
     let steps = iterations(&reference);
     assert!(steps[1..].iter().any(|&n| n > 1), "{steps:?}");
-    let files = names(&reference);
+    let files = file_names(&reference);
     assert!(files.iter().any(|f| f.ends_with(".vtu")), "{files:?}");
     // Threads 1 again (run after run), then 2 and 4.
     for (k, threads) in [1, 2, 4].into_iter().enumerate() {
         let other_dir = dir.path().join(format!("run_{k}"));
         std::fs::create_dir(&other_dir).unwrap();
         let other = run(&other_dir, case, threads);
-        assert_eq!(names(&other), files, "{threads} threads");
+        assert_eq!(file_names(&other), files, "{threads} threads");
         // Records of the run itself (times, host, timestamped log lines; the restart record
         // holds the run's timings) are not results; summary.json is compared without its
         // timings below.

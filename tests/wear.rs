@@ -21,8 +21,8 @@ use asperity::solver::newton::NewtonLog;
 use asperity::solver::stepping::StepResult;
 use asperity::solver::stepping::{Solution, run_steps};
 use common::{
-    CaseBuilder, add_curve_group, block_on_base, linear_coulomb, list, merge, settings,
-    sliding_rough_joint, table, tensor, two_blocks, uniform,
+    CaseBuilder, block_on_base, linear_coulomb, list, settings, sliding_block_mesh,
+    sliding_rough_joint, table, two_blocks,
 };
 use toml::{Table, Value};
 
@@ -44,15 +44,7 @@ fn case(law: Table, wear: Option<Table>, factors: &[f64]) -> Case {
 }
 
 fn model(case: &Case) -> Model {
-    let mut base = tensor(&uniform(0.0, 3.0, 6), &uniform(0.0, 1.0, 2), "base");
-    add_curve_group(&mut base, "ground", |x| x[1] == 0.0);
-    add_curve_group(&mut base, "base_top", |x| {
-        x[1] == 1.0 && (0.5..=2.5).contains(&x[0])
-    });
-    let mut block = tensor(&uniform(0.5, 2.5, 4), &uniform(1.0, 1.75, 2), "block");
-    add_curve_group(&mut block, "block_bottom", |x| x[1] == 1.0);
-    add_curve_group(&mut block, "block_top", |x| x[1] == 1.75);
-    common::model(merge(base, block, false), case).expect("model builds")
+    common::model(sliding_block_mesh(), case).expect("model builds")
 }
 
 fn wear(entries: &[(&str, Value)]) -> Table {
@@ -501,7 +493,7 @@ fn bad_wear_keys_are_named() {
         assert_eq!(key_of(&error), expected, "{wear:?}: {error}");
         assert_eq!(error.exit_code(), 3);
     }
-    // Values serde refuses: the message names the key and the choices.
+    // Values serde refuses: a case error whose message names the key and the choices.
     for (wear, words) in [
         (
             archard(&[("coefficient", 1e-8.into()), ("surface", "c".into())]),
@@ -516,7 +508,10 @@ fn bad_wear_keys_are_named() {
             ["depth", "max_depth"],
         ),
     ] {
-        let message = bad(wear).to_string();
+        let message = match bad(wear) {
+            Error::Case { message, .. } => message,
+            other => panic!("expected a case error, got {other:?}"),
+        };
         for w in words {
             assert!(message.contains(w), "{message}");
         }

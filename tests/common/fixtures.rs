@@ -59,3 +59,13 @@ pub fn held_block() -> CaseBuilder {
         .support("bottom", &[("ux", 0.0), ("uy", 0.0)])
         .support("corner", &[("ux", 0.0)])
 }
+
+/// The names of the files in `dir` (an output folder), sorted.
+pub fn file_names(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
