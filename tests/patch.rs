@@ -10,24 +10,6 @@ use asperity::mesh::Mesh;
 use asperity::solver::stepping::run_steps;
 use common::*;
 
-/// Extension of the test case builder: a body with an explicit `formulation`.
-trait BodyWith {
-    fn body_with(self, group: &str, material: toml::Table, formulation: &str) -> Self;
-}
-
-impl BodyWith for CaseBuilder {
-    fn body_with(self, group: &str, material: toml::Table, formulation: &str) -> Self {
-        self.push(
-            "body",
-            table(&[
-                ("group", group.into()),
-                ("material", material.into()),
-                ("formulation", formulation.into()),
-            ]),
-        )
-    }
-}
-
 const E: f64 = 70_000.0;
 const NU: f64 = 0.33;
 /// Round-off bound: the solutions are O(1e-3) and the stiffness entries O(1e5); 1e-10

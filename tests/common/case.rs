@@ -168,6 +168,18 @@ impl CaseBuilder {
         )
     }
 
+    /// A body with an explicit element `formulation` ("full", "bbar").
+    pub fn body_with(self, group: &str, material: Table, formulation: &str) -> Self {
+        self.push(
+            "body",
+            table(&[
+                ("group", group.into()),
+                ("material", material.into()),
+                ("formulation", formulation.into()),
+            ]),
+        )
+    }
+
     /// A support of `group` prescribing `components` (`("ux", 0.0)`, `("uz", 0.0)`, ...).
     pub fn support(self, group: &str, components: &[(&str, f64)]) -> Self {
         self.push("support", with_group(group, components, None))
