@@ -27,7 +27,7 @@ use asperity::model::Model;
 use asperity::solver::mechanics::Mechanics;
 use asperity::solver::newton::{LinearSolver, Newton, NewtonSettings, Problem, norm};
 use asperity::solver::stepping::Solution;
-use common::{add_curve_group, block_on_base, linear_coulomb, merge, settings, tensor, uniform};
+use common::{block_on_base, linear_coulomb, settings, sliding_block_mesh};
 use faer::MatMut;
 
 /// The system allocator, counting the allocations and reallocations of the threads that
@@ -175,18 +175,10 @@ impl Problem for Marked<'_> {
 /// past the friction limit (slip), 2 push back a little (stick), 3 and 4 push on (slip), 5
 /// back a little again (stick), 6 on (slip).
 fn frictional_model() -> (Model, NewtonSettings) {
-    let mut base = tensor(&uniform(0.0, 3.0, 6), &uniform(0.0, 1.0, 2), "base");
-    add_curve_group(&mut base, "ground", |x| x[1] == 0.0);
-    add_curve_group(&mut base, "base_top", |x| {
-        x[1] == 1.0 && (0.5..=2.5).contains(&x[0])
-    });
-    let mut block = tensor(&uniform(0.5, 2.5, 4), &uniform(1.0, 1.75, 2), "block");
-    add_curve_group(&mut block, "block_bottom", |x| x[1] == 1.0);
-    add_curve_group(&mut block, "block_top", |x| x[1] == 1.75);
     let case = block_on_base(70000.0, 0.33, &[], linear_coulomb(1e4, 1e3, 0.25))
         .pressed_and_pushed(8.0, 0.01, &[1.0, 0.9, 1.5, 2.0, 1.9, 2.5])
         .case();
-    let model = common::model(merge(base, block, false), &case).expect("model builds");
+    let model = common::model(sliding_block_mesh(), &case).expect("model builds");
     (model, settings(&case))
 }
 

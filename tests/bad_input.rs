@@ -8,58 +8,14 @@
 //!
 //! The base case is checked to run, so that every error below is due to its one defect.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
 use asperity::config::Case;
 use asperity::error::MeshProblem;
 use asperity::{Error, run};
-
-/// One quad8 [0,2]×[0,1] (surface "plate"), its bottom edge "bottom" and top edge "top".
-const MESH: &str = "$MeshFormat
-4.1 0 8
-$EndMeshFormat
-$PhysicalNames
-3
-1 2 \"bottom\"
-1 3 \"top\"
-2 1 \"plate\"
-$EndPhysicalNames
-$Entities
-0 2 1 0
-1 0 0 0 2 0 0 1 2 0
-2 0 1 0 2 1 0 1 3 0
-1 0 0 0 2 1 0 1 1 0
-$EndEntities
-$Nodes
-1 8 1 8
-2 1 0 8
-1
-2
-3
-4
-5
-6
-7
-8
-0 0 0
-2 0 0
-2 1 0
-0 1 0
-1 0 0
-2 0.5 0
-1 1 0
-0 0.5 0
-$EndNodes
-$Elements
-3 3 1 3
-1 1 8 1
-1 1 2 5
-1 2 8 1
-2 3 4 7
-2 1 16 1
-3 1 2 3 4 5 6 7 8
-$EndElements
-";
+use common::PLATE_MSH;
 
 /// A plane-stress plate pressed on its top edge and held at its bottom edge.
 const CASE: &str = "[mesh]
@@ -177,14 +133,14 @@ fn bad_mesh(label: &str, mesh: &[u8], problem: MeshProblem) {
     check(label, CASE, Some(mesh), Expected::Mesh(problem));
 }
 
-/// [`MESH`] with `from` replaced by `to` (which must occur).
+/// [`PLATE_MSH`] with `from` replaced by `to` (which must occur).
 fn edit(from: &str, to: &str) -> String {
-    assert!(MESH.contains(from), "{from}");
-    MESH.replacen(from, to, 1)
+    assert!(PLATE_MSH.contains(from), "{from}");
+    PLATE_MSH.replacen(from, to, 1)
 }
 
 fn bad_case(label: &str, case: &str, expected: Expected) {
-    check(label, case, Some(MESH.as_bytes()), expected);
+    check(label, case, Some(PLATE_MSH.as_bytes()), expected);
 }
 
 /// [`CASE`] with `from` replaced by `to` (which must occur).
@@ -200,7 +156,7 @@ fn case_plus(extra: &str) -> String {
 
 #[test]
 fn the_base_case_runs() {
-    let (result, dir) = run(CASE, Some(MESH.as_bytes()));
+    let (result, dir) = run(CASE, Some(PLATE_MSH.as_bytes()));
     result.unwrap();
     assert!(dir.path().join("out/bodies_0001.vtu").is_file());
     assert!(dir.path().join("out/history.csv").is_file());
@@ -229,12 +185,12 @@ fn malformed_meshes_are_mesh_errors() {
         ),
         (
             "cut in the coordinates",
-            MESH[..MESH.find("2 0.5 0").unwrap()].into(),
+            PLATE_MSH[..PLATE_MSH.find("2 0.5 0").unwrap()].into(),
             Truncated,
         ),
         (
             "cut in the elements",
-            MESH[..MESH.len() - 30].into(),
+            PLATE_MSH[..PLATE_MSH.len() - 30].into(),
             Truncated,
         ),
         (
@@ -269,12 +225,12 @@ fn malformed_meshes_are_mesh_errors() {
         ),
         (
             "element total 10^12",
-            edit("3 3 1 3", "3 1000000000000 1 3"),
+            edit("5 5 1 5", "5 1000000000000 1 5"),
             CountMismatch,
         ),
         (
             "element total too large",
-            edit("3 3 1 3", "3 4 1 3"),
+            edit("5 5 1 5", "5 6 1 5"),
             CountMismatch,
         ),
         (
@@ -284,22 +240,22 @@ fn malformed_meshes_are_mesh_errors() {
         ),
         (
             "entity count 10^12",
-            edit("0 2 1 0", "0 2 1000000000000 0"),
+            edit("0 4 1 0", "0 4 1000000000000 0"),
             CountMismatch,
         ),
         (
             "physical tag count 10^12",
-            edit("1 0 0 0 2 0 0 1 2 0", "1 0 0 0 2 0 0 1000000000000 2 0"),
+            edit("1 0 0 0 2 0 0 1 1 0", "1 0 0 0 2 0 0 1000000000000 1 0"),
             CountMismatch,
         ),
         (
             "entity declared twice",
-            edit("2 0 1 0 2 1 0 1 3 0", "1 0 1 0 2 1 0 1 3 0"),
+            edit("2 2 0 0 2 1 0 1 2 0", "1 2 0 0 2 1 0 1 2 0"),
             DuplicateEntity,
         ),
         (
             "duplicate element tag",
-            edit("2 3 4 7\n", "1 3 4 7\n"),
+            edit("2 2 3 6\n", "1 2 3 6\n"),
             DuplicateElement,
         ),
         (
@@ -330,7 +286,7 @@ fn malformed_meshes_are_mesh_errors() {
         ),
         (
             "element of a missing node",
-            edit("3 1 2 3 4 5 6 7 8", "3 1 2 3 4 5 6 7 88"),
+            edit("5 1 2 3 4 5 6 7 8", "5 1 2 3 4 5 6 7 88"),
             UnknownNode,
         ),
         ("NaN coordinate", edit("2 0.5 0", "nan 0.5 0"), NonFinite),
@@ -358,12 +314,12 @@ fn malformed_meshes_are_mesh_errors() {
         ),
         (
             "first-order quad",
-            edit("2 1 16 1\n3 1 2 3 4 5 6 7 8", "2 1 3 1\n3 1 2 3 4"),
+            edit("2 1 16 1\n5 1 2 3 4 5 6 7 8", "2 1 3 1\n5 1 2 3 4"),
             FirstOrder,
         ),
         (
             "only lines",
-            edit("3 3 1 3", "2 2 1 2").replace("2 1 16 1\n3 1 2 3 4 5 6 7 8\n", ""),
+            edit("5 5 1 5", "4 4 1 4").replace("2 1 16 1\n5 1 2 3 4 5 6 7 8\n", ""),
             NoCells,
         ),
         (
@@ -373,7 +329,7 @@ fn malformed_meshes_are_mesh_errors() {
         ),
         (
             "physical name count wrong",
-            edit("$PhysicalNames\n3", "$PhysicalNames\n4"),
+            edit("$PhysicalNames\n5", "$PhysicalNames\n6"),
             PhysicalNames,
         ),
     ];
@@ -817,7 +773,7 @@ fn unsafe_names_and_paths_are_refused() {
     ];
     let count = cases.len();
     for (label, case, key) in cases {
-        let (result, dir) = run(&case, Some(MESH.as_bytes()));
+        let (result, dir) = run(&case, Some(PLATE_MSH.as_bytes()));
         match result {
             Err(Error::InvalidParameter { key: k, .. }) if k == key => {}
             other => panic!("{label}: expected an invalid {key}, got {other:?}"),
@@ -1095,7 +1051,7 @@ fn load_history_errors_name_their_key() {
         &with_steps(
             "[[step]]\nincrements = 2\nloads = { top = 1.0 }\n[[step]]\ncycles = 2\nloads = { top = { time = [0.0, 0.5, 1.0], value = [1.0, -1.0, 1.0] } }",
         ),
-        Some(MESH.as_bytes()),
+        Some(PLATE_MSH.as_bytes()),
     );
     result.unwrap();
 }

@@ -1,7 +1,11 @@
 //! The command line as a user meets it: `mesh-info` on a real gmsh fixture, and clear errors
 //! (naming the file, the entity and the problem, with a non-zero exit status) for bad cases.
+mod common;
+
 use std::path::Path;
 use std::process::Command;
+
+use common::{CaseBuilder, block_material, elastic, fixture, held_block, two_blocks, with_keys};
 
 fn asperity(args: &[&str]) -> (bool, String) {
     let (code, text) = asperity_code(args);
@@ -19,28 +23,24 @@ fn asperity_code(args: &[&str]) -> (Option<i32>, String) {
     (out.status.code(), text)
 }
 
-fn fixture(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(name)
-        .display()
-        .to_string()
+/// The path of `tests/fixtures/<name>` as an argument.
+fn fixture_arg(name: &str) -> String {
+    fixture(name).display().to_string()
 }
 
-/// Writes a case next to a temporary copy-free reference to the two-body fixture.
-fn run_case(body: &str) -> (bool, String) {
+/// Runs `case` (a plane-strain case on the two-body fixture) in a temporary folder.
+fn run_case(case: CaseBuilder) -> (bool, String) {
     let dir = tempfile::tempdir().unwrap();
-    let case = dir.path().join("case.toml");
-    std::fs::write(
-        &case,
-        format!(
-            "[mesh]\nfile = \"{}\"\n{body}",
-            fixture("two_bodies_ascii.msh")
-        ),
-    )
-    .unwrap();
-    let out = dir.path().join("out");
-    asperity(&[
+    let case = case
+        .mesh_file(&fixture("two_bodies_ascii.msh"))
+        .write(&dir.path().join("case.toml"));
+    let (code, text) = run_into(&case, &dir.path().join("out"));
+    (code == Some(0), text)
+}
+
+/// `asperity run <case> --out <out>`: the exit code and the output.
+fn run_into(case: &Path, out: &Path) -> (Option<i32>, String) {
+    asperity_code(&[
         "run",
         case.to_str().unwrap(),
         "--out",
@@ -50,7 +50,7 @@ fn run_case(body: &str) -> (bool, String) {
 
 #[test]
 fn mesh_info_lists_groups_and_element_counts() {
-    let (ok, text) = asperity(&["mesh-info", &fixture("two_bodies_ascii.msh")]);
+    let (ok, text) = asperity(&["mesh-info", &fixture_arg("two_bodies_ascii.msh")]);
     assert!(ok, "{text}");
     for expected in [
         "body_a",
@@ -66,7 +66,7 @@ fn mesh_info_lists_groups_and_element_counts() {
 
 #[test]
 fn mesh_info_on_a_linear_mesh_explains_the_fix() {
-    let (ok, text) = asperity(&["mesh-info", &fixture("linear.msh")]);
+    let (ok, text) = asperity(&["mesh-info", &fixture_arg("linear.msh")]);
     assert!(!ok);
     assert!(
         text.contains("linear.msh") && text.to_lowercase().contains("order"),
@@ -100,7 +100,7 @@ fn bad_mesh_files_are_explained_with_the_fix() {
             &["parametric", "Mesh.SaveParametric = 0"][..],
         ),
     ] {
-        let (ok, text) = asperity(&["mesh-info", &fixture(name)]);
+        let (ok, text) = asperity(&["mesh-info", &fixture_arg(name)]);
         assert!(!ok, "{name}: {text}");
         for w in words.iter().chain(&[name]) {
             assert!(text.contains(w), "{name}: message lacks `{w}`: {text}");
@@ -108,13 +108,9 @@ fn bad_mesh_files_are_explained_with_the_fix() {
     }
 }
 
-const ANALYSIS: &str = "[analysis]\ntype = \"plane_strain\"\n";
-
 #[test]
 fn a_body_that_is_not_in_the_mesh_is_named_with_the_alternatives() {
-    let (ok, text) = run_case(&format!(
-        "{ANALYSIS}[[body]]\ngroup = \"shaft\"\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n"
-    ));
+    let (ok, text) = run_case(CaseBuilder::plane_strain().body("shaft", block_material()));
     assert!(!ok);
     assert!(
         text.contains("'shaft'")
@@ -126,9 +122,11 @@ fn a_body_that_is_not_in_the_mesh_is_named_with_the_alternatives() {
 
 #[test]
 fn a_support_group_that_does_not_exist_is_named() {
-    let (ok, text) = run_case(&format!(
-        "{ANALYSIS}[[body]]\ngroup = \"body_a\"\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n[[support]]\ngroup = \"base\"\nux = 0.0\n"
-    ));
+    let (ok, text) = run_case(
+        CaseBuilder::plane_strain()
+            .body("body_a", block_material())
+            .support("base", &[("ux", 0.0)]),
+    );
     assert!(!ok);
     assert!(text.contains("'base'") && text.contains("bottom"), "{text}");
 }
@@ -136,11 +134,13 @@ fn a_support_group_that_does_not_exist_is_named() {
 #[test]
 fn an_unsupported_body_is_reported_as_such() {
     // body_b shares no node with body_a and has no support of its own.
-    let (ok, text) = run_case(&format!(
-        "{ANALYSIS}[[body]]\ngroup = \"body_a\"\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n[[body]]\ngroup = \"body_b\"\n\
-         material = {{ E = 1000.0, nu = 0.3 }}\n[[support]]\ngroup = \"bottom\"\nux = 0.0\nuy = 0.0\n[[load]]\n\
-         group = \"top\"\npressure = 1.0\n"
-    ));
+    let (ok, text) = run_case(
+        CaseBuilder::plane_strain()
+            .body("body_a", block_material())
+            .body("body_b", block_material())
+            .support("bottom", &[("ux", 0.0), ("uy", 0.0)])
+            .pressure("top", 1.0),
+    );
     assert!(!ok);
     assert!(
         text.contains("not positive definite") && text.contains("supports"),
@@ -162,26 +162,11 @@ fn an_unsupported_body_is_reported_as_such() {
 #[test]
 fn friction_capacity_exceeded_is_named() {
     let dir = tempfile::tempdir().unwrap();
-    let case = dir.path().join("case.toml");
-    std::fs::write(
-        &case,
-        format!(
-            "[mesh]\nfile = \"{}\"\n{ANALYSIS}[[body]]\ngroup = \"lower\"\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n\
-             [[body]]\ngroup = \"upper\"\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n[[support]]\ngroup = \"base\"\n\
-             ux = 0.0\nuy = 0.0\n[[load]]\ngroup = \"lid\"\ntraction = [5.0, -10.0]\n[[contact]]\nname = \"joint\"\n\
-             side_a = \"lower_top\"\nside_b = \"upper_bottom\"\nlaw = {{ type = \"linear_coulomb\", \
-             normal_stiffness = 1e4, tangential_stiffness = 1e4, friction = 0.3 }}\n",
-            fixture("contact_pair.msh")
-        ),
-    )
-    .unwrap();
+    let case = two_blocks(0.3)
+        .traction("lid", [5.0, -10.0])
+        .write(&dir.path().join("case.toml"));
     let out = dir.path().join("out");
-    let (code, text) = asperity_code(&[
-        "run",
-        case.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (code, text) = run_into(&case, &out);
     assert_eq!(code, Some(1), "{text}");
     assert!(
         text.contains("friction capacity exceeded") && text.contains("contact 'joint'"),
@@ -199,19 +184,20 @@ fn friction_capacity_exceeded_is_named() {
 
 #[test]
 fn an_unknown_key_is_named() {
-    let (ok, text) = run_case(&format!(
-        "{ANALYSIS}[[body]]\ngroup = \"body_a\"\nmaterial = {{ E = 1000.0, nu = 0.3, G = 1.0 }}\n"
-    ));
+    let material = with_keys(block_material(), &[("G", 1.0)]);
+    let (ok, text) = run_case(CaseBuilder::plane_strain().body("body_a", material));
     assert!(!ok);
     assert!(text.contains("`G`") && text.contains("case.toml"), "{text}");
 }
 
 #[test]
 fn a_load_on_a_curve_of_no_body_is_reported() {
-    let (ok, text) = run_case(&format!(
-        "{ANALYSIS}[[body]]\ngroup = \"body_a\"\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n[[support]]\ngroup = \"bottom\"\n\
-         ux = 0.0\nuy = 0.0\n[[load]]\ngroup = \"top\"\npressure = 1.0\n"
-    ));
+    let (ok, text) = run_case(
+        CaseBuilder::plane_strain()
+            .body("body_a", block_material())
+            .support("bottom", &[("ux", 0.0), ("uy", 0.0)])
+            .pressure("top", 1.0),
+    );
     assert!(!ok);
     assert!(
         text.contains("load 'top'") && text.contains("not an edge of any body"),
@@ -222,25 +208,12 @@ fn a_load_on_a_curve_of_no_body_is_reported() {
 #[test]
 fn a_successful_run_writes_the_series_and_history() {
     let dir = tempfile::tempdir().unwrap();
-    let case = dir.path().join("case.toml");
-    std::fs::write(
-        &case,
-        format!(
-            "[mesh]\nfile = \"{}\"\n{ANALYSIS}[[body]]\ngroup = \"body_a\"\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n\
-             [[support]]\ngroup = \"bottom\"\nux = 0.0\nuy = 0.0\n[[support]]\ngroup = \"corner\"\nux = 0.0\n\
-             [steps]\nfactors = [0.5, 1.0]\n",
-            fixture("two_bodies_ascii.msh")
-        ),
-    )
-    .unwrap();
+    let case = held_block()
+        .step_factors(&[0.5, 1.0])
+        .write(&dir.path().join("case.toml"));
     let out = dir.path().join("out");
-    let (ok, text) = asperity(&[
-        "run",
-        case.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(ok, "{text}");
+    let (code, text) = run_into(&case, &out);
+    assert_eq!(code, Some(0), "{text}");
     for f in [
         "bodies_0001.vtu",
         "bodies_0002.vtu",
@@ -268,55 +241,16 @@ fn a_successful_run_writes_the_series_and_history() {
 #[test]
 fn a_step_that_cannot_converge_is_named_and_earlier_results_stay_on_disk() {
     let dir = tempfile::tempdir().unwrap();
-    let case = dir.path().join("case.toml");
-    std::fs::write(
-        &case,
-        format!(
-            r#"[mesh]
-file = "{}"
-[analysis]
-type = "plane_strain"
-[[body]]
-group = "lower"
-material = {{ E = 1000.0, nu = 0.3 }}
-[[body]]
-group = "upper"
-material = {{ E = 1000.0, nu = 0.3 }}
-[[support]]
-group = "base"
-ux = 0.0
-uy = 0.0
-[[support]]
-group = "lid"
-ux = 0.5
-factors = [0.0, 1.0]
-[[load]]
-group = "lid"
-pressure = 10.0
-factors = [1.0, 1.0]
-[[contact]]
-name = "joint"
-side_a = "lower_top"
-side_b = "upper_bottom"
-law = {{ type = "linear_coulomb", normal_stiffness = 1e4, tangential_stiffness = 1e4, friction = 0.3 }}
-[steps]
-count = 2
-[solver]
-max_iterations = 1
-max_cutbacks = 0
-"#,
-            fixture("contact_pair.msh")
-        ),
-    )
-    .unwrap();
+    let case = two_blocks(0.3)
+        .support_history("lid", &[("ux", 0.5)], &[0.0, 1.0])
+        .pressure_history("lid", 10.0, &[1.0, 1.0])
+        .steps(2)
+        .set("solver", "max_iterations", 1)
+        .set("solver", "max_cutbacks", 0)
+        .write(&dir.path().join("case.toml"));
     let out = dir.path().join("out");
-    let (ok, text) = asperity(&[
-        "run",
-        case.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(!ok, "{text}");
+    let (code, text) = run_into(&case, &out);
+    assert_ne!(code, Some(0), "{text}");
     assert!(
         text.contains("step 2") && text.contains("did not converge") && text.contains("residuals"),
         "{text}"
@@ -346,39 +280,19 @@ max_cutbacks = 0
 #[test]
 fn plastic_collapse_exits_with_code_5_and_keeps_the_converged_steps() {
     let dir = tempfile::tempdir().unwrap();
-    let case = dir.path().join("case.toml");
     let traction = 2.0 * 2.0 / 3f64.sqrt() * 100.0;
-    std::fs::write(
-        &case,
-        format!(
-            r#"[mesh]
-file = "{}"
-[analysis]
-type = "plane_strain"
-[[body]]
-group = "lower"
-material = {{ E = 70000.0, nu = 0.3, yield_stress = 100.0 }}
-[[support]]
-group = "base"
-ux = 0.0
-uy = 0.0
-[[load]]
-group = "lower_top"
-traction = [0.0, {traction}]
-[steps]
-count = 4
-"#,
-            fixture("contact_pair.msh")
-        ),
-    )
-    .unwrap();
+    let case = CaseBuilder::plane_strain()
+        .mesh_file(&fixture("contact_pair.msh"))
+        .body(
+            "lower",
+            with_keys(elastic(70000.0, 0.3), &[("yield_stress", 100.0)]),
+        )
+        .support("base", &[("ux", 0.0), ("uy", 0.0)])
+        .traction("lower_top", [0.0, traction])
+        .steps(4)
+        .write(&dir.path().join("case.toml"));
     let out = dir.path().join("out");
-    let (code, text) = asperity_code(&[
-        "run",
-        case.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (code, text) = run_into(&case, &out);
     assert_eq!(code, Some(5), "{text}");
     assert!(
         text.contains("plastic collapse") && text.contains("last converged load factor"),
@@ -389,20 +303,9 @@ count = 4
     assert!(summary.contains("\"failed\""), "{summary}");
 }
 
-/// A plane-strain block on its base, pressed at its top, with `steps` equal steps.
-fn block_case(dir: &Path, steps: usize) -> std::path::PathBuf {
-    let case = dir.join("case.toml");
-    std::fs::write(
-        &case,
-        format!(
-            "[mesh]\nfile = \"{}\"\n{ANALYSIS}[[body]]\ngroup = \"body_a\"\nmaterial = {{ E = 1000.0, nu = 0.3 }}\n\
-             [[support]]\ngroup = \"bottom\"\nux = 0.0\nuy = 0.0\n[[support]]\ngroup = \"corner\"\nux = 0.0\n\
-             [steps]\ncount = {steps}\n",
-            fixture("two_bodies_ascii.msh")
-        ),
-    )
-    .unwrap();
-    case
+/// The held block (`common::held_block`) with `steps` equal steps.
+fn block_case(dir: &Path, steps: i64) -> std::path::PathBuf {
+    held_block().steps(steps).write(&dir.join("case.toml"))
 }
 
 /// A second run into a results folder refuses (exit 2) and changes nothing; `--force`

@@ -192,15 +192,7 @@ mod block {
     /// A block [1, 3] × [1, 2] on a base [0, 4] × [0, 1] (plane strain), coincident nodes on
     /// the contact. The block's top edge is the loaded/driven one.
     pub fn mesh() -> Mesh {
-        let mut base = tensor(&uniform(0.0, 4.0, 8), &uniform(0.0, 1.0, 2), "base");
-        add_curve_group(&mut base, "ground", |x| x[1] == 0.0);
-        add_curve_group(&mut base, "base_top", |x| {
-            x[1] == 1.0 && (1.0..=3.0).contains(&x[0])
-        });
-        let mut block = tensor(&uniform(1.0, 3.0, 4), &uniform(1.0, 2.0, 2), "block");
-        add_curve_group(&mut block, "block_bottom", |x| x[1] == 1.0);
-        add_curve_group(&mut block, "block_top", |x| x[1] == 2.0);
-        merge(base, block, false)
+        block_on_base_mesh(4.0, [1.0, 3.0], 2.0, [8, 4], 2)
     }
 
     /// The block on the base with a named linear Coulomb joint.

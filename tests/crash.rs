@@ -8,50 +8,26 @@
 //! `history.csv` and `results.pvd` must be prefixes of the uninterrupted ones, and after
 //! `--resume` every result file must be identical.
 
+mod common;
+
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
+use common::{CaseBuilder, block_material, file_names, two_blocks_on, with_keys};
+
 /// Dragged plastic contact with unloading: 8 steps, about 30 increments.
-fn case_text() -> String {
-    format!(
-        r#"[mesh]
-file = "{}"
-[analysis]
-type = "plane_strain"
-[[body]]
-group = "lower"
-material = {{ E = 1000.0, nu = 0.3, yield_stress = 12.0 }}
-[[body]]
-group = "upper"
-material = {{ E = 1000.0, nu = 0.3 }}
-[[support]]
-group = "base"
-ux = 0.0
-uy = 0.0
-[[support]]
-group = "lid"
-ux = 0.2
-factors = [0.0, 0.25, 0.5, 0.75, 1.0, 1.0, 0.5, 0.0]
-[[load]]
-group = "lid"
-pressure = 10.0
-factors = [1.0, 1.0, 1.0, 1.0, 1.0, 1.5, 1.5, 1.0]
-[[contact]]
-name = "joint"
-side_a = "lower_top"
-side_b = "upper_bottom"
-law = {{ type = "linear_coulomb", normal_stiffness = 1e4, tangential_stiffness = 1e4, friction = 0.3 }}
-[steps]
-count = 8
-[solver]
-max_iterations = 8
-max_cutbacks = 12
-"#,
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/fixtures/contact_pair.msh")
-            .display()
-    )
+fn case() -> CaseBuilder {
+    two_blocks_on(with_keys(block_material(), &[("yield_stress", 12.0)]), 0.3)
+        .support_history(
+            "lid",
+            &[("ux", 0.2)],
+            &[0.0, 0.25, 0.5, 0.75, 1.0, 1.0, 0.5, 0.0],
+        )
+        .pressure_history("lid", 10.0, &[1.0, 1.0, 1.0, 1.0, 1.0, 1.5, 1.5, 1.0])
+        .steps(8)
+        .set("solver", "max_iterations", 8)
+        .set("solver", "max_cutbacks", 12)
 }
 
 fn asperity() -> Command {
@@ -112,15 +88,6 @@ fn kill_run(case: &Path, out: &Path, k: u64, delay: u64) {
     child.wait().unwrap();
 }
 
-fn files(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
-}
-
 fn read(path: PathBuf) -> String {
     std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
@@ -170,7 +137,7 @@ fn is_growing_table(name: &str) -> bool {
 /// Returns the number of steps the killed run had completed.
 fn check_killed(dir: &Path, reference: &Path) -> usize {
     let mut listed = Vec::new();
-    for name in files(dir) {
+    for name in file_names(dir) {
         let path = dir.join(&name);
         let reference_text = || read(reference.join(&name));
         if name.ends_with(".tmp") {
@@ -233,11 +200,11 @@ fn check_killed(dir: &Path, reference: &Path) -> usize {
 fn check_resumed(dir: &Path, reference: &Path) {
     let own = ["run.json", "summary.json", "restart.bin", "log.txt"];
     assert_eq!(
-        files(dir),
-        files(reference),
+        file_names(dir),
+        file_names(reference),
         "file sets differ after --resume"
     );
-    for name in files(reference)
+    for name in file_names(reference)
         .iter()
         .filter(|n| !own.contains(&n.as_str()))
     {
@@ -253,8 +220,7 @@ fn check_resumed(dir: &Path, reference: &Path) {
 #[test]
 fn killed_runs_leave_complete_files_and_resume_to_identical_results() {
     let root = tempfile::tempdir().unwrap();
-    let case = root.path().join("case.toml");
-    std::fs::write(&case, case_text()).unwrap();
+    let case = case().write(&root.path().join("case.toml"));
     let reference = root.path().join("reference");
     run(&case, &reference, &[]);
     let steps = history_steps(&read(reference.join("history.csv")));

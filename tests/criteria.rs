@@ -7,12 +7,12 @@
 
 mod common;
 
+use asperity::Error;
 use asperity::config::Case;
 use asperity::solver::newton::{Criteria, NewtonSettings};
 use asperity::solver::stepping::{RunStatistics, Solution, run_steps};
 use common::{
-    CaseBuilder, add_curve_group, block_on_base, elastic, linear_coulomb, merge, rectangle,
-    settings, tensor, uniform,
+    CaseBuilder, block_on_base, elastic, linear_coulomb, rectangle, settings, sliding_block_mesh,
 };
 
 /// The defaults and the tight reference settings of `case`.
@@ -70,25 +70,13 @@ fn agrees(mesh: impl Fn() -> asperity::mesh::Mesh, case: &Case) -> (usize, usize
     (sa.iterations, sb.iterations)
 }
 
-fn sliding_mesh() -> asperity::mesh::Mesh {
-    let mut base = tensor(&uniform(0.0, 3.0, 6), &uniform(0.0, 1.0, 2), "base");
-    add_curve_group(&mut base, "ground", |x| x[1] == 0.0);
-    add_curve_group(&mut base, "base_top", |x| {
-        x[1] == 1.0 && (0.5..=2.5).contains(&x[0])
-    });
-    let mut block = tensor(&uniform(0.5, 2.5, 4), &uniform(1.0, 1.75, 2), "block");
-    add_curve_group(&mut block, "block_bottom", |x| x[1] == 1.0);
-    add_curve_group(&mut block, "block_top", |x| x[1] == 1.75);
-    merge(base, block, false)
-}
-
 #[test]
 fn frictional_sliding_with_stick_and_slip_agrees_with_a_tight_run() {
     // Pressed, pushed past the friction limit (slip), back a little (stick), on again.
     let case = block_on_base(70000.0, 0.33, &[], linear_coulomb(1e4, 1e3, 0.25))
         .pressed_and_pushed(8.0, 0.01, &[0.5, 1.0, 0.9, 1.5, 2.0, 1.9, 2.5])
         .case();
-    let (default, tight) = agrees(sliding_mesh, &case);
+    let (default, tight) = agrees(sliding_block_mesh, &case);
     assert!(
         default <= tight,
         "iterations: default {default}, tight {tight}"
@@ -173,21 +161,21 @@ fn pressure_on_a_frictional_contact_unloaded_to_zero_converges() {
         .steps(3)
         .case();
     let (default, _) = default_and_tight(&case);
-    let (steps, stats, _) = history(sliding_mesh(), &case, &default);
+    let (steps, stats, _) = history(sliding_block_mesh(), &case, &default);
     assert_eq!(stats.cutbacks, 0);
     let peak = steps[1].iter().fold(0.0_f64, |m, x| m.max(x.abs()));
     let rest = steps[2].iter().fold(0.0_f64, |m, x| m.max(x.abs()));
     assert!(rest <= 1e-6 * peak, "peak {peak}, rest {rest}");
 }
 
-fn solver_table(entries: &[(&str, toml::Value)]) -> Result<Case, String> {
+fn solver_table(entries: &[(&str, toml::Value)]) -> asperity::Result<Case> {
     let mut builder = CaseBuilder::plane_strain()
         .body("body", elastic(200_000.0, 0.3))
         .support("t0", &[("uy", 0.0)]);
     for (k, v) in entries {
         builder = builder.set("solver", k, v.clone());
     }
-    builder.try_case().map_err(|e| e.to_string())
+    builder.try_case()
 }
 
 #[test]
@@ -219,10 +207,22 @@ fn bad_thresholds_are_named() {
         ("average_force", 0.0.into()),
     ] {
         let e = solver_table(&[(key, value)]).expect_err("invalid");
-        assert!(e.contains(&format!("solver.{key}")), "{e}");
+        assert_eq!(invalid_key(e), format!("solver.{key}"));
     }
     let e = solver_table(&[("linear_residual_tolerance", 1e-2.into())]).expect_err("invalid");
-    assert!(e.contains("solver.linear_residual_tolerance"), "{e}");
+    assert_eq!(invalid_key(e), "solver.linear_residual_tolerance");
+    // An unknown key is a case error whose message names it.
     let e = solver_table(&[("residual_tolerence", 1e-3.into())]).expect_err("unknown key");
-    assert!(e.contains("residual_tolerence"), "{e}");
+    assert!(
+        matches!(&e, Error::Case { message, .. } if message.contains("residual_tolerence")),
+        "{e}"
+    );
+}
+
+/// The case-file key of an [`Error::InvalidParameter`].
+fn invalid_key(e: Error) -> String {
+    match e {
+        Error::InvalidParameter { key, .. } => key,
+        other => panic!("expected an invalid parameter, got {other:?}"),
+    }
 }

@@ -9,61 +9,41 @@
 //! `summary.json` is compared as JSON without its wall-clock `seconds` and case path, and
 //! `run.json`, `log.txt` and `restart.bin` (times, host, timestamps) are left out.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use common::{CaseBuilder, block_material, file_names, fixture, two_blocks, with_keys};
+
 /// A frictional pair that slips: two bodies pressed together (lid moved down) and sheared
 /// (lid moved sideways) until the tangential force reaches μ times the normal force.
-const FRICTIONAL: &str = "[analysis]
-type = \"plane_strain\"
-[[body]]
-group = \"lower\"
-material = { E = 1000.0, nu = 0.3 }
-[[body]]
-group = \"upper\"
-material = { E = 1000.0, nu = 0.3 }
-[[support]]
-group = \"base\"
-ux = 0.0
-uy = 0.0
-[[support]]
-group = \"lid\"
-ux = 0.03
-uy = -0.01
-[[contact]]
-name = \"joint\"
-side_a = \"lower_top\"
-side_b = \"upper_bottom\"
-law = { type = \"linear_coulomb\", normal_stiffness = 1e4, tangential_stiffness = 1e4, friction = 0.2 }
-[steps]
-count = 3
-";
+fn frictional() -> CaseBuilder {
+    two_blocks(0.2)
+        .support("lid", &[("ux", 0.03), ("uy", -0.01)])
+        .steps(3)
+}
 
 /// An axisymmetric elasto-plastic body compressed past yield and partly unloaded.
-const PLASTIC: &str = "[analysis]
-type = \"axisymmetric\"
-[[body]]
-group = \"lower\"
-material = { E = 1000.0, nu = 0.3, yield_stress = 1.0, hardening = 10.0 }
-[[support]]
-group = \"base\"
-uy = 0.0
-[[support]]
-group = \"lower_top\"
-uy = -0.03
-[steps]
-factors = [0.5, 1.0, 0.5]
-";
-
-/// Runs `case` (without its `[mesh]`) with `threads` worker threads into `dir/out_<threads>`.
-fn run(dir: &Path, case: &str, threads: usize) -> PathBuf {
-    let geo = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/contact_pair.geo");
-    let case_path = dir.join("case.toml");
-    let mesh = format!(
-        "[mesh]\ngeo = {:?}\nsize = 0.3\n",
-        geo.display().to_string()
+fn plastic() -> CaseBuilder {
+    let material = with_keys(
+        block_material(),
+        &[("yield_stress", 1.0), ("hardening", 10.0)],
     );
-    std::fs::write(&case_path, mesh + case).unwrap();
+    CaseBuilder::axisymmetric()
+        .body("lower", material)
+        .support("base", &[("uy", 0.0)])
+        .support("lower_top", &[("uy", -0.03)])
+        .step_factors(&[0.5, 1.0, 0.5])
+}
+
+/// Runs `case` on a mesh of `contact_pair.geo` (size 0.3) with `threads` worker threads into
+/// `dir/out_<threads>`.
+fn run(dir: &Path, case: &CaseBuilder, threads: usize) -> PathBuf {
+    let case_path = case
+        .clone()
+        .mesh_geo(&fixture("contact_pair.geo"), 0.3)
+        .write(&dir.join("case.toml"));
     let out = dir.join(format!("out_{threads}"));
     let status = Command::new(env!("CARGO_BIN_EXE_asperity"))
         .args(["run", case_path.to_str().unwrap(), "--out"])
@@ -77,16 +57,6 @@ fn run(dir: &Path, case: &str, threads: usize) -> PathBuf {
         String::from_utf8_lossy(&status.stderr)
     );
     out
-}
-
-/// The file names of `dir`, sorted.
-fn names(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
 }
 
 /// `summary.json` without its timings and the path of the case file (each run has its own).
@@ -110,21 +80,21 @@ fn iterations(dir: &Path) -> Vec<u32> {
         .collect()
 }
 
-fn check_identical(case: &str) {
+fn check_identical(case: &CaseBuilder) {
     let dir = tempfile::tempdir().unwrap();
     let reference = run(dir.path(), case, 1);
     // The case must be nonlinear (a step that takes several iterations), or it would test
     // little. history.csv's first row is the unloaded start (step 0).
     let steps = iterations(&reference);
     assert!(steps[1..].iter().any(|&n| n > 1), "{steps:?}");
-    let files = names(&reference);
+    let files = file_names(&reference);
     assert!(files.iter().any(|f| f.ends_with(".vtu")), "{files:?}");
     // Threads 1 again (run after run), then 2 and 4.
     for (k, threads) in [1, 2, 4].into_iter().enumerate() {
         let other_dir = dir.path().join(format!("run_{k}"));
         std::fs::create_dir(&other_dir).unwrap();
         let other = run(&other_dir, case, threads);
-        assert_eq!(names(&other), files, "{threads} threads");
+        assert_eq!(file_names(&other), files, "{threads} threads");
         // Records of the run itself (times, host, timestamped log lines; the restart record
         // holds the run's timings) are not results; summary.json is compared without its
         // timings below.
@@ -142,10 +112,10 @@ fn check_identical(case: &str) {
 
 #[test]
 fn a_frictional_case_is_bitwise_identical_with_1_2_and_4_threads() {
-    check_identical(FRICTIONAL);
+    check_identical(&frictional());
 }
 
 #[test]
 fn a_plastic_case_is_bitwise_identical_with_1_2_and_4_threads() {
-    check_identical(PLASTIC);
+    check_identical(&plastic());
 }

@@ -3,65 +3,33 @@
 //! equilibrium (the base carries the lid's pressure load at every step) and the factors the
 //! case gives.
 
+mod common;
+
 use std::collections::HashMap;
 use std::path::Path;
 use std::process::Command;
 
+use common::{table, two_blocks};
+
 /// Two blocks on a frictional joint: the lid pressed by p = 3 MPa along its own factors and
 /// dragged sideways by a prescribed displacement along others; global factors of their own.
 fn case(dir: &Path) -> std::path::PathBuf {
-    let case = dir.join("case.toml");
-    std::fs::write(
-        &case,
-        format!(
-            r#"[mesh]
-file = "{}"
-[analysis]
-type = "plane_strain"
-thickness = 2.5
-[[body]]
-group = "lower"
-material = {{ E = 1000.0, nu = 0.3 }}
-[[body]]
-group = "upper"
-material = {{ E = 1000.0, nu = 0.3 }}
-[[support]]
-group = "base"
-ux = 0.0
-uy = 0.0
-[[support]]
-group = "lid"
-ux = 0.01
-factors = [0.0, 0.5, 1.0]
-[[load]]
-group = "lid"
-pressure = 3.0
-factors = [1.0, 2.0, 0.5]
-[[contact]]
-name = "joint"
-side_a = "lower_top"
-side_b = "upper_bottom"
-law = {{ type = "linear_coulomb", normal_stiffness = 1e4, tangential_stiffness = 1e4, friction = 0.5 }}
-[steps]
-factors = [0.2, 0.6, 1.0]
-[[history]]
-name = "base_y"
-kind = "reaction"
-support = "base"
-component = "y"
-[[history]]
-name = "lid_x"
-kind = "reaction"
-support = "lid"
-component = "x"
-"#,
-            Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("tests/fixtures/contact_pair.msh")
-                .display()
-        ),
-    )
-    .unwrap();
-    case
+    let reaction = |name: &str, support: &str, component: &str| {
+        table(&[
+            ("name", name.into()),
+            ("kind", "reaction".into()),
+            ("support", support.into()),
+            ("component", component.into()),
+        ])
+    };
+    two_blocks(0.5)
+        .set("analysis", "thickness", 2.5)
+        .support_history("lid", &[("ux", 0.01)], &[0.0, 0.5, 1.0])
+        .pressure_history("lid", 3.0, &[1.0, 2.0, 0.5])
+        .step_factors(&[0.2, 0.6, 1.0])
+        .push("history", reaction("base_y", "base", "y"))
+        .push("history", reaction("lid_x", "lid", "x"))
+        .write(&dir.join("case.toml"))
 }
 
 fn read_history(path: &Path) -> Vec<HashMap<String, f64>> {

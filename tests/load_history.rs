@@ -8,67 +8,16 @@
 //! its top and right edges. Its stress is uniform, which the quadratic element represents
 //! exactly, so the corner (2, 1) moves by u_x = 2 (σ_xx − ν σ_yy)/E, u_y = (σ_yy − ν σ_xx)/E.
 
+mod common;
+
 use std::path::Path;
 
 use asperity::config::Case;
 use asperity::model::Model;
 use asperity::run::{self, folder::OutputFolder};
 use asperity::solver::stepping::StepResult;
-
-/// One quad8 [0,2]×[0,1] (surface "plate") with its four edges.
-const MESH: &str = "$MeshFormat
-4.1 0 8
-$EndMeshFormat
-$PhysicalNames
-5
-1 1 \"bottom\"
-1 2 \"right\"
-1 3 \"top\"
-1 4 \"left\"
-2 5 \"plate\"
-$EndPhysicalNames
-$Entities
-0 4 1 0
-1 0 0 0 2 0 0 1 1 0
-2 2 0 0 2 1 0 1 2 0
-3 0 1 0 2 1 0 1 3 0
-4 0 0 0 0 1 0 1 4 0
-1 0 0 0 2 1 0 1 5 0
-$EndEntities
-$Nodes
-1 8 1 8
-2 1 0 8
-1
-2
-3
-4
-5
-6
-7
-8
-0 0 0
-2 0 0
-2 1 0
-0 1 0
-1 0 0
-2 0.5 0
-1 1 0
-0 0.5 0
-$EndNodes
-$Elements
-5 5 1 5
-1 1 8 1
-1 1 2 5
-1 2 8 1
-2 2 3 6
-1 3 8 1
-3 3 4 7
-1 4 8 1
-4 4 1 8
-2 1 16 1
-5 1 2 3 4 5 6 7 8
-$EndElements
-";
+use common::{CaseBuilder, PLATE_MSH, elastic, list, table, with_keys};
+use toml::{Table, Value};
 
 const E: f64 = 1000.0;
 const NU: f64 = 0.3;
@@ -77,21 +26,38 @@ const PULL: f64 = 2.0;
 const SIDE: f64 = -1.5;
 
 /// The plate's case head: mesh, plane stress, a body of `material` on the rollers.
-fn plate(material: &str) -> String {
-    format!(
-        "[mesh]\nfile = \"m.msh\"\n[analysis]\ntype = \"plane_stress\"\nthickness = 1.0\n\
-         [[body]]\ngroup = \"plate\"\nmaterial = {material}\n\
-         [[support]]\ngroup = \"left\"\nux = 0.0\n[[support]]\ngroup = \"bottom\"\nuy = 0.0\n"
-    )
+fn plate(material: Table) -> CaseBuilder {
+    CaseBuilder::plane_stress(1.0)
+        .mesh_file(Path::new("m.msh"))
+        .body("plate", material)
+        .support("left", &[("ux", 0.0)])
+        .support("bottom", &[("uy", 0.0)])
 }
 
 /// The elastic plate with its two loads, `pull` (top) and `side` (right).
-fn elastic() -> String {
-    plate(&format!("{{ E = {E}, nu = {NU} }}"))
-        + &format!(
-            "[[load]]\nname = \"pull\"\ngroup = \"top\"\ntraction = [0.0, {PULL}]\n\
-             [[load]]\nname = \"side\"\ngroup = \"right\"\ntraction = [{SIDE}, 0.0]\n"
-        )
+fn elastic_plate() -> CaseBuilder {
+    let traction = |name: &str, group: &str, traction: [f64; 2]| {
+        table(&[
+            ("name", name.into()),
+            ("group", group.into()),
+            ("traction", list(&traction)),
+        ])
+    };
+    plate(elastic(E, NU))
+        .push("load", traction("pull", "top", [0.0, PULL]))
+        .push("load", traction("side", "right", [SIDE, 0.0]))
+}
+
+/// A `[[step]]` of `keys` that sets the multipliers `targets` (`loads` or `supports`).
+fn step(keys: &[(&str, Value)], targets: &str, multipliers: &[(&str, Value)]) -> Table {
+    let mut step = table(keys);
+    step.insert(targets.into(), table(multipliers).into());
+    step
+}
+
+/// The inline amplitude through (time, value).
+fn inline_amplitude(time: &[f64], value: &[f64]) -> Value {
+    table(&[("time", list(time)), ("value", list(value))]).into()
 }
 
 /// What the run handed to `on_step` at each frame.
@@ -110,13 +76,11 @@ struct Seen {
     cutbacks: usize,
 }
 
-/// Runs `case` on [`MESH`] and returns every frame and the output folder.
-fn run(case: &str) -> (Vec<Seen>, tempfile::TempDir) {
+/// Runs `case` on [`PLATE_MSH`] and returns every frame and the output folder.
+fn run(case: &CaseBuilder) -> (Vec<Seen>, tempfile::TempDir) {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("m.msh"), MESH).unwrap();
-    let path = dir.path().join("case.toml");
-    std::fs::write(&path, case).unwrap();
-    let case = Case::from_file(&path).unwrap();
+    std::fs::write(dir.path().join("m.msh"), PLATE_MSH).unwrap();
+    let case = Case::from_file(&case.write(&dir.path().join("case.toml"))).unwrap();
     let out = dir.path().join("out");
     let folder = OutputFolder::scratch(&out).unwrap();
     let mesh = run::load_mesh(&case, &folder).unwrap();
@@ -197,12 +161,29 @@ const WAVE_VALUE: [f64; 4] = [1.0, -1.5, 0.2, -0.5];
 
 #[test]
 fn loads_follow_their_amplitudes_exactly_through_reversal_and_sign_change() {
-    let case = format!(
-        "{}[[amplitude]]\nname = \"wave\"\ntime = {WAVE_TIME:?}\nvalue = {WAVE_VALUE:?}\n\
-         [[step]]\nname = \"load\"\nincrements = 4\nloads = {{ pull = 1.0, side = 0.5 }}\n\
-         [[step]]\nname = \"reverse\"\nincrements = 7\nloads = {{ pull = \"wave\" }}\n",
-        elastic()
-    );
+    let wave = table(&[
+        ("name", "wave".into()),
+        ("time", list(&WAVE_TIME)),
+        ("value", list(&WAVE_VALUE)),
+    ]);
+    let case = elastic_plate()
+        .push("amplitude", wave)
+        .push(
+            "step",
+            step(
+                &[("name", "load".into()), ("increments", 4.into())],
+                "loads",
+                &[("pull", 1.0.into()), ("side", 0.5.into())],
+            ),
+        )
+        .push(
+            "step",
+            step(
+                &[("name", "reverse".into()), ("increments", 7.into())],
+                "loads",
+                &[("pull", "wave".into())],
+            ),
+        );
     let (seen, dir) = run(&case);
     assert_eq!(seen.len(), 4 + 7);
     for s in &seen {
@@ -249,12 +230,17 @@ fn loads_follow_their_amplitudes_exactly_through_reversal_and_sign_change() {
 
 #[test]
 fn a_step_holds_the_loads_it_does_not_name_while_another_ramps() {
-    let case = format!(
-        "{}[[step]]\nincrements = 2\nloads = {{ pull = 1.0 }}\n\
-         [[step]]\nincrements = 3\nloads = {{ side = -2.0 }}\n\
-         [[step]]\nincrements = 2\nloads = {{ pull = 0.0 }}\n",
-        elastic()
-    );
+    let ramp = |increments: i64, load: &str, to: f64| {
+        step(
+            &[("increments", increments.into())],
+            "loads",
+            &[(load, to.into())],
+        )
+    };
+    let case = elastic_plate()
+        .push("step", ramp(2, "pull", 1.0))
+        .push("step", ramp(3, "side", -2.0))
+        .push("step", ramp(2, "pull", 0.0));
     let (seen, dir) = run(&case);
     assert_eq!(seen.len(), 7);
     for s in &seen {
@@ -278,12 +264,30 @@ fn a_step_holds_the_loads_it_does_not_name_while_another_ramps() {
 
 #[test]
 fn the_frames_of_a_cyclic_elastic_step_repeat_every_cycle() {
-    let case = format!(
-        "{}[[step]]\nname = \"preload\"\nloads = {{ pull = 1.0 }}\n\
-         [[step]]\nname = \"cycling\"\ncycles = 4\nincrements = 5\n\
-         loads = {{ side = {{ time = [0.0, 0.2, 0.7, 1.0], value = [0.0, 1.0, -1.0, 0.0] }} }}\n",
-        elastic()
-    );
+    let case = elastic_plate()
+        .push(
+            "step",
+            step(
+                &[("name", "preload".into())],
+                "loads",
+                &[("pull", 1.0.into())],
+            ),
+        )
+        .push(
+            "step",
+            step(
+                &[
+                    ("name", "cycling".into()),
+                    ("cycles", 4.into()),
+                    ("increments", 5.into()),
+                ],
+                "loads",
+                &[(
+                    "side",
+                    inline_amplitude(&[0.0, 0.2, 0.7, 1.0], &[0.0, 1.0, -1.0, 0.0]),
+                )],
+            ),
+        );
     let (seen, dir) = run(&case);
     assert_eq!(seen.len(), 1 + 4 * 5);
     let cycling = &seen[1..];
@@ -325,14 +329,26 @@ fn a_cut_back_increment_stops_on_the_breakpoint_and_the_plastic_bar_keeps_the_pe
     // the yield strain) the first sub-increment is implausible ([solver]
     // max_strain_increment) and is cut back; the sub-increments meet the peak exactly.
     let (sy, h, peak) = (1.0, 100.0, 0.004);
-    let material = format!("{{ E = {E}, nu = {NU}, yield_stress = {sy}, hardening = {h} }}");
-    let case = plate(&material)
-        + &format!(
-            "[[support]]\nname = \"grip\"\ngroup = \"top\"\nuy = {peak}\n\
-             [[step]]\nsupports = {{ grip = {{ time = [0.0, 0.5, 1.0], value = [0.0, 1.0, 0.4] }} }}\n\
-             [solver]\nmax_strain_increment = 0.003\nresidual_tolerance = 1e-8\n\
-             correction_tolerance = 1e-8\nlinear_residual_tolerance = 1e-10\n"
-        );
+    let material = with_keys(elastic(E, NU), &[("yield_stress", sy), ("hardening", h)]);
+    let grip = table(&[
+        ("name", "grip".into()),
+        ("group", "top".into()),
+        ("uy", peak.into()),
+    ]);
+    let case = plate(material)
+        .push("support", grip)
+        .push(
+            "step",
+            step(
+                &[],
+                "supports",
+                &[("grip", inline_amplitude(&[0.0, 0.5, 1.0], &[0.0, 1.0, 0.4]))],
+            ),
+        )
+        .set("solver", "max_strain_increment", 0.003)
+        .set("solver", "residual_tolerance", 1e-8)
+        .set("solver", "correction_tolerance", 1e-8)
+        .set("solver", "linear_residual_tolerance", 1e-10);
     let (seen, _dir) = run(&case);
     assert_eq!(seen.len(), 1);
     assert!(seen[0].cutbacks >= 1, "{seen:?}");

@@ -7,22 +7,21 @@
 //! - Prandtl's flat punch: collapse pressure (2 + π) k, k = σ_Y/√3.
 mod common;
 
-use asperity::config::Case;
 use asperity::mesh::Mesh;
 use asperity::model::Model;
 use asperity::solver::stepping::run_steps;
 use common::*;
-
-/// The case of a case-file text.
-fn case(text: &str) -> Case {
-    let text = format!("[mesh]\nfile = \"generated.msh\"\n{text}");
-    Case::from_toml(&text, std::path::Path::new("test.toml")).expect("valid test case")
-}
+use toml::Table;
 
 const A: f64 = 10.0;
 const B: f64 = 20.0;
 const E: f64 = 210_000.0;
 const SY: f64 = 100.0;
+
+/// The perfectly plastic material (E, ν, σ_Y).
+fn plastic(nu: f64) -> Table {
+    with_keys(elastic(E, nu), &[("yield_stress", SY)])
+}
 
 /// Limit pressure of the perfectly plastic cylinder (plane strain, von Mises).
 fn p_limit() -> f64 {
@@ -52,27 +51,19 @@ impl Cylinder {
         }
     }
 
-    fn case(self, material: &str, formulation: &str, pressure: f64, factors: &[f64]) -> String {
-        let (analysis, supports) = match self {
-            Cylinder::Axisymmetric => (
-                "axisymmetric",
-                "[[support]]\ngroup = \"t0\"\nuz = 0.0\n[[support]]\ngroup = \"t1\"\nuz = 0.0",
-            ),
-            Cylinder::PlaneStrain => (
-                "plane_strain",
-                "[[support]]\ngroup = \"t0\"\nuy = 0.0\n[[support]]\ngroup = \"t1\"\nux = 0.0",
-            ),
+    /// The cylinder of `material` and `formulation`, its bore pressed by `pressure`; the
+    /// steps are the caller's.
+    fn case(self, material: Table, formulation: &str, pressure: f64) -> CaseBuilder {
+        let (case, supports) = match self {
+            Cylinder::Axisymmetric => (CaseBuilder::axisymmetric(), [("t0", "uz"), ("t1", "uz")]),
+            Cylinder::PlaneStrain => (CaseBuilder::plane_strain(), [("t0", "uy"), ("t1", "ux")]),
         };
-        let factors = factors
-            .iter()
-            .map(|f| format!("{f}"))
-            .collect::<Vec<_>>()
-            .join(", ");
-        format!(
-            "[analysis]\ntype = \"{analysis}\"\n[[body]]\ngroup = \"body\"\nmaterial = {{ {material} }}\n\
-             formulation = \"{formulation}\"\n{supports}\n[[load]]\ngroup = \"s0\"\npressure = {pressure}\n\
-             [steps]\nfactors = [{factors}]\n[solver]\nmax_cutbacks = 6\n"
-        )
+        let case = case.body_with("body", material, formulation);
+        let case = supports.iter().fold(case, |case, (group, component)| {
+            case.support(group, &[(component, 0.0)])
+        });
+        case.pressure("s0", pressure)
+            .set("solver", "max_cutbacks", 6)
     }
 
     /// Mean radial displacement of the bore nodes.
@@ -106,9 +97,11 @@ fn nearly_incompressible_lame_cylinder_within_one_percent() {
         for triangles in [false, true] {
             let mut errors = Vec::new();
             for formulation in ["full", "bbar"] {
-                let text =
-                    cylinder.case(&format!("E = {E}, nu = {nu}"), formulation, 100.0, &[1.0]);
-                let (model, solution) = solve(cylinder.mesh(4, triangles), &case(&text));
+                let case = cylinder
+                    .case(elastic(E, nu), formulation, 100.0)
+                    .step_factors(&[1.0])
+                    .case();
+                let (model, solution) = solve(cylinder.mesh(4, triangles), &case);
                 let u = cylinder.bore_displacement(&model, &solution.u);
                 errors.push((u - exact) / exact);
             }
@@ -201,13 +194,10 @@ fn plastic_cylinder(
     formulation: &str,
     factors: &[f64],
 ) -> Vec<CylinderStep> {
-    let text = cylinder.case(
-        &format!("E = {E}, nu = {nu}, yield_stress = {SY}"),
-        formulation,
-        p_limit(),
-        factors,
-    );
-    let case = case(&text);
+    let case = cylinder
+        .case(plastic(nu), formulation, p_limit())
+        .step_factors(factors)
+        .case();
     let model = model(cylinder.mesh(n, triangles), &case).unwrap();
     let mut steps = Vec::new();
     let _ = run_steps(&model, &settings(&case), |step| {
@@ -331,54 +321,30 @@ fn prandtl_mesh(size: f64) -> Mesh {
 /// Mean punch pressure −F_y / a against the punch displacement.
 fn prandtl_curve(size: f64, formulation: &str, steps: usize, depth: f64) -> Vec<(f64, f64)> {
     let a = 10.0;
-    let factors = (1..=steps)
-        .map(|i| format!("{}", (i as f64 / steps as f64).powf(1.5)))
-        .collect::<Vec<_>>()
-        .join(", ");
+    let factors: Vec<f64> = (1..=steps)
+        .map(|i| (i as f64 / steps as f64).powf(1.5))
+        .collect();
     // The punch: an elastic block 1000 times stiffer than the half-space, on a frictionless
     // contact (penalty k_N = 1000 E / a: an overlap of 1.4·10⁻⁵ mm at collapse), driven at
     // its top. Driving the face nodes directly is the same smooth rigid punch, but the
     // solver's first iteration then concentrates each displacement increment in the first
     // layer of cells, and Newton needs many cut-backs.
-    let text = format!(
-        r#"[analysis]
-        type = "plane_strain"
-        [[body]]
-        group = "half_space"
-        material = {{ E = {E}, nu = 0.3, yield_stress = {SY} }}
-        formulation = "{formulation}"
-        [[body]]
-        group = "punch"
-        material = {{ E = {}, nu = 0.3 }}
-        [[support]]
-        group = "top"
-        uy = {}
-        [[support]]
-        group = "punch_axis"
-        ux = 0.0
-        [[support]]
-        group = "symmetry"
-        ux = 0.0
-        [[support]]
-        group = "far"
-        ux = 0.0
-        [[support]]
-        group = "base"
-        ux = 0.0
-        uy = 0.0
-        [[contact]]
-        curve = "face"
-        body_a = "half_space"
-        body_b = "punch"
-        law = {{ type = "linear_coulomb", normal_stiffness = {}, tangential_stiffness = 1.0, friction = 0.0 }}
-        [steps]
-        factors = [{factors}]
-        "#,
-        1000.0 * E,
-        -depth,
-        1000.0 * E / a
-    );
-    let case = case(&text);
+    let face = [
+        ("curve", "face".into()),
+        ("body_a", "half_space".into()),
+        ("body_b", "punch".into()),
+    ];
+    let case = CaseBuilder::plane_strain()
+        .body_with("half_space", plastic(0.3), formulation)
+        .body("punch", elastic(1000.0 * E, 0.3))
+        .support("top", &[("uy", -depth)])
+        .support("punch_axis", &[("ux", 0.0)])
+        .support("symmetry", &[("ux", 0.0)])
+        .support("far", &[("ux", 0.0)])
+        .support("base", &[("ux", 0.0), ("uy", 0.0)])
+        .contact(&face, linear_coulomb(1000.0 * E / a, 1.0, 0.0))
+        .step_factors(&factors)
+        .case();
     let model = model(prandtl_mesh(size), &case).unwrap();
     let top = model.supports.iter().position(|s| s.name == "top").unwrap();
     let mut curve = Vec::new();
@@ -424,13 +390,10 @@ fn overloaded_cylinder(
     overload: f64,
     factors: &[f64],
 ) -> asperity::Result<usize> {
-    let text = cylinder.case(
-        &format!("E = {E}, nu = 0.3, yield_stress = {SY}"),
-        formulation,
-        overload * p_limit(),
-        factors,
-    );
-    let case = case(&text);
+    let case = cylinder
+        .case(plastic(0.3), formulation, overload * p_limit())
+        .step_factors(factors)
+        .case();
     let model = model(cylinder.mesh(n, false), &case).unwrap();
     let mut steps = 0;
     run_steps(&model, &settings(&case), |_| {
@@ -488,19 +451,13 @@ fn arc_length_control_follows_the_cylinder_to_its_limit_pressure() {
     // reached is the limit pressure in units of p_L, and the run ends normally (at the
     // plateau the arc cannot be continued and shrinks below min_arc_length).
     for cylinder in [Cylinder::Axisymmetric, Cylinder::PlaneStrain] {
-        let text = cylinder
-            .case(
-                &format!("E = {E}, nu = 0.3, yield_stress = {SY}"),
-                "bbar",
-                p_limit(),
-                &[1.0],
-            )
-            .replace(
-                "factors = [1]",
-                "control = \"arc_length\"\ninitial_increment = 0.2\nmax_load_factor = 1.5\n\
-                 max_increments = 200",
-            );
-        let case = case(&text);
+        let case = cylinder
+            .case(plastic(0.3), "bbar", p_limit())
+            .set("steps", "control", "arc_length")
+            .set("steps", "initial_increment", 0.2)
+            .set("steps", "max_load_factor", 1.5)
+            .set("steps", "max_increments", 200)
+            .case();
         let model = model(cylinder.mesh(4, false), &case).unwrap();
         let mut path = Vec::new();
         run_steps(&model, &settings(&case), |step| {

@@ -2,6 +2,8 @@
 //! bit it was given, and a record that does not belong to the case is refused with a clear
 //! error instead of continuing a different model. (Resuming killed runs is `tests/crash.rs`.)
 
+mod common;
+
 use std::path::Path;
 use std::process::Command;
 
@@ -12,6 +14,8 @@ use asperity::output::restart::{OutputState, RecordWriter, read_record};
 use asperity::solver::energy::{Energy, EnergyLedger};
 use asperity::solver::newton::ForceAverage;
 use asperity::solver::stepping::{LoopState, RunStatistics, Solution, StiffnessHistory};
+use common::{CaseBuilder, fixture, held_block, list, table, two_blocks};
+use toml::Table;
 
 /// Values that no formatting round trip would keep: thirds, subnormals, negative zero.
 fn awkward(i: usize) -> f64 {
@@ -215,18 +219,18 @@ fn a_record_gives_back_every_bit() {
     assert_eq!(record.output.series, output.series);
 
     // Another case, another model size, and a damaged file are refused with the reason.
-    let err = read_record(&path, "other case", &template)
-        .unwrap_err()
-        .to_string();
-    assert!(err.contains("case file changed"), "{err}");
+    let refusal = |err: asperity::Error| match err {
+        asperity::Error::Restart { path: p, reason } if p == path => reason,
+        other => panic!("expected a refused record, got {other:?}"),
+    };
+    let reason = refusal(read_record(&path, "other case", &template).unwrap_err());
+    assert!(reason.contains("case file changed"), "{reason}");
     let mut small = template.clone();
     small.u.pop();
-    let err = read_record(&path, "case text", &small)
-        .unwrap_err()
-        .to_string();
+    let reason = refusal(read_record(&path, "case text", &small).unwrap_err());
     assert!(
-        err.contains("damaged") && err.contains("displacements"),
-        "{err}"
+        reason.contains("damaged") && reason.contains("displacements"),
+        "{reason}"
     );
     let bytes = std::fs::read(&path).unwrap();
     for cut in [0, 10, bytes.len() / 2, bytes.len() - 1] {
@@ -250,19 +254,8 @@ fn asperity(args: &[&str]) -> (Option<i32>, String) {
     )
 }
 
-fn write_case(path: &Path, steps: usize) {
-    std::fs::write(
-        path,
-        format!(
-            "[mesh]\nfile = \"{}\"\n[analysis]\ntype = \"plane_strain\"\n[[body]]\ngroup = \"body_a\"\n\
-             material = {{ E = 1000.0, nu = 0.3 }}\n[[support]]\ngroup = \"bottom\"\nux = 0.0\nuy = 0.0\n\
-             [[support]]\ngroup = \"corner\"\nux = 0.0\n[steps]\ncount = {steps}\n",
-            Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("tests/fixtures/two_bodies_ascii.msh")
-                .display()
-        ),
-    )
-    .unwrap();
+fn write_case(path: &Path, steps: i64) {
+    held_block().steps(steps).write(path);
 }
 
 /// `--resume` of a finished run changes no result; of a changed case it is refused (exit 3)
@@ -301,43 +294,50 @@ fn resume_continues_only_the_same_case() {
 
 /// A frictional pair pressed in one step, then sheared back and forth in a cyclic step whose
 /// five cycles are simulated as three (2 + 2 + 1 by cycle jumping).
-const MULTI_STEP: &str = "[analysis]
-type = \"plane_strain\"
-[[body]]
-group = \"lower\"
-material = { E = 1000.0, nu = 0.3 }
-[[body]]
-group = \"upper\"
-material = { E = 1000.0, nu = 0.3 }
-[[support]]
-group = \"base\"
-ux = 0.0
-uy = 0.0
-[[support]]
-name = \"press\"
-group = \"lid\"
-uy = -0.01
-[[support]]
-name = \"shear\"
-group = \"lid\"
-ux = 0.03
-[[contact]]
-name = \"joint\"
-side_a = \"lower_top\"
-side_b = \"upper_bottom\"
-law = { type = \"linear_coulomb\", normal_stiffness = 1e4, tangential_stiffness = 1e4, friction = 0.2 }
-wear = { model = \"archard\", coefficient = 1e-5 }
-[[step]]
-name = \"press\"
-increments = 2
-supports = { press = 1.0 }
-[[step]]
-name = \"fret\"
-cycles = 5
-cycles_per_jump = 2
-increments = 4
-supports = { shear = { time = [0.0, 0.25, 0.75, 1.0], value = [0.0, 1.0, -1.0, 0.0] } }
-";
+fn multi_step() -> CaseBuilder {
+    let step = |name: &str, keys: &[(&str, i64)], supports: Table| {
+        let mut step = table(&[("name", name.into()), ("supports", supports.into())]);
+        for (k, v) in keys {
+            step.insert(k.to_string(), (*v).into());
+        }
+        step
+    };
+    let lid = |name: &str, component: &str, value: f64| {
+        table(&[
+            ("name", name.into()),
+            ("group", "lid".into()),
+            (component, value.into()),
+        ])
+    };
+    let shear = table(&[
+        ("time", list(&[0.0, 0.25, 0.75, 1.0])),
+        ("value", list(&[0.0, 1.0, -1.0, 0.0])),
+    ]);
+    two_blocks(0.2)
+        .set_last(
+            "contact",
+            "wear",
+            table(&[("model", "archard".into()), ("coefficient", 1e-5.into())]),
+        )
+        .push("support", lid("press", "uy", -0.01))
+        .push("support", lid("shear", "ux", 0.03))
+        .push(
+            "step",
+            step(
+                "press",
+                &[("increments", 2)],
+                table(&[("press", 1.0.into())]),
+            ),
+        )
+        .push(
+            "step",
+            step(
+                "fret",
+                &[("cycles", 5), ("cycles_per_jump", 2), ("increments", 4)],
+                table(&[("shear", shear.into())]),
+            ),
+        )
+}
 
 /// Every frame of a run (step number and the bits of the displacements and interface
 /// stresses), and the state to resume from after each.
@@ -374,15 +374,11 @@ impl asperity::solver::stepping::Observer for Frames {
 fn a_multi_step_cyclic_run_resumed_from_any_frame_is_bit_identical() {
     use asperity::model::{Model, ModelSpec};
     use asperity::solver::stepping::run_steps_from;
-    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/contact_pair.msh");
-    let text = format!(
-        "[mesh]\nfile = {:?}\n{MULTI_STEP}",
-        fixture.display().to_string()
-    );
+    let text = multi_step().text();
     let case = asperity::config::Case::from_toml(&text, Path::new("case.toml")).unwrap();
     let settings = asperity::run::newton_settings(&case.solver);
     let model = Model::build(
-        asperity::mesh::msh::read_msh(&fixture).unwrap(),
+        asperity::mesh::msh::read_msh(&fixture("contact_pair.msh")).unwrap(),
         ModelSpec::new(&case).unwrap(),
     )
     .unwrap();

@@ -22,8 +22,8 @@ use asperity::solver::newton::NewtonLog;
 use asperity::solver::stepping::StepResult;
 use asperity::solver::stepping::{Solution, run_steps};
 use common::{
-    add_curve_group, block_on_base, linear_coulomb, merge, settings, sliding_rough_joint, table,
-    tensor, uniform,
+    CaseBuilder, block_on_base, linear_coulomb, list, settings, sliding_block_mesh,
+    sliding_rough_joint, table, two_blocks,
 };
 use toml::{Table, Value};
 
@@ -45,15 +45,7 @@ fn case(law: Table, wear: Option<Table>, factors: &[f64]) -> Case {
 }
 
 fn model(case: &Case) -> Model {
-    let mut base = tensor(&uniform(0.0, 3.0, 6), &uniform(0.0, 1.0, 2), "base");
-    add_curve_group(&mut base, "ground", |x| x[1] == 0.0);
-    add_curve_group(&mut base, "base_top", |x| {
-        x[1] == 1.0 && (0.5..=2.5).contains(&x[0])
-    });
-    let mut block = tensor(&uniform(0.5, 2.5, 4), &uniform(1.0, 1.75, 2), "block");
-    add_curve_group(&mut block, "block_bottom", |x| x[1] == 1.0);
-    add_curve_group(&mut block, "block_top", |x| x[1] == 1.75);
-    common::model(merge(base, block, false), case).expect("model builds")
+    common::model(sliding_block_mesh(), case).expect("model builds")
 }
 
 fn wear(entries: &[(&str, Value)]) -> Table {
@@ -502,7 +494,7 @@ fn bad_wear_keys_are_named() {
         assert_eq!(key_of(&error), expected, "{wear:?}: {error}");
         assert_eq!(error.exit_code(), 3);
     }
-    // Values serde refuses: the message names the key and the choices.
+    // Values serde refuses: a case error whose message names the key and the choices.
     for (wear, words) in [
         (
             archard(&[("coefficient", 1e-8.into()), ("surface", "c".into())]),
@@ -517,7 +509,10 @@ fn bad_wear_keys_are_named() {
             ["depth", "max_depth"],
         ),
     ] {
-        let message = bad(wear).to_string();
+        let message = match bad(wear) {
+            Error::Case { message, .. } => message,
+            other => panic!("expected a case error, got {other:?}"),
+        };
         for w in words {
             assert!(message.contains(w), "{message}");
         }
@@ -698,55 +693,27 @@ fn numeric_csv(path: &std::path::Path, columns: &[&str]) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// Two blocks (tests/fixtures/contact_pair.msh, contact at y = 1 for 0 ≤ x ≤ 2) pressed by
-/// 10 MPa and sheared back and forth, with energy wear and `points` as the contact's
+/// Two blocks (`common::two_blocks`, contact at y = 1 for 0 ≤ x ≤ 2) pressed by 10 MPa and
+/// sheared back and forth, with energy wear and `points` as the contact's
 /// `hysteresis_points`.
-fn sheared_pair_case(points: &str) -> String {
-    format!(
-        r#"[mesh]
-file = "{}"
-[analysis]
-type = "plane_strain"
-[[body]]
-group = "lower"
-material = {{ E = 1000.0, nu = 0.3 }}
-[[body]]
-group = "upper"
-material = {{ E = 1000.0, nu = 0.3 }}
-[[support]]
-group = "base"
-ux = 0.0
-uy = 0.0
-[[support]]
-group = "lid"
-ux = 0.2
-factors = [0.5, 1.0, 0.0, -1.0]
-[[load]]
-group = "lid"
-pressure = 10.0
-factors = [1.0, 1.0, 1.0, 1.0]
-[[contact]]
-name = "joint"
-side_a = "lower_top"
-side_b = "upper_bottom"
-law = {{ type = "linear_coulomb", normal_stiffness = 1e4, tangential_stiffness = 1e4, friction = 0.3 }}
-wear = {{ model = "energy", coefficient = 1e-6 }}
-hysteresis_points = {}
-[steps]
-count = 4
-"#,
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/fixtures/contact_pair.msh")
-            .display(),
-        points
-    )
+fn sheared_pair_case(points: &[[f64; 2]]) -> CaseBuilder {
+    let points: Vec<Value> = points.iter().map(|p| list(p)).collect();
+    two_blocks(0.3)
+        .set_last(
+            "contact",
+            "wear",
+            table(&[("model", "energy".into()), ("coefficient", 1e-6.into())]),
+        )
+        .set_last("contact", "hysteresis_points", points)
+        .support_history("lid", &[("ux", 0.2)], &[0.5, 1.0, 0.0, -1.0])
+        .pressure_history("lid", 10.0, &[1.0; 4])
+        .steps(4)
 }
 
 #[test]
 fn a_run_with_contact_writes_its_hysteresis_and_resumes_it_unchanged() {
     let dir = tempfile::tempdir().unwrap();
-    let case = dir.path().join("case.toml");
-    std::fs::write(&case, sheared_pair_case("[[0.6, 1.0], [1.5, 1.0]]")).unwrap();
+    let case = sheared_pair_case(&[[0.6, 1.0], [1.5, 1.0]]).write(&dir.path().join("case.toml"));
     let out = dir.path().join("out");
     let run = |extra: &[&str]| {
         let status = std::process::Command::new(env!("CARGO_BIN_EXE_asperity"))
@@ -814,8 +781,7 @@ fn a_run_with_contact_writes_its_hysteresis_and_resumes_it_unchanged() {
 #[test]
 fn a_hysteresis_point_off_the_contact_is_refused_naming_its_key() {
     let dir = tempfile::tempdir().unwrap();
-    let case = dir.path().join("case.toml");
-    std::fs::write(&case, sheared_pair_case("[[0.6, 1.0], [1.0, 1.9]]")).unwrap();
+    let case = sheared_pair_case(&[[0.6, 1.0], [1.0, 1.9]]).write(&dir.path().join("case.toml"));
     let run = std::process::Command::new(env!("CARGO_BIN_EXE_asperity"))
         .arg("run")
         .arg(&case)

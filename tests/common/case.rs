@@ -36,6 +36,14 @@ pub fn elastic(e: f64, nu: f64) -> Table {
     table(&[("E", e.into()), ("nu", nu.into())])
 }
 
+/// `table` with the numeric `keys` added (a material's plastic parameters, say).
+pub fn with_keys(mut table: Table, keys: &[(&str, f64)]) -> Table {
+    for (k, v) in keys {
+        table.insert(k.to_string(), (*v).into());
+    }
+    table
+}
+
 /// The linear Coulomb interface law.
 pub fn linear_coulomb(normal_stiffness: f64, tangential_stiffness: f64, friction: f64) -> Table {
     table(&[
@@ -49,11 +57,7 @@ pub fn linear_coulomb(normal_stiffness: f64, tangential_stiffness: f64, friction
 /// The rough-joint law (Buczkowski & Kleiber (1994), Eqs. 1–5) with the given parameters
 /// (c_n, m, R, S, mu_m, ...).
 pub fn rough_joint(parameters: &[(&str, f64)]) -> Table {
-    let mut law = table(&[("type", "rough_joint".into())]);
-    for (k, v) in parameters {
-        law.insert(k.to_string(), (*v).into());
-    }
-    law
+    with_keys(table(&[("type", "rough_joint".into())]), parameters)
 }
 
 /// The rough joint used by the sliding-block tests and benches: power-law compliance,
@@ -112,6 +116,37 @@ impl CaseBuilder {
         self
     }
 
+    /// Sets `key` of the last table of the array `name` (e.g. a key of the contact pair
+    /// pushed last).
+    pub fn set_last(mut self, name: &str, key: &str, value: impl Into<Value>) -> Self {
+        let last = self
+            .root
+            .get_mut(name)
+            .and_then(Value::as_array_mut)
+            .and_then(|array| array.last_mut())
+            .and_then(Value::as_table_mut)
+            .unwrap_or_else(|| panic!("no [[{name}]] to set `{key}` in"));
+        last.insert(key.into(), value.into());
+        self
+    }
+
+    /// The mesh section: the MSH file at `path`.
+    pub fn mesh_file(mut self, path: &Path) -> Self {
+        let mesh = table(&[("file", path.display().to_string().into())]);
+        self.root.insert("mesh".into(), mesh.into());
+        self
+    }
+
+    /// The mesh section: the gmsh script at `path`, meshed with element size `size`.
+    pub fn mesh_geo(mut self, path: &Path, size: f64) -> Self {
+        let mesh = table(&[
+            ("geo", path.display().to_string().into()),
+            ("size", size.into()),
+        ]);
+        self.root.insert("mesh".into(), mesh.into());
+        self
+    }
+
     /// Sets `key` of the table `section` (`[section]`).
     pub fn set(mut self, section: &str, key: &str, value: impl Into<Value>) -> Self {
         let table = self
@@ -130,6 +165,18 @@ impl CaseBuilder {
         self.push(
             "body",
             table(&[("group", group.into()), ("material", material.into())]),
+        )
+    }
+
+    /// A body with an explicit element `formulation` ("full", "bbar").
+    pub fn body_with(self, group: &str, material: Table, formulation: &str) -> Self {
+        self.push(
+            "body",
+            table(&[
+                ("group", group.into()),
+                ("material", material.into()),
+                ("formulation", formulation.into()),
+            ]),
         )
     }
 
@@ -182,6 +229,12 @@ impl CaseBuilder {
     /// The case file's text.
     pub fn text(&self) -> String {
         toml::to_string(&self.root).expect("a case serialises")
+    }
+
+    /// Writes the case file to `path` and returns the path.
+    pub fn write(&self, path: &Path) -> std::path::PathBuf {
+        std::fs::write(path, self.text()).expect("the case file is written");
+        path.to_path_buf()
     }
 
     /// The case, or why it is not valid.

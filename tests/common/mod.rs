@@ -4,8 +4,12 @@
 #![allow(dead_code)]
 
 mod case;
+mod fixtures;
 
 pub use case::*;
+// Not every test uses the fixtures, and a test crate warns of a re-export it never uses.
+#[allow(unused_imports)]
+pub use fixtures::*;
 
 use asperity::config::Case;
 use asperity::mesh::{Cell, CellKind, Line3, Mesh, PhysicalGroup, PointElement};
@@ -358,6 +362,42 @@ pub fn graded(start: f64, length: f64, n: usize, ratio: f64) -> Vec<f64> {
 /// Uniform points from `a` to `b` with `n` intervals.
 pub fn uniform(a: f64, b: f64, n: usize) -> Vec<f64> {
     (0..=n).map(|i| a + (b - a) * i as f64 / n as f64).collect()
+}
+
+/// The mesh of [`block_on_base`] (coincident nodes on the contact): the base [0, `base_width`]
+/// × [0, 1] with curves "ground" (y = 0) and "base_top" (y = 1 under the block), and the block
+/// `block_x` × [1, `block_top`] with curves "block_bottom" and "block_top"; `columns` quad8
+/// across the base and the block, `rows` up each.
+pub fn block_on_base_mesh(
+    base_width: f64,
+    block_x: [f64; 2],
+    block_top: f64,
+    columns: [usize; 2],
+    rows: usize,
+) -> Mesh {
+    let mut base = tensor(
+        &uniform(0.0, base_width, columns[0]),
+        &uniform(0.0, 1.0, rows),
+        "base",
+    );
+    add_curve_group(&mut base, "ground", |x| x[1] == 0.0);
+    add_curve_group(&mut base, "base_top", |x| {
+        x[1] == 1.0 && (block_x[0]..=block_x[1]).contains(&x[0])
+    });
+    let mut block = tensor(
+        &uniform(block_x[0], block_x[1], columns[1]),
+        &uniform(1.0, block_top, rows),
+        "block",
+    );
+    add_curve_group(&mut block, "block_bottom", |x| x[1] == 1.0);
+    add_curve_group(&mut block, "block_top", |x| x[1] == block_top);
+    merge(base, block, false)
+}
+
+/// The sliding block of the allocation, criteria and wear tests: the block
+/// [0.5, 2.5] × [1, 1.75] on the base [0, 3] × [0, 1], 6 and 4 columns, 2 rows.
+pub fn sliding_block_mesh() -> Mesh {
+    block_on_base_mesh(3.0, [0.5, 2.5], 1.75, [6, 4], 2)
 }
 
 /// The shrink fit of a solid shaft (radius B) in a hub (outer radius C), both of length L,

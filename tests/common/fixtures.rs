@@ -1,0 +1,71 @@
+//! The files of `tests/fixtures` and the cases the tests run on them.
+
+use std::path::{Path, PathBuf};
+
+use toml::Table;
+
+use super::case::{CaseBuilder, elastic, linear_coulomb};
+
+/// The path of `tests/fixtures/<name>`.
+pub fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(name)
+}
+
+/// One quad8 [0,2]×[0,1] (`tests/fixtures/plate.msh`, written by hand): surface "plate" and
+/// its edges "bottom", "right", "top" and "left", each its own entity. The text itself, for
+/// the tests that break it one line at a time.
+pub const PLATE_MSH: &str = include_str!("../fixtures/plate.msh");
+
+/// The material of both blocks of [`two_blocks`]: E = 1000 MPa, ν = 0.3.
+pub fn block_material() -> Table {
+    elastic(1000.0, 0.3)
+}
+
+/// Two blocks on a frictional joint (plane strain, `contact_pair.msh`): "lower" [0,2]×[0,1]
+/// and "upper" [0,2]×[1,2], both of [`block_material`], the lower held at its "base"
+/// (u_x = u_y = 0), and the contact pair "joint" from "lower_top" to "upper_bottom", linear
+/// Coulomb with k_N = k_T = 1e4 N/mm³ and `friction`. What acts on the upper block's "lid",
+/// the steps and the pair's other keys ([`CaseBuilder::set_last`]) are the tests' own.
+pub fn two_blocks(friction: f64) -> CaseBuilder {
+    two_blocks_on(block_material(), friction)
+}
+
+/// [`two_blocks`] with the lower block of `lower` instead.
+pub fn two_blocks_on(lower: Table, friction: f64) -> CaseBuilder {
+    CaseBuilder::plane_strain()
+        .mesh_file(&fixture("contact_pair.msh"))
+        .body("lower", lower)
+        .body("upper", block_material())
+        .support("base", &[("ux", 0.0), ("uy", 0.0)])
+        .contact(
+            &[
+                ("name", "joint".into()),
+                ("side_a", "lower_top".into()),
+                ("side_b", "upper_bottom".into()),
+            ],
+            linear_coulomb(1e4, 1e4, friction),
+        )
+}
+
+/// One block held at its bottom (plane strain, `two_bodies_ascii.msh`): body "body_a" of
+/// [`block_material`], its "bottom" held (u_x = u_y = 0) and its "corner" point held in x.
+/// Nothing loads it: the steps are the tests' own.
+pub fn held_block() -> CaseBuilder {
+    CaseBuilder::plane_strain()
+        .mesh_file(&fixture("two_bodies_ascii.msh"))
+        .body("body_a", block_material())
+        .support("bottom", &[("ux", 0.0), ("uy", 0.0)])
+        .support("corner", &[("ux", 0.0)])
+}
+
+/// The names of the files in `dir` (an output folder), sorted.
+pub fn file_names(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
