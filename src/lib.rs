@@ -36,6 +36,7 @@ pub mod model;
 pub mod output;
 pub mod pipeline;
 pub mod post;
+pub mod python;
 pub mod solver;
 pub mod study;
 pub mod sweep;

@@ -633,3 +633,80 @@ fn plans_with_more_runs_than_the_limit_are_refused_before_allocating() {
     }
     assert_eq!(sweep::MAX_RUNS, 100_000);
 }
+
+/// `collect` plots through the one Python runner (`asperity::python`): the script found in
+/// `$ASPERITY_PIPELINES`, run with the `.venv/bin/python` beside that folder; when the script,
+/// matplotlib or the script's success is missing, the `plots:` line says why and how to make
+/// the plots by hand. The Python here is a stand-in that runs the "script" with `sh`.
+#[test]
+fn collect_plots_with_the_pipelines_script_or_says_how_to_make_them() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let dir = dir.path().canonicalize().unwrap();
+    let study = dir.join("study");
+    sweep::plan(&sweep_file(&dir, |t| t), &study, &exe()).unwrap();
+    let pipelines = dir.join("repo/pipelines");
+    std::fs::create_dir_all(pipelines.join("sweep")).unwrap();
+    let collect = |matplotlib: bool| {
+        let out = Command::new(exe())
+            .args(["sweep", "collect", study.to_str().unwrap()])
+            .env("ASPERITY_PIPELINES", &pipelines)
+            .env("STUB_MATPLOTLIB", if matplotlib { "0" } else { "1" })
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout).to_string();
+        text.lines()
+            .find_map(|l| l.split_once("; plots: ").map(|(_, p)| p.to_string()))
+            .unwrap_or_else(|| panic!("no plots: in {text}"))
+    };
+    let manual = |python: &str, script: &str| {
+        format!(
+            "to make it, run `{python} {script} {}` in the repository (after `make venv`)",
+            study.display()
+        )
+    };
+    assert_eq!(
+        collect(true),
+        format!(
+            "skipped one PNG per quantity: ASPERITY_PIPELINES={} has no sweep/plot_sweep.py; {}",
+            pipelines.display(),
+            manual(".venv/bin/python", "pipelines/sweep/plot_sweep.py")
+        )
+    );
+    let script = pipelines.join("sweep/plot_sweep.py");
+    let python = dir.join("repo/.venv/bin/python");
+    std::fs::create_dir_all(python.parent().unwrap()).unwrap();
+    std::fs::write(
+        &python,
+        "#!/bin/sh\nif [ \"$1\" = -c ]; then exit \"$STUB_MATPLOTLIB\"; fi\nexec sh \"$@\"\n",
+    )
+    .unwrap();
+    std::fs::set_permissions(&python, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let by_hand = manual(&python.display().to_string(), &script.display().to_string());
+    std::fs::write(&script, "touch \"$1/stub.png\"\n").unwrap();
+    assert_eq!(
+        collect(false),
+        format!(
+            "skipped one PNG per quantity: {} has no matplotlib; {by_hand}",
+            python.display()
+        )
+    );
+    assert!(!study.join("stub.png").exists());
+    assert_eq!(
+        collect(true),
+        format!("one PNG per quantity in {}", study.display())
+    );
+    assert!(study.join("stub.png").exists());
+    std::fs::write(
+        &script,
+        "echo first >&2\necho 'the last line' >&2\nexit 1\n",
+    )
+    .unwrap();
+    assert_eq!(
+        collect(true),
+        format!(
+            "skipped one PNG per quantity: {} failed: the last line; {by_hand}",
+            script.display()
+        )
+    );
+}

@@ -19,7 +19,6 @@
 
 mod jobs;
 pub mod keys;
-pub(crate) mod python;
 mod run;
 
 use std::collections::BTreeMap;
