@@ -710,3 +710,23 @@ fn collect_plots_with_the_pipelines_script_or_says_how_to_make_them() {
         )
     );
 }
+
+/// A varied string value with a line break (TOML writes it as a multi-line string) stays a
+/// value: the header comment of every run's case file cannot turn its lines into keys.
+#[test]
+fn a_value_with_line_breaks_stays_inside_the_case_header_comment() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("study");
+    let path = sweep_file(dir.path(), |t| {
+        let head = t.split("[[vary]]").next().unwrap().to_string();
+        head + "[[vary]]\nkey = \"mesh.geo\"\nvalues = [\"a\\nb = 1\\r\\n[injected]\"]\n"
+    });
+    sweep::plan(&path, &study, &exe()).unwrap();
+    let text = std::fs::read_to_string(study.join("runs/0000/case.toml")).unwrap();
+    let tree: toml::Value = toml::from_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
+    assert_eq!(tree["mesh"]["geo"].as_str(), Some("a\nb = 1\r\n[injected]"));
+    assert!(
+        tree.get("b").is_none() && tree.get("injected").is_none(),
+        "{text}"
+    );
+}

@@ -224,10 +224,10 @@ pub fn plan(path: &Path, study: &Path, exe: &Path) -> Result<Manifest> {
                 format!("run {id} is not a valid case: {e}"),
             )
         })?;
-        let header = format!(
-            "# run {id} of sweep {sweep_path}: {}\n",
+        let header = comment(&format!(
+            "run {id} of sweep {sweep_path}: {}",
             describe(&sweep.keys, &values)
-        );
+        ));
         write_atomically(&case_path, |w| {
             w.write_all(format!("{header}{text}").as_bytes())
         })?;
@@ -257,6 +257,15 @@ fn describe(keys: &[Vary], values: &[Value]) -> String {
         .map(|(k, v)| format!("{} = {v}", k.key))
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// `text` as TOML comment lines: a value TOML writes over several lines (a string with a line
+/// break) stays inside the comment, and control characters, which a TOML comment may not
+/// hold, are replaced.
+fn comment(text: &str) -> String {
+    text.lines()
+        .map(|line| format!("# {}\n", line.replace(|c: char| c.is_control(), "\u{fffd}")))
+        .collect()
 }
 
 /// A run's case must parse and give a model spec (the law and material parameters valid).
