@@ -35,6 +35,7 @@ pub mod mesh;
 pub mod model;
 pub mod output;
 pub mod post;
+pub mod python;
 pub mod run;
 pub mod solver;
 pub mod study;

@@ -89,7 +89,7 @@ fn plan_writes_one_checked_case_per_grid_point_and_the_job_files() {
         );
     }
     let command = format!(
-        "exec '{}' sweep run '{}' --task \"$SLURM_ARRAY_TASK_ID\"",
+        "RAYON_NUM_THREADS=\"${{SLURM_CPUS_PER_TASK:-1}}\" exec '{}' sweep run '{}' --task \"$SLURM_ARRAY_TASK_ID\"",
         exe().display(),
         study.display()
     );
@@ -220,4 +220,513 @@ fn local_pool_runs_restarts_and_collect_reports_a_failed_run() {
     assert!(rows[4][5].is_empty());
     let (ok, text) = run_cli(&["sweep", "collect", s, "--no-plot"]);
     assert!(!ok && text.contains("run 4: failed"), "{text}");
+}
+
+// ---- Hostile inputs: values and paths that reach generated job files and file names ----
+
+/// The shipped sweep file with its `[slurm]` section replaced by `slurm` (TOML lines).
+fn with_slurm(dir: &Path, slurm: &str) -> PathBuf {
+    sweep_file(dir, |t| {
+        format!("{}[slurm]\n{slurm}\n", t.split("[slurm]").next().unwrap())
+    })
+}
+
+/// `#SBATCH` lines, then exactly one command: what Slurm and bash must both see in
+/// `array.sbatch`. Returns the command line. Slurm reads options only up to the first line
+/// that is neither blank nor a comment, so every option must come before it.
+fn the_one_command(sbatch: &str) -> &str {
+    let commands: Vec<&str> = sbatch
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
+        .collect();
+    assert_eq!(commands.len(), 1, "exactly one command expected:\n{sbatch}");
+    let first = sbatch.lines().position(|l| l == commands[0]).unwrap();
+    assert!(
+        sbatch
+            .lines()
+            .skip(first)
+            .all(|l| !l.starts_with("#SBATCH")),
+        "#SBATCH after the command:\n{sbatch}"
+    );
+    assert!(
+        Command::new("bash")
+            .arg("-n")
+            .arg("-c")
+            .arg(sbatch)
+            .status()
+            .unwrap()
+            .success(),
+        "bash -n fails:\n{sbatch}"
+    );
+    commands[0]
+}
+
+/// The argument of `#SBATCH <option>` as Slurm's batch-script parser reads it (sbatch
+/// `_get_argument`: a backslash escapes the next character, '…' and "…" quote, an unquoted
+/// `#` starts a comment, blanks separate arguments); `None` if the option is absent. Older
+/// Slurm versions (before 17.11) quote with "…" only and end the line at any unescaped `#`:
+/// both readings must agree.
+fn sbatch_option(sbatch: &str, option: &str) -> Option<String> {
+    let rest = sbatch
+        .lines()
+        .filter_map(|l| l.strip_prefix("#SBATCH "))
+        .find_map(|l| l.strip_prefix(option))?;
+    let read = |legacy: bool| {
+        let (mut out, mut quote, mut escape) = (String::new(), None, false);
+        for c in rest.chars() {
+            match (escape, quote, c) {
+                (true, ..) => {
+                    escape = false;
+                    out.push(c);
+                }
+                (false, _, '\\') => escape = true,
+                (false, _, '#') if legacy => break,
+                (false, Some(q), c) if c == q => quote = None,
+                (false, Some(_), c) => out.push(c),
+                (false, None, '"') => quote = Some(c),
+                (false, None, '\'') if !legacy => quote = Some(c),
+                (false, None, '#') => break,
+                (false, None, c) if c.is_whitespace() => break,
+                (false, None, c) => out.push(c),
+            }
+        }
+        assert!(quote.is_none(), "unmatched quote in #SBATCH {option}{rest}");
+        out
+    };
+    let argument = read(false);
+    assert_eq!(argument, read(true), "#SBATCH {option}{rest}");
+    Some(argument)
+}
+
+#[test]
+fn slurm_values_outside_slurm_syntax_are_refused_before_anything_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("study");
+    for (key, value) in [
+        ("partition", r#""debug\necho INJECTED""#),
+        ("partition", r#""debug; touch CANARY""#),
+        ("partition", r#""$(touch CANARY)""#),
+        ("partition", r#""`touch CANARY`""#),
+        ("partition", r#""a b""#),
+        ("partition", r#""'a'""#),
+        ("partition", r#""""#),
+        ("partition", r#""a,,b""#),
+        ("time", r#""01:00:00\ntouch CANARY""#),
+        ("time", r#""01:00:00\r""#),
+        ("time", r#""1:00:00; touch CANARY""#),
+        ("time", r#""""#),
+        ("time", r#""1::00""#),
+        ("time", r#""1-2-3""#),
+        ("time", r#""1:2:3:4""#),
+        ("time", r#""1-2:3:4:5""#),
+        ("time", r#""one hour""#),
+        ("time", r#""1-""#),
+        ("time", r#""-1""#),
+        ("time", r#""1h""#),
+        ("memory", r#""4G\ntouch CANARY""#),
+        ("memory", r#""4G\u0000""#),
+        ("memory", r#""0""#),
+        ("memory", r#""0G""#),
+        ("memory", r#""4X""#),
+        ("memory", r#""-4G""#),
+        ("memory", r#""G""#),
+        ("memory", r#""4 G""#),
+        ("memory", r#""4GB""#),
+        ("memory", r#""99999999999999999999999G""#),
+        ("cpus", "0"),
+    ] {
+        let path = with_slurm(dir.path(), &format!("{key} = {value}"));
+        let (p, k, reason) = key_error(sweep::plan(&path, &study, &exe()).unwrap_err());
+        assert_eq!((p, k), (path, format!("slurm.{key}")), "{key} = {value}");
+        assert!(!reason.is_empty());
+        assert!(!study.exists(), "{key} = {value}: the study was created");
+    }
+}
+
+#[test]
+fn slurm_values_in_slurm_syntax_become_resource_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    for (time, memory, partition, cpus) in [
+        ("30", "4096", "debug", 1),
+        ("30:00", "4G", "gpu,short", 2),
+        ("1:00:00", "512M", "a_b-c.d", 16),
+        ("2-0", "1T", "x1", 1),
+        ("2-12:00", "100K", "P", 1),
+        ("2-12:00:00", "2g", "long.q", 1),
+    ] {
+        let study = dir.path().join(format!("study-{cpus}-{memory}"));
+        let path = with_slurm(
+            dir.path(),
+            &format!(
+                "time = {time:?}\nmemory = {memory:?}\npartition = {partition:?}\ncpus = {cpus}"
+            ),
+        );
+        sweep::plan(&path, &study, &exe()).unwrap();
+        let sbatch = std::fs::read_to_string(study.join("array.sbatch")).unwrap();
+        the_one_command(&sbatch);
+        assert_eq!(sbatch_option(&sbatch, "--time=").unwrap(), time);
+        assert_eq!(sbatch_option(&sbatch, "--mem=").unwrap(), memory);
+        assert_eq!(sbatch_option(&sbatch, "--partition=").unwrap(), partition);
+        assert_eq!(
+            sbatch_option(&sbatch, "--cpus-per-task=").unwrap(),
+            cpus.to_string()
+        );
+    }
+}
+
+/// Every file named `name` below `dir`.
+fn find(dir: &Path, name: &str) -> Vec<PathBuf> {
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.file_name().is_some_and(|n| n == name) {
+            found.push(path.clone());
+        }
+        if path.is_dir() && !path.is_symlink() {
+            found.extend(find(&path, name));
+        }
+    }
+    found
+}
+
+/// A stand-in for asperity at `path` that appends its arguments (each followed by a NUL)
+/// and then `RAYON_NUM_THREADS=…` and an empty record end to `$ARGV_LOG`.
+fn stub_asperity(path: &Path) {
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    std::fs::write(
+        path,
+        "#!/bin/sh\nprintf '%s\\0' \"$@\" \"RAYON_NUM_THREADS=$RAYON_NUM_THREADS\" '' >> \"$ARGV_LOG\"\n",
+    )
+    .unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(path, std::fs::Permissions::from_mode(0o755)).unwrap();
+}
+
+/// The calls recorded by [`stub_asperity`]: each call's arguments.
+fn recorded_calls(log: &Path) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(log).unwrap_or_default();
+    let mut calls = Vec::new();
+    let mut call = Vec::new();
+    for field in text.split('\0') {
+        if field.is_empty() {
+            if !call.is_empty() {
+                calls.push(std::mem::take(&mut call));
+            }
+        } else {
+            call.push(field.to_string());
+        }
+    }
+    calls
+}
+
+/// Study folders and executables whose names are shell syntax: planned, `jobs.txt` (read line
+/// by line as GNU parallel does, each line run by `sh -c`) and `array.sbatch` (run by bash
+/// with a task id) call the executable with the study as one argument, and nothing else runs.
+#[test]
+fn study_and_executable_paths_with_shell_syntax_stay_single_arguments() {
+    let dir = tempfile::tempdir().unwrap();
+    let dir = dir.path().canonicalize().unwrap();
+    let path = sweep_file(&dir, |t| t);
+    let exe = dir
+        .join("bin it's $(touch CANARY) `touch CANARY`; touch CANARY")
+        .join("asperity");
+    stub_asperity(&exe);
+    let work = dir.join("work");
+    std::fs::create_dir(&work).unwrap();
+    let log = dir.join("argv.log");
+    for name in [
+        "it's",
+        "$(touch CANARY)",
+        "`touch CANARY`",
+        "a; touch CANARY",
+        "a\" && touch CANARY && \"b",
+        "sp ace | touch CANARY > x < y & {} !x $HOME ~ * ?",
+        "%A %a %j %%",
+        "#x # touch CANARY",
+        "é ' \" '",
+    ] {
+        let study = dir.join(name).join("study");
+        sweep::plan(&path, &study, &exe).unwrap();
+        let study_arg = study.to_str().unwrap().to_string();
+        let expected = |task: &str, threads: &str| {
+            vec![
+                "sweep".to_string(),
+                "run".into(),
+                study_arg.clone(),
+                "--task".into(),
+                task.into(),
+                format!("RAYON_NUM_THREADS={threads}"),
+            ]
+        };
+        let jobs = std::fs::read_to_string(study.join("jobs.txt")).unwrap();
+        assert_eq!(jobs.lines().count(), 6, "{name}: {jobs}");
+        let _ = std::fs::remove_file(&log);
+        for line in jobs.lines() {
+            let status = Command::new("sh")
+                .args(["-c", line])
+                .current_dir(&work)
+                .env("ARGV_LOG", &log)
+                .env_remove("RAYON_NUM_THREADS")
+                .status()
+                .unwrap();
+            assert!(status.success(), "{name}: {line}");
+        }
+        let calls = recorded_calls(&log);
+        let want: Vec<_> = (0..6).map(|k| expected(&k.to_string(), "")).collect();
+        assert_eq!(calls, want, "{name}: jobs.txt");
+
+        let sbatch = std::fs::read_to_string(study.join("array.sbatch")).unwrap();
+        the_one_command(&sbatch);
+        assert_eq!(
+            sbatch_option(&sbatch, "--output=").unwrap(),
+            format!("{}/runs/slurm-%A_%a.out", study_arg.replace('%', "%%")),
+            "{name}"
+        );
+        let _ = std::fs::remove_file(&log);
+        let status = Command::new("bash")
+            .arg(study.join("array.sbatch"))
+            .current_dir(&work)
+            .env("ARGV_LOG", &log)
+            .env("SLURM_ARRAY_TASK_ID", "3")
+            .env("SLURM_CPUS_PER_TASK", "2")
+            .status()
+            .unwrap();
+        assert!(status.success(), "{name}: array.sbatch");
+        assert_eq!(
+            recorded_calls(&log),
+            vec![expected("3", "2")],
+            "{name}: array.sbatch"
+        );
+        assert_eq!(find(&dir, "CANARY"), Vec::<PathBuf>::new(), "{name}");
+    }
+}
+
+/// Control characters in a path written into a job file (the study folder, the executable,
+/// the sweep file named in every case file) and backslashes in the study folder (Slurm then
+/// expands no `%A_%a` in the log file name) are refused, naming the path, before anything is
+/// written; so are control characters in a varied key (written into every case file's header).
+#[test]
+fn control_characters_in_paths_and_keys_are_refused_before_anything_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = sweep_file(dir.path(), |t| t);
+    for bad in [
+        "a\nb", "a\rb", "a\tb", "a\u{7f}b", "a\u{1b}b", "a\0b", "a\\b",
+    ] {
+        let study = dir.path().join(bad).join("study");
+        let (p, key, _) = key_error(sweep::plan(&path, &study, &exe()).unwrap_err());
+        assert_eq!((&p, key.as_str()), (&path, "study folder"), "{bad:?}");
+        assert!(!dir.path().join(bad).exists(), "{bad:?}");
+    }
+    let study = dir.path().join("study");
+    let hostile_exe = dir.path().join("bin\ntouch CANARY").join("asperity");
+    let (_, key, _) = key_error(sweep::plan(&path, &study, &hostile_exe).unwrap_err());
+    assert_eq!(key, "asperity executable");
+    // A sweep file whose name has a newline (its default study folder would have one too).
+    let named = dir.path().join("sweep\ntouch CANARY.toml");
+    std::fs::copy(&path, &named).unwrap();
+    let (p, key, _) = key_error(sweep::plan(&named, &study, &exe()).unwrap_err());
+    assert_eq!((p, key.as_str()), (named, "sweep file"));
+    let keyed = sweep_file(dir.path(), |t| {
+        t.replace("\"contact.0.law.m\"", r#""contact.0.law.m\n""#)
+    });
+    let (_, key, _) = key_error(sweep::plan(&keyed, &study, &exe()).unwrap_err());
+    assert_eq!(key, "vary[1].key");
+    assert!(!study.exists());
+}
+
+/// Quantity names become plot file names (`<name>.png`) and CSV columns: the rules of
+/// contact pair names apply, at planning and when a manifest is read.
+#[test]
+fn quantity_names_that_are_not_safe_file_names_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("study");
+    for name in [
+        "../escape",
+        "/tmp/absolute",
+        "a/b",
+        "",
+        "x,y",
+        "line\nbreak",
+        "..",
+        "CON",
+    ] {
+        let path = sweep_file(dir.path(), |t| {
+            t.replace(
+                "iterations = \"totals.iterations\"",
+                &format!("{name:?} = \"totals.iterations\""),
+            )
+        });
+        let (p, key, reason) = key_error(sweep::plan(&path, &study, &exe()).unwrap_err());
+        assert_eq!((p, key), (path, format!("quantities.{name:?}")), "{name:?}");
+        assert!(reason.contains("name"), "{reason}");
+        assert!(!study.exists(), "{name:?}");
+    }
+    // A manifest edited by hand after planning.
+    sweep::plan(&sweep_file(dir.path(), |t| t), &study, &exe()).unwrap();
+    let manifest = study.join("manifest.json");
+    let text = std::fs::read_to_string(&manifest).unwrap();
+    std::fs::write(
+        &manifest,
+        text.replace("\"iterations\":", "\"../iterations\":"),
+    )
+    .unwrap();
+    let (p, key, _) = key_error(sweep::collect(&study, false).unwrap_err());
+    assert_eq!(
+        (p, key.as_str()),
+        (
+            study.canonicalize().unwrap().join("manifest.json"),
+            "quantities.\"../iterations\""
+        )
+    );
+}
+
+/// Astronomical plans are counted before anything is allocated and refused above
+/// `sweep::MAX_RUNS`, naming the key and the count.
+#[test]
+fn plans_with_more_runs_than_the_limit_are_refused_before_allocating() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("study");
+    let base = sweep_file(dir.path(), |t| t);
+    let base = std::fs::read_to_string(base).unwrap();
+    let head = base.split("[[vary]]").next().unwrap().to_string();
+    let ranges = |counts: &[&str]| -> String {
+        counts
+            .iter()
+            .enumerate()
+            .map(|(i, n)| {
+                format!("[[vary]]\nkey = \"mesh.parameters.p{i}\"\nrange = {{ from = 1, to = 2, count = {n} }}\n")
+            })
+            .collect()
+    };
+    let lhs = head.replace(
+        "method = \"grid\"",
+        "method = \"latin_hypercube\"\nsamples = 1000000000000",
+    ) + &ranges(&["1"]);
+    let zip = head.replace("method = \"grid\"", "method = \"zip\"") + &ranges(&["100000000"; 2]);
+    for (text, key, count) in [
+        (
+            head.clone() + &ranges(&["100000000"]),
+            "vary[0].range.count",
+            "100000000",
+        ),
+        (zip, "vary[0].range.count", "100000000"),
+        (lhs, "samples", "1000000000000"),
+        (head.clone() + &ranges(&["100"; 6]), "vary", "1000000000000"),
+        (
+            head.clone() + &ranges(&["100000"; 5]),
+            "vary",
+            "18446744073709551615",
+        ),
+        (head.clone() + &ranges(&["1000", "101"]), "vary", "101000"),
+    ] {
+        let path = dir.path().join("huge.toml");
+        std::fs::write(&path, &text).unwrap();
+        let e = sweep::plan(&path, &study, &exe()).unwrap_err();
+        let message = e.to_string();
+        let (p, k, _) = key_error(e);
+        assert_eq!((p, k.as_str()), (path, key), "{message}");
+        assert!(
+            message.contains(count) && message.contains(&sweep::MAX_RUNS.to_string()),
+            "{message}"
+        );
+        assert!(!study.exists());
+    }
+    assert_eq!(sweep::MAX_RUNS, 100_000);
+}
+
+/// `collect` plots through the one Python runner (`asperity::python`): the script found in
+/// `$ASPERITY_PIPELINES`, run with the `.venv/bin/python` beside that folder; when the script,
+/// matplotlib or the script's success is missing, the `plots:` line says why and how to make
+/// the plots by hand. The Python here is a stand-in that runs the "script" with `sh`.
+#[test]
+fn collect_plots_with_the_pipelines_script_or_says_how_to_make_them() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let dir = dir.path().canonicalize().unwrap();
+    let study = dir.join("study");
+    sweep::plan(&sweep_file(&dir, |t| t), &study, &exe()).unwrap();
+    let pipelines = dir.join("repo/pipelines");
+    std::fs::create_dir_all(pipelines.join("sweep")).unwrap();
+    let collect = |matplotlib: bool| {
+        let out = Command::new(exe())
+            .args(["sweep", "collect", study.to_str().unwrap()])
+            .env("ASPERITY_PIPELINES", &pipelines)
+            .env("STUB_MATPLOTLIB", if matplotlib { "0" } else { "1" })
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout).to_string();
+        text.lines()
+            .find_map(|l| l.split_once("; plots: ").map(|(_, p)| p.to_string()))
+            .unwrap_or_else(|| panic!("no plots: in {text}"))
+    };
+    let manual = |python: &str, script: &str| {
+        format!(
+            "to make it, run `{python} {script} {}` in the repository (after `make venv`)",
+            study.display()
+        )
+    };
+    assert_eq!(
+        collect(true),
+        format!(
+            "skipped one PNG per quantity: ASPERITY_PIPELINES={} has no sweep/plot_sweep.py; {}",
+            pipelines.display(),
+            manual(".venv/bin/python", "pipelines/sweep/plot_sweep.py")
+        )
+    );
+    let script = pipelines.join("sweep/plot_sweep.py");
+    let python = dir.join("repo/.venv/bin/python");
+    std::fs::create_dir_all(python.parent().unwrap()).unwrap();
+    std::fs::write(
+        &python,
+        "#!/bin/sh\nif [ \"$1\" = -c ]; then exit \"$STUB_MATPLOTLIB\"; fi\nexec sh \"$@\"\n",
+    )
+    .unwrap();
+    std::fs::set_permissions(&python, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let by_hand = manual(&python.display().to_string(), &script.display().to_string());
+    std::fs::write(&script, "touch \"$1/stub.png\"\n").unwrap();
+    assert_eq!(
+        collect(false),
+        format!(
+            "skipped one PNG per quantity: {} has no matplotlib; {by_hand}",
+            python.display()
+        )
+    );
+    assert!(!study.join("stub.png").exists());
+    assert_eq!(
+        collect(true),
+        format!("one PNG per quantity in {}", study.display())
+    );
+    assert!(study.join("stub.png").exists());
+    std::fs::write(
+        &script,
+        "echo first >&2\necho 'the last line' >&2\nexit 1\n",
+    )
+    .unwrap();
+    assert_eq!(
+        collect(true),
+        format!(
+            "skipped one PNG per quantity: {} failed: the last line; {by_hand}",
+            script.display()
+        )
+    );
+}
+
+/// A varied string value with a line break (TOML writes it as a multi-line string) stays a
+/// value: the header comment of every run's case file cannot turn its lines into keys.
+#[test]
+fn a_value_with_line_breaks_stays_inside_the_case_header_comment() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("study");
+    let path = sweep_file(dir.path(), |t| {
+        let head = t.split("[[vary]]").next().unwrap().to_string();
+        head + "[[vary]]\nkey = \"mesh.geo\"\nvalues = [\"a\\nb = 1\\r\\n[injected]\"]\n"
+    });
+    sweep::plan(&path, &study, &exe()).unwrap();
+    let text = std::fs::read_to_string(study.join("runs/0000/case.toml")).unwrap();
+    let tree: toml::Value = toml::from_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
+    assert_eq!(tree["mesh"]["geo"].as_str(), Some("a\nb = 1\r\n[injected]"));
+    assert!(
+        tree.get("b").is_none() && tree.get("injected").is_none(),
+        "{text}"
+    );
 }

@@ -8,7 +8,7 @@ use std::path::Path;
 use super::FitResult;
 use crate::output::atomic::write_atomically;
 use crate::output::csv::{Cell, CsvTable, write_csv};
-use crate::sweep::python::run_python;
+use crate::python;
 use crate::{Error, Result};
 
 /// Writes the result's files into `out`; returns what happened to the plots.
@@ -101,5 +101,8 @@ impl std::fmt::Display for FitResult {
 }
 
 fn plot(out: &Path) -> String {
-    run_python("fit/plot_fit.py", out, "fit.png, residuals.png")
+    python::run_script("fit/plot_fit.py", out, "fit.png, residuals.png").map_or_else(
+        |skipped| skipped,
+        |()| format!("fit.png, residuals.png in {}", out.display()),
+    )
 }

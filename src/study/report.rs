@@ -4,9 +4,9 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::analysis::Convergence;
-use crate::Result;
 use crate::config::{QuantityKind, QuantitySpec, Statistic};
 use crate::output::csv::{Cell, CsvTable, write_csv};
+use crate::{Result, python};
 
 /// What was run at one level.
 #[derive(Clone, Debug)]
@@ -257,97 +257,11 @@ pub(super) fn write_table(report: &Report) -> Result<()> {
     write_csv(&report.csv, &table)
 }
 
-/// The environment variable naming the folder of the plot script (`plot_convergence.py`).
-const PIPELINES_VAR: &str = "ASPERITY_PIPELINES";
-
-/// Where `plot_convergence.py` is: in `$ASPERITY_PIPELINES` if set, else in the `pipelines/`
-/// folder of the first ancestor of the running executable that has one (the repository of a
-/// `target/release/asperity`). Returns the script and the Python to run it with: the
-/// `.venv/bin/python` beside that `pipelines/` folder if there is one, else `python3`.
-fn plot_script() -> std::result::Result<(PathBuf, PathBuf), String> {
-    let script_in = |dir: &Path| dir.join("plot_convergence.py");
-    let pipelines = match std::env::var_os(PIPELINES_VAR) {
-        Some(dir) => {
-            let dir = PathBuf::from(dir);
-            if !script_in(&dir).is_file() {
-                return Err(format!(
-                    "{PIPELINES_VAR}={} has no plot_convergence.py",
-                    dir.display()
-                ));
-            }
-            dir
-        }
-        None => {
-            let exe = std::env::current_exe().map_err(|e| format!("no executable path: {e}"))?;
-            exe.ancestors()
-                .skip(1)
-                .map(|a| a.join("pipelines"))
-                .find(|p| script_in(p).is_file())
-                .ok_or_else(|| {
-                    format!(
-                        "pipelines/plot_convergence.py not found above {} (set {PIPELINES_VAR})",
-                        exe.display()
-                    )
-                })?
-        }
-    };
-    let venv = pipelines
-        .parent()
-        .map(|root| root.join(".venv/bin/python"))
-        .filter(|p| p.is_file());
-    Ok((
-        script_in(&pipelines),
-        venv.unwrap_or_else(|| PathBuf::from("python3")),
-    ))
-}
-
-/// Makes `convergence.png` with `plot_convergence.py` (found by [`plot_script`]); returns
-/// what happened, with the command to run by hand when it was skipped.
+/// Makes `convergence.png` with `pipelines/plot_convergence.py`; returns its path, or why it
+/// was skipped and the command to make it.
 pub(super) fn plot(out: &Path) -> String {
-    let how = |python: &str, script: &str| {
-        format!(
-            "to make it, run `{python} {script} {}` in the repository (after `make venv`)",
-            out.display()
-        )
-    };
-    let (script, python) = match plot_script() {
-        Ok(found) => found,
-        Err(why) => {
-            return format!(
-                "skipped convergence.png: {why}; {}",
-                how(".venv/bin/python", "pipelines/plot_convergence.py")
-            );
-        }
-    };
-    let manual = how(&python.display().to_string(), &script.display().to_string());
-    let has_matplotlib = std::process::Command::new(&python)
-        .args(["-c", "import matplotlib"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !has_matplotlib {
-        return format!(
-            "skipped convergence.png: {} has no matplotlib; {manual}",
-            python.display()
-        );
-    }
-    match std::process::Command::new(&python)
-        .arg(&script)
-        .arg(out)
-        .output()
-    {
-        Ok(o) if o.status.success() => out.join("convergence.png").display().to_string(),
-        Ok(o) => format!(
-            "skipped convergence.png: {} failed: {}; {manual}",
-            script.display(),
-            String::from_utf8_lossy(&o.stderr)
-                .trim()
-                .lines()
-                .last()
-                .unwrap_or_default()
-        ),
-        Err(e) => format!(
-            "skipped convergence.png: cannot run {}: {e}; {manual}",
-            python.display()
-        ),
+    match python::run_script("plot_convergence.py", out, "convergence.png") {
+        Ok(()) => out.join("convergence.png").display().to_string(),
+        Err(skipped) => skipped,
     }
 }

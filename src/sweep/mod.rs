@@ -12,9 +12,13 @@
 //! Every job is `asperity sweep run STUDY --task K`, which skips a run whose `summary.json`
 //! exists, so a sweep is restartable by any of the three means; a run that fails leaves a
 //! `summary.json` with its error. `collect` gathers the runs into `sweep.csv` and plots.
+//!
+//! Before anything is written, `plan` counts the runs (at most [`MAX_RUNS`]) and checks what
+//! reaches file names and job files: quantity names follow the rules of contact pair names,
+//! `[slurm]` values Slurm's syntax, and paths hold no control character ([`Slurm`]).
 
+mod jobs;
 pub mod keys;
-pub(crate) mod python;
 mod run;
 
 use std::collections::BTreeMap;
@@ -27,12 +31,20 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use toml::Value;
 
-use crate::config::Case;
+use crate::config::{Case, check_name};
 use crate::model::ModelSpec;
 use crate::output::atomic::write_atomically;
 use crate::{Error, Result};
 
+pub use jobs::Slurm;
 pub use run::{Collected, collect, run_local, run_task};
+
+/// The most runs a sweep may have. A plan is counted before anything is allocated or
+/// written, so that a typing slip (a range of 10⁸ points, 10¹² samples, a 100⁶ grid) is an
+/// error naming the key instead of an exhausted memory; 100 000 runs is already more folders
+/// than a file browser or a cluster's array limit handles comfortably (Slurm's default
+/// `MaxArraySize` is 1001 tasks).
+pub const MAX_RUNS: usize = 100_000;
 
 /// A sweep file.
 #[derive(Clone, Debug, Deserialize)]
@@ -88,40 +100,6 @@ pub struct Range {
     pub log: bool,
 }
 
-/// The resource lines of `array.sbatch`.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Slurm {
-    #[serde(default = "default_time")]
-    pub time: String,
-    #[serde(default = "default_memory")]
-    pub memory: String,
-    #[serde(default = "one")]
-    pub cpus: usize,
-    pub partition: Option<String>,
-}
-
-fn default_time() -> String {
-    "01:00:00".into()
-}
-fn default_memory() -> String {
-    "4G".into()
-}
-fn one() -> usize {
-    1
-}
-
-impl Default for Slurm {
-    fn default() -> Self {
-        Self {
-            time: default_time(),
-            memory: default_memory(),
-            cpus: 1,
-            partition: None,
-        }
-    }
-}
-
 /// `manifest.json` of a study folder.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Manifest {
@@ -148,11 +126,30 @@ impl Manifest {
     pub fn read(study: &Path) -> Result<Self> {
         let path = study.join("manifest.json");
         let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
-        serde_json::from_str(&text).map_err(|e| Error::Case {
-            path,
+        let manifest: Self = serde_json::from_str(&text).map_err(|e| Error::Case {
+            path: path.clone(),
             message: format!("not a sweep manifest: {e}"),
-        })
+        })?;
+        check_quantity_names(&path, &manifest.quantities)?;
+        Ok(manifest)
     }
+}
+
+/// Quantity names become file names (`<name>.png` in the study) and `sweep.csv` columns, so
+/// they follow the rules of contact pair names ([`check_name`]: no `/`, `..`, comma, line
+/// break, ...); the error names `quantities.<name>` of `file` (the sweep file or a manifest).
+fn check_quantity_names(file: &Path, quantities: &BTreeMap<String, String>) -> Result<()> {
+    for name in quantities.keys() {
+        check_name(name).map_err(|reason| {
+            invalid(
+                file,
+                format!("quantities.{name:?}"),
+                "",
+                format!("the name of a quantity becomes the file name {name}.png: {reason}"),
+            )
+        })?;
+    }
+    Ok(())
 }
 
 /// An error of sweep file `path` at `key`.
@@ -176,6 +173,26 @@ pub fn plan(path: &Path, study: &Path, exe: &Path) -> Result<Manifest> {
     if sweep.keys.is_empty() {
         return Err(invalid(path, "vary".into(), "[]", "no [[vary]] key"));
     }
+    // Everything that reaches a file name, a case file's header or a job file is checked
+    // before anything is written.
+    let sweep_path = jobs::job_path(path, "sweep file", path)?;
+    let exe = jobs::job_path(path, "asperity executable", exe)?;
+    jobs::study_path(
+        path,
+        &std::path::absolute(study).map_err(|e| Error::io(study, e))?,
+    )?;
+    sweep.slurm.check(path)?;
+    check_quantity_names(path, &sweep.quantities)?;
+    for (i, vary) in sweep.keys.iter().enumerate() {
+        if vary.key.chars().any(char::is_control) {
+            return Err(invalid(
+                path,
+                format!("vary[{i}].key"),
+                format!("{:?}", vary.key),
+                "a key holds no control character (line break, tab, ...)",
+            ));
+        }
+    }
     let base = path.parent().unwrap_or(Path::new("")).join(&sweep.base);
     let base = base.canonicalize().map_err(|e| Error::io(&base, e))?;
     let base_text = std::fs::read_to_string(&base).map_err(|e| Error::io(&base, e))?;
@@ -187,6 +204,8 @@ pub fn plan(path: &Path, study: &Path, exe: &Path) -> Result<Manifest> {
     let points = points(&sweep, path)?;
     std::fs::create_dir_all(study).map_err(|e| Error::io(study, e))?;
     let study = study.canonicalize().map_err(|e| Error::io(study, e))?;
+    // Once more after symbolic links are resolved: they name the folder in the job files.
+    let study_text = jobs::study_path(path, &study)?;
     let mut runs = Vec::with_capacity(points.len());
     for (id, values) in points.into_iter().enumerate() {
         let dir = PathBuf::from(format!("runs/{id:04}"));
@@ -205,11 +224,10 @@ pub fn plan(path: &Path, study: &Path, exe: &Path) -> Result<Manifest> {
                 format!("run {id} is not a valid case: {e}"),
             )
         })?;
-        let header = format!(
-            "# run {id} of sweep {}: {}\n",
-            path.display(),
+        let header = comment(&format!(
+            "run {id} of sweep {sweep_path}: {}",
             describe(&sweep.keys, &values)
-        );
+        ));
         write_atomically(&case_path, |w| {
             w.write_all(format!("{header}{text}").as_bytes())
         })?;
@@ -228,7 +246,7 @@ pub fn plan(path: &Path, study: &Path, exe: &Path) -> Result<Manifest> {
     write_atomically(&study.join("manifest.json"), |w| {
         w.write_all(json.as_bytes())
     })?;
-    write_jobs(&study, manifest.runs.len(), exe, &sweep.slurm)?;
+    jobs::write_jobs(study_text, manifest.runs.len(), exe, &sweep.slurm)?;
     Ok(manifest)
 }
 
@@ -239,6 +257,15 @@ fn describe(keys: &[Vary], values: &[Value]) -> String {
         .map(|(k, v)| format!("{} = {v}", k.key))
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// `text` as TOML comment lines: a value TOML writes over several lines (a string with a line
+/// break) stays inside the comment, and control characters, which a TOML comment may not
+/// hold, are replaced.
+fn comment(text: &str) -> String {
+    text.lines()
+        .map(|line| format!("# {}\n", line.replace(|c: char| c.is_control(), "\u{fffd}")))
+        .collect()
 }
 
 /// A run's case must parse and give a model spec (the law and material parameters valid).
@@ -291,6 +318,7 @@ fn points(sweep: &SweepFile, path: &Path) -> Result<Vec<Vec<Value>>> {
                             "a grid or zip range needs `count` ≥ 1",
                         )
                     })?;
+                    check_run_count(path, key("range.count"), Some(n), n)?;
                     (0..n)
                         .map(|j| {
                             Value::Float(r.at(if n == 1 {
@@ -322,17 +350,14 @@ fn points(sweep: &SweepFile, path: &Path) -> Result<Vec<Vec<Value>>> {
         columns.push(values);
     }
     Ok(match sweep.method {
-        Method::Grid => columns.iter().fold(vec![Vec::new()], |acc, col| {
-            acc.iter()
-                .flat_map(|prefix| {
-                    col.iter().map(move |v| {
-                        let mut p = prefix.clone();
-                        p.push(v.clone());
-                        p
-                    })
-                })
-                .collect()
-        }),
+        Method::Grid => {
+            let sizes: Vec<String> = columns.iter().map(|c| c.len().to_string()).collect();
+            let runs = columns
+                .iter()
+                .try_fold(1usize, |runs, c| runs.checked_mul(c.len()));
+            check_run_count(path, "vary".into(), runs, sizes.join(" × "))?;
+            grid(&columns)
+        }
         Method::Zip => {
             let n = columns[0].len();
             if let Some(i) = columns.iter().position(|c| c.len() != n) {
@@ -343,6 +368,7 @@ fn points(sweep: &SweepFile, path: &Path) -> Result<Vec<Vec<Value>>> {
                     format!("zip needs every key to have the same number of values ({n})"),
                 ));
             }
+            check_run_count(path, "vary".into(), Some(n), n)?;
             (0..n)
                 .map(|j| columns.iter().map(|c| c[j].clone()).collect())
                 .collect()
@@ -356,6 +382,7 @@ fn points(sweep: &SweepFile, path: &Path) -> Result<Vec<Vec<Value>>> {
                     "a Latin hypercube needs `samples` ≥ 1",
                 )
             })?;
+            check_run_count(path, "samples".into(), Some(n), n)?;
             let ranges: Vec<Range> = sweep
                 .keys
                 .iter()
@@ -363,6 +390,44 @@ fn points(sweep: &SweepFile, path: &Path) -> Result<Vec<Vec<Value>>> {
                 .collect();
             latin_hypercube(&ranges, n, sweep.seed)
         }
+    })
+}
+
+/// Refuses a plan of `runs` runs (`None`: more than `usize::MAX`) above [`MAX_RUNS`]; `key`
+/// and `value` of sweep file `path` are what gives that many.
+fn check_run_count(
+    path: &Path,
+    key: String,
+    runs: Option<usize>,
+    value: impl ToString,
+) -> Result<()> {
+    match runs {
+        Some(n) if n <= MAX_RUNS => Ok(()),
+        _ => Err(invalid(
+            path,
+            key,
+            value,
+            format!(
+                "the plan would have {} runs, more than the {MAX_RUNS} runs a sweep may have \
+                 (asperity::sweep::MAX_RUNS); use fewer values or split the sweep",
+                runs.map_or(format!("more than {}", usize::MAX), |n| n.to_string())
+            ),
+        )),
+    }
+}
+
+/// Every combination of the values of `columns` (the first key varying slowest).
+fn grid(columns: &[Vec<Value>]) -> Vec<Vec<Value>> {
+    columns.iter().fold(vec![Vec::new()], |acc, col| {
+        acc.iter()
+            .flat_map(|prefix| {
+                col.iter().map(move |v| {
+                    let mut p = prefix.clone();
+                    p.push(v.clone());
+                    p
+                })
+            })
+            .collect()
     })
 }
 
@@ -396,49 +461,6 @@ pub fn latin_hypercube(ranges: &[Range], n: usize, seed: u64) -> Vec<Vec<Value>>
     (0..n)
         .map(|j| columns.iter().map(|c| Value::Float(c[j])).collect())
         .collect()
-}
-
-/// Single-quotes `s` for a POSIX shell.
-fn quote(s: &Path) -> String {
-    format!("'{}'", s.display().to_string().replace('\'', r"'\''"))
-}
-
-/// `jobs.txt` (GNU parallel) and `array.sbatch` (Slurm) of a study with `n` runs.
-fn write_jobs(study: &Path, n: usize, exe: &Path, slurm: &Slurm) -> Result<()> {
-    let (exe, dir) = (quote(exe), quote(study));
-    let jobs: String = (0..n)
-        .map(|k| format!("{exe} sweep run {dir} --task {k}\n"))
-        .collect();
-    write_atomically(&study.join("jobs.txt"), |w| w.write_all(jobs.as_bytes()))?;
-    let partition = slurm
-        .partition
-        .as_ref()
-        .map(|p| format!("#SBATCH --partition={p}\n"))
-        .unwrap_or_default();
-    let script = format!(
-        "#!/bin/bash\n\
-         # Slurm job array of the sweep in {study}: one task per run, the task id selecting the run.\n\
-         # Submit with `sbatch {study}/array.sbatch`; finished runs are skipped, so resubmitting\n\
-         # completes an interrupted sweep. Then `asperity sweep collect {study}`.\n\
-         #SBATCH --job-name=asperity-sweep\n\
-         #SBATCH --array=0-{last}\n\
-         #SBATCH --ntasks=1\n\
-         #SBATCH --cpus-per-task={cpus}\n\
-         #SBATCH --mem={mem}\n\
-         #SBATCH --time={time}\n\
-         {partition}\
-         #SBATCH --output={study}/runs/slurm-%A_%a.out\n\
-         export RAYON_NUM_THREADS=\"${{SLURM_CPUS_PER_TASK:-1}}\"\n\
-         exec {exe} sweep run {dir} --task \"$SLURM_ARRAY_TASK_ID\"\n",
-        study = study.display(),
-        last = n - 1,
-        cpus = slurm.cpus,
-        mem = slurm.memory,
-        time = slurm.time,
-    );
-    write_atomically(&study.join("array.sbatch"), |w| {
-        w.write_all(script.as_bytes())
-    })
 }
 
 #[cfg(test)]

@@ -5,15 +5,14 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
-use super::python::run_python;
 use super::{Manifest, keys};
 use crate::config::Case;
 use crate::output::csv::{Cell, CsvTable, write_csv};
 use crate::output::summary::Summary;
-use crate::run;
 use crate::run::folder::{OutputFolder, RunFile};
 use crate::study::available_memory;
 use crate::{Error, Result};
+use crate::{python, run};
 
 /// Whether run `dir` is done: its `summary.json` exists (converged, or failed and not
 /// `retry_failed`).
@@ -231,7 +230,10 @@ pub fn collect(study: &Path, plot: bool) -> Result<Collected> {
     let csv = study.join("sweep.csv");
     write_csv(&csv, &table)?;
     let plots = if plot {
-        run_python("sweep/plot_sweep.py", study, "one PNG per quantity")
+        python::run_script("sweep/plot_sweep.py", study, "one PNG per quantity").map_or_else(
+            |skipped| skipped,
+            |()| format!("one PNG per quantity in {}", study.display()),
+        )
     } else {
         "not made (--no-plot)".into()
     };
