@@ -7,9 +7,7 @@
 
 use std::collections::BTreeSet;
 
-use super::{
-    AnalysisSpec, Case, ControlKind, LawSpec, Leg, Motion, Role, StepSpec, Target, check_name,
-};
+use super::{AnalysisSpec, Case, ControlKind, Leg, Motion, Role, StepSpec, Target, check_name};
 use crate::Result;
 
 /// Most load steps (`[steps] count`, the length of `factors`) and arc-length increments: a
@@ -125,36 +123,21 @@ impl Case {
         Ok(())
     }
 
-    /// The rough-joint law's tangential stiffness k_T = p^S / R (paper, Eq. 3) only matters
-    /// with friction: R and S are required when `mu_m > 0` and unused (a warning if given)
-    /// when `mu_m = 0`.
+    /// The parameters of every contact's law are finite numbers (their bounds, and the rules
+    /// that tie them together, are checked where the law is built).
     fn check_laws(&self) -> Result<()> {
         for (i, c) in self.contacts.iter().enumerate() {
-            let LawSpec::RoughJoint { mu_m, r, s, .. } = c.law else {
-                continue;
-            };
-            if mu_m == 0.0 {
-                if r.is_some() || s.is_some() {
-                    tracing::warn!(
-                        "{}: contact[{i}] ('{}'): R and S are not used when mu_m = 0 (no friction)",
-                        self.path.display(),
-                        c.name()
-                    );
-                }
-                continue;
-            }
-            for (key, value) in [("R", r), ("S", s)] {
-                if value.is_none() {
-                    return Err(self.invalid(
-                        format!("contact[{i}].law.{key}"),
-                        "(missing)",
-                        format!(
-                            "the rough-joint law needs R and S (k_T = p^S / R) when mu_m = {mu_m} \
-                             (contact '{}')",
-                            c.name()
-                        ),
-                    ));
-                }
+            let law = &c.law;
+            let given = law.law.parameters.iter().zip(&law.values);
+            if let Some((p, v)) = given
+                .filter_map(|(p, v)| Some((p, (*v)?)))
+                .find(|(_, v)| !v.is_finite())
+            {
+                return Err(self.invalid(
+                    format!("contact[{i}].law.{}", p.key),
+                    v,
+                    format!("must be finite (contact '{}')", c.name()),
+                ));
             }
         }
         Ok(())

@@ -19,12 +19,14 @@ use crate::{Error, Result};
 
 mod check;
 pub mod history;
+mod law;
 mod names;
 mod quantity;
 mod steps;
 pub mod wear;
 
 pub use check::{MAX_CUTBACKS, MAX_ITERATIONS, MAX_STEPS, MAX_TOLERANCE};
+pub use law::LawSpec;
 pub use names::{MAX_NAME_LEN, check_name};
 pub use quantity::{Component, QuantityKind, QuantitySpec, Statistic, parse_quantity};
 pub use steps::{AmplitudeSpec, InlineAmplitude, Leg, Motion, Role, StepSpec, Target};
@@ -290,51 +292,6 @@ pub enum Faces<'c> {
     },
 }
 
-/// The interface law of a contact pair and its parameters.
-#[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-pub enum LawSpec {
-    /// Linear normal stiffness (compression only), linear tangential stiffness and ideal
-    /// Coulomb friction.
-    LinearCoulomb {
-        /// k_N in MPa/mm.
-        normal_stiffness: f64,
-        /// k_T in MPa/mm.
-        tangential_stiffness: f64,
-        /// Coulomb coefficient μ (default 0: frictionless).
-        #[serde(default)]
-        friction: f64,
-    },
-    /// The rough-joint law of Buczkowski & Kleiber (1994), Eqs. 1–5: power-law normal
-    /// compliance u_N = c_N p^m, tangential stiffness k_T = p^S / R, slip-hardening friction
-    /// μ_F = μ_m [1 − (1 − β) exp(−n ū)].
-    RoughJoint {
-        /// c_N in mm/MPa^m (values given in µm/MPa^m: multiply them by 1e-3).
-        c_n: f64,
-        m: f64,
-        /// Optional unloading curve (c_N, m); default: the loading curve.
-        unloading_c_n: Option<f64>,
-        unloading_m: Option<f64>,
-        /// R such that p^S / R is in MPa/mm (values given per µm: × 1e-3), and S. Required
-        /// when `mu_m > 0`; unused (and optional) without friction.
-        #[serde(rename = "R")]
-        r: Option<f64>,
-        #[serde(rename = "S")]
-        s: Option<f64>,
-        /// Macroscopic friction coefficient μ_m.
-        mu_m: f64,
-        /// Initial friction as a fraction of μ_m (default 1: no hardening).
-        #[serde(default = "default_beta")]
-        beta: f64,
-        /// Slip-hardening rate n in 1/mm (default 0).
-        #[serde(default)]
-        n: f64,
-        /// Pressure (MPa) below which stiffnesses are evaluated at this value (default 0.1).
-        #[serde(default = "default_starting_pressure")]
-        starting_pressure: f64,
-    },
-}
-
 /// A plane vector: exactly two components (a third one, say a z component, would otherwise be
 /// dropped without a word).
 fn two_components<'de, D: serde::Deserializer<'de>>(
@@ -347,14 +304,6 @@ fn two_components<'de, D: serde::Deserializer<'de>>(
             v.len()
         ))
     })
-}
-
-fn default_beta() -> f64 {
-    1.0
-}
-
-fn default_starting_pressure() -> f64 {
-    0.1
 }
 
 impl ContactSpec {
@@ -815,28 +764,6 @@ impl Case {
                      and body_b",
                     c.name()
                 )));
-            }
-            if let LawSpec::RoughJoint {
-                unloading_c_n,
-                unloading_m,
-                ..
-            } = c.law
-            {
-                let one = match (unloading_c_n, unloading_m) {
-                    (Some(v), None) => Some(("unloading_c_n", v)),
-                    (None, Some(v)) => Some(("unloading_m", v)),
-                    _ => None,
-                };
-                if let Some((key, v)) = one {
-                    return Err(self.invalid(
-                        format!("contact[{i}].law.{key}"),
-                        v,
-                        format!(
-                            "give both unloading_c_n and unloading_m, or neither (contact '{}')",
-                            c.name()
-                        ),
-                    ));
-                }
             }
             if !c.interference.is_finite() {
                 return Err(self.invalid(
