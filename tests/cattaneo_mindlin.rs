@@ -15,7 +15,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use asperity::config::{Case, LawSpec};
+use asperity::config::Case;
 use asperity::contact::ContactStatus;
 use asperity::element::interface6::interface_point;
 use asperity::element::set::INTERFACE_POINTS;
@@ -53,9 +53,9 @@ impl Setup {
                 .iter()
                 .all(|m| m.e == materials[0].e && m.nu == materials[0].nu)
         );
-        let LawSpec::LinearCoulomb { friction, .. } = case.contacts[0].law else {
-            panic!("a linear Coulomb contact")
-        };
+        let law = &case.contacts[0].law;
+        assert_eq!(law.law.name, "linear_coulomb");
+        let friction = law.get("friction").unwrap();
         Self {
             p: 2.0 * radius * pressure,
             q_star: 2.0 * radius * traction[0],

@@ -12,13 +12,14 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use asperity::Error;
+use asperity::contact::rough;
 use asperity::fit::experiment::{normal, tangential};
-use asperity::fit::{Fit, FitResult, LawKind};
+use asperity::fit::{Fit, FitResult};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
-/// The generating parameters (rough joint, in the order of `LawKind::parameters`).
+/// The generating parameters (rough joint, in the order of `rough::LAW.parameters`).
 const TRUE: [(&str, f64); 10] = [
     ("c_n", 2e-3),
     ("m", 0.5),
@@ -82,7 +83,7 @@ fn write_curves(
     rng: &mut ChaCha8Rng,
     errors: &str,
 ) -> String {
-    let law = LawKind::RoughJoint.build(&true_values()).unwrap();
+    let law = rough::LAW.build(&true_values()).unwrap();
     let mut noisy = |y: Vec<f64>| -> Vec<f64> {
         y.into_iter()
             .map(|v| {

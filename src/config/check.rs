@@ -1,15 +1,15 @@
-//! Range checks of case-file values beyond what the types enforce: every count bounded
-//! (so that no value can drive an absurd allocation or run time), every number finite and
-//! physically meaningful, tolerances that cannot accept an unconverged state, names that are
-//! safe in file names, and no contact pair defined twice. Material and interface-law
-//! parameters are checked where the material and the law are built
-//! ([`crate::model::ModelSpec::new`]), the quantities of a study in [`super::quantity`].
+//! The checks of a read case ([`Case::validate`]) beyond what the types enforce: keys that
+//! go together or exclude each other, every count bounded (so that no value can drive an
+//! absurd allocation or run time), every number finite and physically meaningful, tolerances
+//! that cannot accept an unconverged state, names that are safe in file names, and no contact
+//! pair defined twice. The load histories are checked in [`super::step_checks`], a contact's
+//! wear in [`super::wear`], the quantities of a study in [`super::quantity`]. Material and
+//! interface-law parameters are checked where the material and the law are built
+//! ([`crate::model::ModelSpec::new`]).
 
 use std::collections::BTreeSet;
 
-use super::{
-    AnalysisSpec, Case, ControlKind, LawSpec, Leg, Motion, Role, StepSpec, Target, check_name,
-};
+use super::{AnalysisSpec, Case, check_name};
 use crate::Result;
 
 /// Most load steps (`[steps] count`, the length of `factors`) and arc-length increments: a
@@ -28,29 +28,42 @@ pub const MAX_TOLERANCE: f64 = 1e-2;
 pub const MAX_LATE_TOLERANCE: f64 = 0.2;
 
 impl Case {
-    /// The checks of this module, in key order; the first failure is returned.
-    pub(super) fn check_ranges(&self) -> Result<()> {
-        self.check_mesh_parameters()?;
-        if let AnalysisSpec::PlaneStress { thickness } | AnalysisSpec::PlaneStrain { thickness } =
-            self.analysis
-            && !(thickness.is_finite() && thickness > 0.0)
-        {
-            return Err(self.invalid(
-                "analysis.thickness",
-                thickness,
-                "must be positive and finite",
-            ));
-        }
+    /// Every check of a read case, in key order; the first failure is returned.
+    pub(super) fn validate(&self) -> Result<()> {
+        self.check_mesh()?;
+        self.check_analysis()?;
+        self.check_bodies()?;
+        self.check_supports()?;
+        self.check_loads()?;
+        self.check_contacts()?;
+        self.check_steps()?;
+        self.check_analysis_steps()?;
+        self.check_factors()?;
+        self.check_solver()?;
         self.check_names()?;
         self.check_laws()?;
         self.check_hysteresis_points()?;
         self.check_wear()?;
-        self.check_steps()?;
-        self.check_solver()
+        self.check_quantities()
     }
 
-    /// `[mesh] parameters`: gmsh hangs on a NaN and its `-setnumber` needs an identifier.
-    fn check_mesh_parameters(&self) -> Result<()> {
+    /// `[mesh]`: a file or a script, a positive size, and parameters that gmsh takes (it
+    /// hangs on a NaN and its `-setnumber` needs an identifier).
+    fn check_mesh(&self) -> Result<()> {
+        match (&self.mesh.file, &self.mesh.geo) {
+            (Some(_), Some(_)) => {
+                return Err(self.error("[mesh]: give either `file` or `geo`, not both"));
+            }
+            (None, None) => {
+                return Err(
+                    self.error("[mesh]: give `file` (an .msh file) or `geo` (a gmsh script)")
+                );
+            }
+            _ => {}
+        }
+        if !self.mesh.size.is_finite() || self.mesh.size <= 0.0 {
+            return Err(self.invalid("mesh.size", self.mesh.size, "must be positive"));
+        }
         for (name, &value) in &self.mesh.parameters {
             let key = format!("mesh.parameters.{name}");
             let identifier = name.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
@@ -65,6 +78,155 @@ impl Case {
             }
             if !value.is_finite() {
                 return Err(self.invalid(key, value, "must be finite"));
+            }
+        }
+        Ok(())
+    }
+
+    /// `[analysis] thickness`: positive and finite.
+    fn check_analysis(&self) -> Result<()> {
+        let (AnalysisSpec::PlaneStress { thickness } | AnalysisSpec::PlaneStrain { thickness }) =
+            self.analysis
+        else {
+            return Ok(());
+        };
+        if thickness.is_nan() || thickness <= 0.0 {
+            return Err(self.invalid("analysis.thickness", thickness, "must be positive"));
+        }
+        if thickness.is_infinite() {
+            return Err(self.invalid(
+                "analysis.thickness",
+                thickness,
+                "must be positive and finite",
+            ));
+        }
+        Ok(())
+    }
+
+    /// At least one `[[body]]`; hardening only with a yield stress.
+    fn check_bodies(&self) -> Result<()> {
+        if self.bodies.is_empty() {
+            return Err(
+                self.error("no [[body]]: name at least one physical surface and its material")
+            );
+        }
+        for (i, b) in self.bodies.iter().enumerate() {
+            if let (None, Some(h)) = (b.material.yield_stress, b.material.hardening) {
+                return Err(self.invalid(
+                    format!("body[{i}].material.hardening"),
+                    h,
+                    format!("`hardening` needs a `yield_stress` (body '{}')", b.group),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Every `[[support]]` prescribes a component, with a finite value.
+    fn check_supports(&self) -> Result<()> {
+        for (i, s) in self.supports.iter().enumerate() {
+            if s.ux.is_none() && s.uy.is_none() {
+                return Err(self.error(format!("[[support]] '{}': give ux and/or uy", s.group)));
+            }
+            for (key, value) in [("ux", s.ux), ("uy", s.uy)] {
+                if let Some(v) = value.filter(|v| !v.is_finite()) {
+                    return Err(self.invalid(format!("support[{i}].{key}"), v, "must be finite"));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Every `[[load]]` is one finite pressure, traction or force.
+    fn check_loads(&self) -> Result<()> {
+        for (i, l) in self.loads.iter().enumerate() {
+            let given = [
+                l.pressure.is_some(),
+                l.traction.is_some(),
+                l.force.is_some(),
+            ]
+            .iter()
+            .filter(|&&b| b)
+            .count();
+            if given != 1 {
+                return Err(self.error(format!(
+                    "[[load]] '{}': give exactly one of pressure, traction, force",
+                    l.group
+                )));
+            }
+            let values = [
+                ("pressure", l.pressure.map(|p| vec![p])),
+                ("traction", l.traction.map(Vec::from)),
+                ("force", l.force.map(Vec::from)),
+            ];
+            for (key, value) in values {
+                if let Some(v) = value.filter(|v| v.iter().any(|x| !x.is_finite())) {
+                    let shown = if v.len() == 1 {
+                        v[0].to_string()
+                    } else {
+                        format!("{v:?}")
+                    };
+                    return Err(self.invalid(format!("load[{i}].{key}"), shown, "must be finite"));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Every `[[contact]]` gives its faces one way, and a finite interference.
+    fn check_contacts(&self) -> Result<()> {
+        for (i, c) in self.contacts.iter().enumerate() {
+            if c.faces().is_none() {
+                return Err(self.error(format!(
+                    "[[contact]] '{}': give either side_a and side_b (with optional pairing), or curve, body_a \
+                     and body_b",
+                    c.name()
+                )));
+            }
+            if !c.interference.is_finite() {
+                return Err(self.invalid(
+                    format!("contact[{i}].interference"),
+                    c.interference,
+                    "must be finite",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Per-load `factors` of the `[steps]` form: one finite value per step.
+    fn check_factors(&self) -> Result<()> {
+        let steps = self.steps.len();
+        let own = self.supports.iter().map(|s| &s.factors).enumerate();
+        let own = own
+            .map(|(i, f)| (format!("support[{i}].factors"), f))
+            .chain(
+                self.loads
+                    .iter()
+                    .enumerate()
+                    .map(|(i, l)| (format!("load[{i}].factors"), &l.factors)),
+            );
+        for (key, factors) in own {
+            if let Some(f) = factors
+                && (f.len() != steps || f.iter().any(|x| !x.is_finite()))
+            {
+                return Err(self.invalid(
+                    key,
+                    format!("{f:?}"),
+                    format!("needs one finite value per step ({steps}), got {}", f.len()),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// `[[quantity]]`: each one valid for this case, no name twice.
+    fn check_quantities(&self) -> Result<()> {
+        let mut names = BTreeSet::new();
+        for q in &self.quantities {
+            q.check(self).map_err(|m| self.error(m))?;
+            if !names.insert(&q.name) {
+                return Err(self.error(format!("[[quantity]] '{}' is defined twice", q.name)));
             }
         }
         Ok(())
@@ -125,36 +287,21 @@ impl Case {
         Ok(())
     }
 
-    /// The rough-joint law's tangential stiffness k_T = p^S / R (paper, Eq. 3) only matters
-    /// with friction: R and S are required when `mu_m > 0` and unused (a warning if given)
-    /// when `mu_m = 0`.
+    /// The parameters of every contact's law are finite numbers (their bounds, and the rules
+    /// that tie them together, are checked where the law is built).
     fn check_laws(&self) -> Result<()> {
         for (i, c) in self.contacts.iter().enumerate() {
-            let LawSpec::RoughJoint { mu_m, r, s, .. } = c.law else {
-                continue;
-            };
-            if mu_m == 0.0 {
-                if r.is_some() || s.is_some() {
-                    tracing::warn!(
-                        "{}: contact[{i}] ('{}'): R and S are not used when mu_m = 0 (no friction)",
-                        self.path.display(),
-                        c.name()
-                    );
-                }
-                continue;
-            }
-            for (key, value) in [("R", r), ("S", s)] {
-                if value.is_none() {
-                    return Err(self.invalid(
-                        format!("contact[{i}].law.{key}"),
-                        "(missing)",
-                        format!(
-                            "the rough-joint law needs R and S (k_T = p^S / R) when mu_m = {mu_m} \
-                             (contact '{}')",
-                            c.name()
-                        ),
-                    ));
-                }
+            let law = &c.law;
+            let given = law.law.parameters.iter().zip(&law.values);
+            if let Some((p, v)) = given
+                .filter_map(|(p, v)| Some((p, (*v)?)))
+                .find(|(_, v)| !v.is_finite())
+            {
+                return Err(self.invalid(
+                    format!("contact[{i}].law.{}", p.key),
+                    v,
+                    format!("must be finite (contact '{}')", c.name()),
+                ));
             }
         }
         Ok(())
@@ -200,9 +347,22 @@ impl Case {
         }
     }
 
-    /// `[steps]`: bounded counts.
+    /// `[steps]`: `count` or `factors`, finite factors, bounded counts.
     fn check_steps(&self) -> Result<()> {
         let steps = &self.steps;
+        match (&steps.factors, steps.count) {
+            (Some(_), Some(_)) => {
+                return Err(self.error("[steps]: give either `count` or `factors`, not both"));
+            }
+            (Some(f), None) if f.is_empty() => {
+                return Err(self.invalid("steps.factors", "[]", "must not be empty"));
+            }
+            (Some(f), None) if f.iter().any(|x| !x.is_finite()) => {
+                return Err(self.invalid("steps.factors", format!("{f:?}"), "must be finite"));
+            }
+            (None, Some(0)) => return Err(self.invalid("steps.count", 0, "must be at least 1")),
+            _ => {}
+        }
         let counts = [
             ("steps.count", steps.count),
             ("steps.factors", steps.factors.as_ref().map(Vec::len)),
@@ -220,9 +380,13 @@ impl Case {
         Ok(())
     }
 
-    /// `[solver]`: bounded iteration and cut-back counts, tolerances in (0, 1 %].
+    /// `[solver]`: positive and bounded iteration and cut-back counts, tolerances in
+    /// (0, 1 %] and the linear one not above the residual one.
     fn check_solver(&self) -> Result<()> {
         let s = &self.solver;
+        if s.max_iterations == 0 {
+            return Err(self.invalid("solver.max_iterations", 0, "must be positive"));
+        }
         if s.max_iterations > MAX_ITERATIONS {
             return Err(self.invalid(
                 "solver.max_iterations",
@@ -240,7 +404,7 @@ impl Case {
                 ),
             ));
         }
-        for (key, value) in [
+        let tolerances = [
             ("solver.force_tolerance", s.force_tolerance),
             ("solver.displacement_tolerance", s.displacement_tolerance),
             ("solver.residual_tolerance", s.residual_tolerance),
@@ -254,8 +418,29 @@ impl Case {
                 "solver.linear_residual_tolerance",
                 s.linear_residual_tolerance,
             ),
-        ] {
-            if !(value > 0.0 && value <= MAX_TOLERANCE) {
+        ];
+        let positive = [
+            ("solver.late_residual_tolerance", s.late_residual_tolerance),
+            ("solver.average_force", s.average_force.unwrap_or(1.0)),
+        ];
+        for (key, value) in tolerances.into_iter().chain(positive) {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(self.invalid(key, value, "must be positive and finite"));
+            }
+        }
+        if s.linear_residual_tolerance > s.residual_tolerance {
+            return Err(self.invalid(
+                "solver.linear_residual_tolerance",
+                s.linear_residual_tolerance,
+                format!(
+                    "must not exceed residual_tolerance ({}): a linear increment is accepted \
+                     without the correction check",
+                    s.residual_tolerance
+                ),
+            ));
+        }
+        for (key, value) in tolerances {
+            if value > MAX_TOLERANCE {
                 return Err(self.invalid(
                     key,
                     value,
@@ -286,346 +471,5 @@ impl Case {
             ));
         }
         Ok(())
-    }
-}
-
-/// Two multipliers that must meet (continuity between steps, a cycle that closes): equal up
-/// to round-off of the values as written.
-fn meets(a: f64, b: f64) -> bool {
-    (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1.0)
-}
-
-impl Case {
-    /// `[[step]]`, `[[amplitude]]` and the load and support names: every name known and
-    /// unique, every amplitude a function of step time from 0 to 1, every load continuous
-    /// from step to step, every cyclic step closing its cycle, counts in range, and nothing
-    /// of the simple form (`[steps]`, per-load `factors`) mixed in.
-    pub(super) fn check_analysis_steps(&self) -> Result<()> {
-        if !self.has_analysis_steps() {
-            if !self.amplitudes.is_empty() {
-                return Err(self.invalid(
-                    "amplitude[0]",
-                    format!("{:?}", self.amplitudes[0].name),
-                    "amplitudes are used by [[step]] tables; this case has no [[step]]",
-                ));
-            }
-            return Ok(());
-        }
-        self.check_no_factors()?;
-        self.check_history_names()?;
-        for (j, a) in self.amplitudes.iter().enumerate() {
-            self.check_table(&format!("amplitude[{j}]"), &a.time, &a.value)?;
-        }
-        let wear = self.has_wear();
-        let mut increments = 0usize;
-        for (i, step) in self.analysis_steps.iter().enumerate() {
-            self.check_step_counts(i, step)?;
-            increments = increments
-                .saturating_add(step.increments.saturating_mul(step.simulated_cycles(wear)));
-            if increments > MAX_STEPS {
-                return Err(self.invalid(
-                    format!("step[{i}].increments"),
-                    step.increments,
-                    format!(
-                        "the steps up to this one simulate {increments} increments (increments × \
-                         simulated cycles), at most {MAX_STEPS} are allowed; use fewer \
-                         increments or a larger cycles_per_jump"
-                    ),
-                ));
-            }
-            self.check_step_targets(i, step)?;
-        }
-        self.check_legs()?;
-        self.check_every_history_used()
-    }
-
-    /// Per-load `factors` belong to the `[steps]` form.
-    fn check_no_factors(&self) -> Result<()> {
-        fn given<'a>(
-            role: &str,
-            mut factors: impl Iterator<Item = &'a Option<Vec<f64>>>,
-        ) -> Option<(String, &'a Vec<f64>)> {
-            factors
-                .by_ref()
-                .enumerate()
-                .find_map(|(i, f)| Some((format!("{role}[{i}].factors"), f.as_ref()?)))
-        }
-        let supports = given("support", self.supports.iter().map(|s| &s.factors));
-        let loads = || given("load", self.loads.iter().map(|l| &l.factors));
-        if let Some((key, f)) = supports.or_else(loads) {
-            return Err(self.invalid(
-                key,
-                format!("{f:?}"),
-                "per-load factors belong to [steps]; with [[step]] give the history in the \
-                 steps' `loads` and `supports` tables",
-            ));
-        }
-        Ok(())
-    }
-
-    /// Load, support, amplitude and step names: safe, and unique within their kind.
-    fn check_history_names(&self) -> Result<()> {
-        let loads = self.loads.iter().map(|l| l.name());
-        let supports = self.supports.iter().map(|s| s.name());
-        let amplitudes = self.amplitudes.iter().map(|a| a.name.as_str());
-        let steps = (0..self.analysis_steps.len()).map(|i| self.analysis_steps[i].name(i));
-        let kinds: [(&str, Vec<String>); 4] = [
-            ("load", loads.map(String::from).collect()),
-            ("support", supports.map(String::from).collect()),
-            ("amplitude", amplitudes.map(String::from).collect()),
-            ("step", steps.collect()),
-        ];
-        for (kind, names) in kinds {
-            let mut seen = BTreeSet::new();
-            for (i, name) in names.iter().enumerate() {
-                let key = format!("{kind}[{i}].name");
-                check_name(name)
-                    .map_err(|reason| self.invalid(&key, format!("{name:?}"), reason))?;
-                if !seen.insert(name) {
-                    return Err(self.invalid(
-                        key,
-                        format!("{name:?}"),
-                        format!(
-                            "another [[{kind}]] has this name (a load's or support's name \
-                             defaults to its group: give `name`)"
-                        ),
-                    ));
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// An amplitude table at `key`: as many values as times, all finite, times strictly
-    /// increasing from 0 to 1.
-    fn check_table(&self, key: &str, time: &[f64], value: &[f64]) -> Result<()> {
-        if value.len() != time.len() {
-            return Err(self.invalid(
-                format!("{key}.value"),
-                format!("{value:?}"),
-                format!(
-                    "needs one value per time ({}), got {}",
-                    time.len(),
-                    value.len()
-                ),
-            ));
-        }
-        if value.iter().any(|v| !v.is_finite()) {
-            return Err(self.invalid(
-                format!("{key}.value"),
-                format!("{value:?}"),
-                "must be finite",
-            ));
-        }
-        let increasing = time.windows(2).all(|w| w[0] < w[1]);
-        if !increasing || time.iter().any(|t| !t.is_finite()) {
-            return Err(self.invalid(
-                format!("{key}.time"),
-                format!("{time:?}"),
-                "must be finite and strictly increasing",
-            ));
-        }
-        if time.first() != Some(&0.0) || time.last() != Some(&1.0) {
-            return Err(self.invalid(
-                format!("{key}.time"),
-                format!("{time:?}"),
-                "must run from 0 to 1 (step time: the fraction of the step, or of one cycle)",
-            ));
-        }
-        Ok(())
-    }
-
-    /// `increments`, `cycles` and `cycles_per_jump` of step `i`.
-    fn check_step_counts(&self, i: usize, step: &StepSpec) -> Result<()> {
-        for (key, value) in [("increments", step.increments), ("cycles", step.cycles)] {
-            if value < 1 {
-                return Err(self.invalid(format!("step[{i}].{key}"), value, "must be at least 1"));
-            }
-        }
-        if let Some(n) = step.cycles_per_jump
-            && (n < 1 || n > step.cycles)
-        {
-            return Err(self.invalid(
-                format!("step[{i}].cycles_per_jump"),
-                n,
-                format!("must lie in [1, cycles = {}]", step.cycles),
-            ));
-        }
-        if step.is_cyclic() && !self.step_has_amplitude(step) {
-            return Err(self.invalid(
-                format!("step[{i}].cycles"),
-                step.cycles,
-                "a cyclic step repeats its amplitudes, and this one has none: let a load or \
-                 support follow an amplitude (a name or { time = [...], value = [...] })",
-            ));
-        }
-        Ok(())
-    }
-
-    /// Whether a load or support of `step` follows an amplitude.
-    fn step_has_amplitude(&self, step: &StepSpec) -> bool {
-        let targets = step.loads.values().chain(step.supports.values());
-        targets.into_iter().any(|t| !matches!(t, Target::Ramp(_)))
-    }
-
-    /// The `loads` and `supports` tables of step `i`: known names and amplitudes, finite
-    /// ramps, valid inline tables.
-    fn check_step_targets(&self, i: usize, step: &StepSpec) -> Result<()> {
-        for role in [Role::Load, Role::Support] {
-            let (table, known): (_, Vec<&str>) = match role {
-                Role::Load => (&step.loads, self.loads.iter().map(|l| l.name()).collect()),
-                Role::Support => (
-                    &step.supports,
-                    self.supports.iter().map(|s| s.name()).collect(),
-                ),
-            };
-            for (name, target) in table {
-                let key = format!("step[{i}].{}.{name}", role.key());
-                if !known.contains(&name.as_str()) {
-                    return Err(self.invalid(
-                        key,
-                        format!("{name:?}"),
-                        format!(
-                            "no [[{}]] has this name (known: {})",
-                            role.name(),
-                            known.join(", ")
-                        ),
-                    ));
-                }
-                self.check_target(&key, target)?;
-            }
-        }
-        Ok(())
-    }
-
-    /// Every load's and support's motion from step to step ([`Self::check_leg`]).
-    fn check_legs(&self) -> Result<()> {
-        for (role, _, name) in self.history_names() {
-            let steps = self.analysis_steps.iter().enumerate();
-            for ((i, step), leg) in steps.zip(self.legs(role, name)) {
-                let key = format!("step[{i}].{}.{name}", role.key());
-                self.check_leg(&key, step, &leg)?;
-            }
-        }
-        Ok(())
-    }
-
-    /// One target on its own: a finite ramp, a known amplitude, a valid inline table.
-    fn check_target(&self, key: &str, target: &Target) -> Result<()> {
-        match target {
-            Target::Ramp(v) if !v.is_finite() => Err(self.invalid(key, v, "must be finite")),
-            Target::Ramp(_) => Ok(()),
-            Target::Named(a) if self.amplitude(a).is_none() => Err(self.invalid(
-                key,
-                format!("{a:?}"),
-                format!(
-                    "no [[amplitude]] has this name (known: {})",
-                    self.amplitudes
-                        .iter()
-                        .map(|a| a.name.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            )),
-            Target::Named(_) => Ok(()),
-            Target::Table(t) => self.check_table(key, &t.time, &t.value),
-        }
-    }
-
-    /// The motion of one load or support in a step against where it stands: an amplitude
-    /// starts at the value the previous step ended with; in a cyclic step a ramp cannot
-    /// repeat (unless it holds the value) and an amplitude must end where it starts.
-    fn check_leg(&self, key: &str, step: &StepSpec, leg: &Leg) -> Result<()> {
-        match leg.motion {
-            Motion::Ramp(v) if step.is_cyclic() && !meets(v, leg.start) => Err(self.invalid(
-                key,
-                v,
-                format!(
-                    "a number ramps once and cannot repeat in a cyclic step (cycles = {}); the \
-                     value at the end of the previous step is {}: follow an amplitude instead",
-                    step.cycles, leg.start
-                ),
-            )),
-            Motion::Table(Some((_, value))) => {
-                let (first, last) = (value[0], value[value.len() - 1]);
-                if !meets(first, leg.start) {
-                    return Err(self.invalid(
-                        key,
-                        first,
-                        format!(
-                            "the amplitude starts at {first}, but the value at the end of the \
-                             previous step is {} (a load cannot jump between steps)",
-                            leg.start
-                        ),
-                    ));
-                }
-                if step.is_cyclic() && !meets(first, last) {
-                    return Err(self.invalid(
-                        key,
-                        last,
-                        format!(
-                            "in a cyclic step (cycles = {}) the amplitude must end where it \
-                             starts ({first}), it ends at {last}",
-                            step.cycles
-                        ),
-                    ));
-                }
-                Ok(())
-            }
-            _ => Ok(()),
-        }
-    }
-
-    /// Every load, and every support with a non-zero value, is named in some step (otherwise
-    /// it would stay at zero: a forgotten load).
-    fn check_every_history_used(&self) -> Result<()> {
-        for (role, i, name) in self.history_names() {
-            let nonzero = match role {
-                Role::Load => true,
-                Role::Support => self.supports[i].is_nonzero(),
-            };
-            let named = self.analysis_steps.iter().any(|s| match role {
-                Role::Load => s.loads.contains_key(name),
-                Role::Support => s.supports.contains_key(name),
-            });
-            if nonzero && !named {
-                return Err(self.invalid(
-                    format!("{}[{i}]", role.name()),
-                    format!("{name:?}"),
-                    format!(
-                        "this {} is named in no [[step]], so it would never be applied: name it \
-                         in a step's `{}` table",
-                        role.name(),
-                        role.key()
-                    ),
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    /// `[steps]` and `[[step]]` are two forms of one history: the raw table tells whether
-    /// `[steps]` was written (its defaults are indistinguishable from an absent table).
-    pub(super) fn check_history_form(&self, text: &str) -> Result<()> {
-        if !self.has_analysis_steps() {
-            return Ok(());
-        }
-        let table: toml::Table = toml::from_str(text).map_err(|e| self.error(e.to_string()))?;
-        if !table.contains_key("steps") {
-            return Ok(());
-        }
-        if self.steps.control == ControlKind::ArcLength {
-            return Err(self.invalid(
-                "steps.control",
-                "\"arc_length\"",
-                "arc-length control finds its own load factor and cannot follow [[step]] \
-                 histories; use [steps] alone",
-            ));
-        }
-        Err(self.invalid(
-            "steps",
-            "[steps]",
-            "give either [steps] (the simple form) or [[step]] (analysis steps), not both",
-        ))
     }
 }

@@ -19,14 +19,19 @@ use crate::{Error, Result};
 
 mod check;
 pub mod history;
+mod law;
 mod names;
 mod quantity;
+mod solver;
+mod step_checks;
 mod steps;
 pub mod wear;
 
 pub use check::{MAX_CUTBACKS, MAX_ITERATIONS, MAX_STEPS, MAX_TOLERANCE};
+pub use law::LawSpec;
 pub use names::{MAX_NAME_LEN, check_name};
 pub use quantity::{Component, QuantityKind, QuantitySpec, Statistic, parse_quantity};
+pub use solver::{ContactAlgorithmKind, LinearSolverKind, SolverSpec};
 pub use steps::{AmplitudeSpec, InlineAmplitude, Leg, Motion, Role, StepSpec, Target};
 
 /// A parsed case file.
@@ -290,51 +295,6 @@ pub enum Faces<'c> {
     },
 }
 
-/// The interface law of a contact pair and its parameters.
-#[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-pub enum LawSpec {
-    /// Linear normal stiffness (compression only), linear tangential stiffness and ideal
-    /// Coulomb friction.
-    LinearCoulomb {
-        /// k_N in MPa/mm.
-        normal_stiffness: f64,
-        /// k_T in MPa/mm.
-        tangential_stiffness: f64,
-        /// Coulomb coefficient μ (default 0: frictionless).
-        #[serde(default)]
-        friction: f64,
-    },
-    /// The rough-joint law of Buczkowski & Kleiber (1994), Eqs. 1–5: power-law normal
-    /// compliance u_N = c_N p^m, tangential stiffness k_T = p^S / R, slip-hardening friction
-    /// μ_F = μ_m [1 − (1 − β) exp(−n ū)].
-    RoughJoint {
-        /// c_N in mm/MPa^m (values given in µm/MPa^m: multiply them by 1e-3).
-        c_n: f64,
-        m: f64,
-        /// Optional unloading curve (c_N, m); default: the loading curve.
-        unloading_c_n: Option<f64>,
-        unloading_m: Option<f64>,
-        /// R such that p^S / R is in MPa/mm (values given per µm: × 1e-3), and S. Required
-        /// when `mu_m > 0`; unused (and optional) without friction.
-        #[serde(rename = "R")]
-        r: Option<f64>,
-        #[serde(rename = "S")]
-        s: Option<f64>,
-        /// Macroscopic friction coefficient μ_m.
-        mu_m: f64,
-        /// Initial friction as a fraction of μ_m (default 1: no hardening).
-        #[serde(default = "default_beta")]
-        beta: f64,
-        /// Slip-hardening rate n in 1/mm (default 0).
-        #[serde(default)]
-        n: f64,
-        /// Pressure (MPa) below which stiffnesses are evaluated at this value (default 0.1).
-        #[serde(default = "default_starting_pressure")]
-        starting_pressure: f64,
-    },
-}
-
 /// A plane vector: exactly two components (a third one, say a z component, would otherwise be
 /// dropped without a word).
 fn two_components<'de, D: serde::Deserializer<'de>>(
@@ -347,14 +307,6 @@ fn two_components<'de, D: serde::Deserializer<'de>>(
             v.len()
         ))
     })
-}
-
-fn default_beta() -> f64 {
-    1.0
-}
-
-fn default_starting_pressure() -> f64 {
-    0.1
 }
 
 impl ContactSpec {
@@ -464,177 +416,6 @@ impl Steps {
     }
 }
 
-/// Newton-Raphson settings (`[solver]`). The convergence criteria are the engineering ones of
-/// CalculiX and Abaqus (see `docs/convergence_criteria.md`); the older relative-norm keys
-/// `force_tolerance` and `displacement_tolerance` still work and, when given, are required in
-/// addition.
-#[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
-#[serde(from = "RawSolverSpec")]
-pub struct SolverSpec {
-    /// Iteration limit per step.
-    pub max_iterations: usize,
-    /// R_n: largest residual force ≤ R_n × the time-averaged force.
-    pub residual_tolerance: f64,
-    /// C_n: largest correction ≤ C_n × the largest displacement change of the increment.
-    pub correction_tolerance: f64,
-    /// R_p, used instead of R_n after `late_iteration` (I_P) iterations.
-    pub late_residual_tolerance: f64,
-    pub late_iteration: usize,
-    /// ε: zero flux when the force flux is below ε × its time average.
-    pub zero_flux: f64,
-    /// C_ε: the correction criterion under zero flux.
-    pub zero_flux_correction_tolerance: f64,
-    /// R_l: a residual below R_l × the average force is accepted alone (linear increments).
-    pub linear_residual_tolerance: f64,
-    /// q_u: a user-given average force (N) replacing the time-averaged one.
-    pub average_force: Option<f64>,
-    /// Relative tolerance on the out-of-balance force: ‖r‖ ≤ tol · max(‖f_ext‖, ‖f_int‖).
-    /// Always used by arc-length control; by load control only if given (`relative_norms`).
-    pub force_tolerance: f64,
-    /// Relative tolerance on the displacement correction: ‖δu‖ ≤ tol · ‖u‖ (as above).
-    pub displacement_tolerance: f64,
-    /// Whether the case gave `force_tolerance` or `displacement_tolerance`: load-controlled
-    /// increments then also require the relative-norm criteria.
-    pub relative_norms: bool,
-    /// How often a step that fails to converge is halved and retried.
-    pub max_cutbacks: usize,
-    /// Global algorithm for contact: `"newton"` (consistent tangent, default), `"two_step"`
-    /// (normal stress frozen in the friction tangent, symmetric) or `"elastic_contact"`
-    /// (elastic contact matrix).
-    pub contact_algorithm: ContactAlgorithmKind,
-    /// Linear solver of models with contact pairs: `"condensed"` (exact solves by
-    /// condensation onto the interface unknowns, default) or `"krylov"` (Cholesky, and
-    /// BiCGSTAB preconditioned with the elastic contact matrix for unsymmetric tangents).
-    pub linear_solver: LinearSolverKind,
-    /// Start an increment proportional to the last converged one from the displacements
-    /// extrapolated from it (default false).
-    pub extrapolate: bool,
-    // --- plausibility of a converged increment and collapse detection ----------
-    /// Largest nodal displacement increment of a converged increment, as a fraction of the
-    /// model size (bounding-box diagonal); a larger one is a failed increment (cut back).
-    pub max_displacement_increment: f64,
-    /// Largest equivalent strain increment √(⅔ Δε:Δε) at any integration point of a
-    /// converged increment; a larger one is a failed increment (cut back).
-    pub max_strain_increment: f64,
-    /// A step that cannot be completed is reported as plastic collapse when the secant
-    /// stiffness Δλ/‖Δu‖ of its last converged increment is below this fraction of that of
-    /// the first increment of the run.
-    pub collapse_stiffness_ratio: f64,
-}
-
-/// `[solver]` as written in the case file (the relative-norm keys optional).
-#[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields, default)]
-struct RawSolverSpec {
-    max_iterations: usize,
-    residual_tolerance: f64,
-    correction_tolerance: f64,
-    late_residual_tolerance: f64,
-    late_iteration: usize,
-    zero_flux: f64,
-    zero_flux_correction_tolerance: f64,
-    linear_residual_tolerance: f64,
-    average_force: Option<f64>,
-    force_tolerance: Option<f64>,
-    displacement_tolerance: Option<f64>,
-    max_cutbacks: usize,
-    contact_algorithm: ContactAlgorithmKind,
-    linear_solver: LinearSolverKind,
-    extrapolate: bool,
-    max_displacement_increment: f64,
-    max_strain_increment: f64,
-    collapse_stiffness_ratio: f64,
-}
-
-impl Default for RawSolverSpec {
-    /// CalculiX's field defaults (*CONTROLS, PARAMETERS=FIELD), but R_n = 5e-4 and C_n = 1e-3
-    /// rather than 5e-3 and 1e-2: with theirs frictional answers drifted by up to 4e-4 from a
-    /// tight run, with these by < 1e-5 at a few % more iterations
-    /// (docs/convergence_criteria.md).
-    fn default() -> Self {
-        Self {
-            max_iterations: 25,
-            residual_tolerance: 5e-4,
-            correction_tolerance: 1e-3,
-            late_residual_tolerance: 2e-2,
-            late_iteration: 9,
-            zero_flux: 1e-5,
-            zero_flux_correction_tolerance: 1e-3,
-            linear_residual_tolerance: 1e-8,
-            average_force: None,
-            force_tolerance: None,
-            displacement_tolerance: None,
-            max_cutbacks: 8,
-            contact_algorithm: ContactAlgorithmKind::default(),
-            linear_solver: LinearSolverKind::default(),
-            extrapolate: false,
-            max_displacement_increment: 0.1,
-            max_strain_increment: 0.05,
-            collapse_stiffness_ratio: 1e-2,
-        }
-    }
-}
-
-/// The relative-norm tolerances' value when not given (arc-length control's criteria).
-const DEFAULT_NORM_TOLERANCE: f64 = 1e-8;
-
-impl From<RawSolverSpec> for SolverSpec {
-    fn from(r: RawSolverSpec) -> Self {
-        Self {
-            max_iterations: r.max_iterations,
-            residual_tolerance: r.residual_tolerance,
-            correction_tolerance: r.correction_tolerance,
-            late_residual_tolerance: r.late_residual_tolerance,
-            late_iteration: r.late_iteration,
-            zero_flux: r.zero_flux,
-            zero_flux_correction_tolerance: r.zero_flux_correction_tolerance,
-            linear_residual_tolerance: r.linear_residual_tolerance,
-            average_force: r.average_force,
-            force_tolerance: r.force_tolerance.unwrap_or(DEFAULT_NORM_TOLERANCE),
-            displacement_tolerance: r.displacement_tolerance.unwrap_or(DEFAULT_NORM_TOLERANCE),
-            relative_norms: r.force_tolerance.is_some() || r.displacement_tolerance.is_some(),
-            max_cutbacks: r.max_cutbacks,
-            contact_algorithm: r.contact_algorithm,
-            linear_solver: r.linear_solver,
-            extrapolate: r.extrapolate,
-            max_displacement_increment: r.max_displacement_increment,
-            max_strain_increment: r.max_strain_increment,
-            collapse_stiffness_ratio: r.collapse_stiffness_ratio,
-        }
-    }
-}
-
-/// The linear solver of models with contact pairs (`[solver] linear_solver`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum LinearSolverKind {
-    /// Exact solves by condensation onto the interface unknowns.
-    #[default]
-    Condensed,
-    /// Cholesky for symmetric tangents, preconditioned BiCGSTAB for unsymmetric ones.
-    Krylov,
-}
-
-/// The global algorithm for contact (`[solver] contact_algorithm`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum ContactAlgorithmKind {
-    /// Full Newton with the consistent tangent.
-    #[default]
-    Newton,
-    /// The two-step scheme of Buczkowski & Kleiber (1994), §2.4 (normal stress frozen in the
-    /// friction tangent).
-    TwoStep,
-    /// The elastic contact matrix.
-    ElasticContact,
-}
-
-impl Default for SolverSpec {
-    fn default() -> Self {
-        RawSolverSpec::default().into()
-    }
-}
-
 /// What to write.
 #[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
@@ -728,204 +509,6 @@ impl Case {
             value: value.to_string(),
             reason: reason.into(),
         }
-    }
-
-    fn validate(&self) -> Result<()> {
-        match (&self.mesh.file, &self.mesh.geo) {
-            (Some(_), Some(_)) => {
-                return Err(self.error("[mesh]: give either `file` or `geo`, not both"));
-            }
-            (None, None) => {
-                return Err(
-                    self.error("[mesh]: give `file` (an .msh file) or `geo` (a gmsh script)")
-                );
-            }
-            _ => {}
-        }
-        if !self.mesh.size.is_finite() || self.mesh.size <= 0.0 {
-            return Err(self.invalid("mesh.size", self.mesh.size, "must be positive"));
-        }
-        match self.analysis {
-            AnalysisSpec::PlaneStress { thickness } | AnalysisSpec::PlaneStrain { thickness }
-                if thickness.is_nan() || thickness <= 0.0 =>
-            {
-                return Err(self.invalid("analysis.thickness", thickness, "must be positive"));
-            }
-            _ => {}
-        }
-        if self.bodies.is_empty() {
-            return Err(
-                self.error("no [[body]]: name at least one physical surface and its material")
-            );
-        }
-        for (i, b) in self.bodies.iter().enumerate() {
-            if let (None, Some(h)) = (b.material.yield_stress, b.material.hardening) {
-                return Err(self.invalid(
-                    format!("body[{i}].material.hardening"),
-                    h,
-                    format!("`hardening` needs a `yield_stress` (body '{}')", b.group),
-                ));
-            }
-        }
-        for (i, s) in self.supports.iter().enumerate() {
-            if s.ux.is_none() && s.uy.is_none() {
-                return Err(self.error(format!("[[support]] '{}': give ux and/or uy", s.group)));
-            }
-            for (key, value) in [("ux", s.ux), ("uy", s.uy)] {
-                if let Some(v) = value.filter(|v| !v.is_finite()) {
-                    return Err(self.invalid(format!("support[{i}].{key}"), v, "must be finite"));
-                }
-            }
-        }
-        for (i, l) in self.loads.iter().enumerate() {
-            let given = [
-                l.pressure.is_some(),
-                l.traction.is_some(),
-                l.force.is_some(),
-            ]
-            .iter()
-            .filter(|&&b| b)
-            .count();
-            if given != 1 {
-                return Err(self.error(format!(
-                    "[[load]] '{}': give exactly one of pressure, traction, force",
-                    l.group
-                )));
-            }
-            let values = [
-                ("pressure", l.pressure.map(|p| vec![p])),
-                ("traction", l.traction.map(Vec::from)),
-                ("force", l.force.map(Vec::from)),
-            ];
-            for (key, value) in values {
-                if let Some(v) = value.filter(|v| v.iter().any(|x| !x.is_finite())) {
-                    let shown = if v.len() == 1 {
-                        v[0].to_string()
-                    } else {
-                        format!("{v:?}")
-                    };
-                    return Err(self.invalid(format!("load[{i}].{key}"), shown, "must be finite"));
-                }
-            }
-        }
-        for (i, c) in self.contacts.iter().enumerate() {
-            if c.faces().is_none() {
-                return Err(self.error(format!(
-                    "[[contact]] '{}': give either side_a and side_b (with optional pairing), or curve, body_a \
-                     and body_b",
-                    c.name()
-                )));
-            }
-            if let LawSpec::RoughJoint {
-                unloading_c_n,
-                unloading_m,
-                ..
-            } = c.law
-            {
-                let one = match (unloading_c_n, unloading_m) {
-                    (Some(v), None) => Some(("unloading_c_n", v)),
-                    (None, Some(v)) => Some(("unloading_m", v)),
-                    _ => None,
-                };
-                if let Some((key, v)) = one {
-                    return Err(self.invalid(
-                        format!("contact[{i}].law.{key}"),
-                        v,
-                        format!(
-                            "give both unloading_c_n and unloading_m, or neither (contact '{}')",
-                            c.name()
-                        ),
-                    ));
-                }
-            }
-            if !c.interference.is_finite() {
-                return Err(self.invalid(
-                    format!("contact[{i}].interference"),
-                    c.interference,
-                    "must be finite",
-                ));
-            }
-        }
-        match (&self.steps.factors, self.steps.count) {
-            (Some(_), Some(_)) => {
-                return Err(self.error("[steps]: give either `count` or `factors`, not both"));
-            }
-            (Some(f), None) if f.is_empty() => {
-                return Err(self.invalid("steps.factors", "[]", "must not be empty"));
-            }
-            (Some(f), None) if f.iter().any(|x| !x.is_finite()) => {
-                return Err(self.invalid("steps.factors", format!("{f:?}"), "must be finite"));
-            }
-            (None, Some(0)) => return Err(self.invalid("steps.count", 0, "must be at least 1")),
-            _ => {}
-        }
-        self.check_analysis_steps()?;
-        let steps = self.steps.len();
-        let own = self.supports.iter().map(|s| &s.factors).enumerate();
-        let own = own
-            .map(|(i, f)| (format!("support[{i}].factors"), f))
-            .chain(
-                self.loads
-                    .iter()
-                    .enumerate()
-                    .map(|(i, l)| (format!("load[{i}].factors"), &l.factors)),
-            );
-        for (key, factors) in own {
-            if let Some(f) = factors
-                && (f.len() != steps || f.iter().any(|x| !x.is_finite()))
-            {
-                return Err(self.invalid(
-                    key,
-                    format!("{f:?}"),
-                    format!("needs one finite value per step ({steps}), got {}", f.len()),
-                ));
-            }
-        }
-        let s = &self.solver;
-        if s.max_iterations == 0 {
-            return Err(self.invalid("solver.max_iterations", 0, "must be positive"));
-        }
-        for (key, value) in [
-            ("solver.force_tolerance", s.force_tolerance),
-            ("solver.displacement_tolerance", s.displacement_tolerance),
-            ("solver.residual_tolerance", s.residual_tolerance),
-            ("solver.correction_tolerance", s.correction_tolerance),
-            ("solver.late_residual_tolerance", s.late_residual_tolerance),
-            ("solver.zero_flux", s.zero_flux),
-            (
-                "solver.zero_flux_correction_tolerance",
-                s.zero_flux_correction_tolerance,
-            ),
-            (
-                "solver.linear_residual_tolerance",
-                s.linear_residual_tolerance,
-            ),
-            ("solver.average_force", s.average_force.unwrap_or(1.0)),
-        ] {
-            if !(value.is_finite() && value > 0.0) {
-                return Err(self.invalid(key, value, "must be positive and finite"));
-            }
-        }
-        if s.linear_residual_tolerance > s.residual_tolerance {
-            return Err(self.invalid(
-                "solver.linear_residual_tolerance",
-                s.linear_residual_tolerance,
-                format!(
-                    "must not exceed residual_tolerance ({}): a linear increment is accepted \
-                     without the correction check",
-                    s.residual_tolerance
-                ),
-            ));
-        }
-        self.check_ranges()?;
-        let mut names = std::collections::BTreeSet::new();
-        for q in &self.quantities {
-            q.check(self).map_err(|m| self.error(m))?;
-            if !names.insert(&q.name) {
-                return Err(self.error(format!("[[quantity]] '{}' is defined twice", q.name)));
-            }
-        }
-        Ok(())
     }
 }
 

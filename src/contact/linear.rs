@@ -3,6 +3,7 @@
 //! (paper Box 1, corrected as in docs/theory.md, "Known misprints in the paper", 1–2: the trial stress starts from the converged
 //! p_T,n, and the returned stress is p_T = μ|p_N| sign(p_T^tr)).
 
+use super::laws::{Bound, LawDescriptor, ParameterDefault, ParameterDescriptor, check};
 use super::{
     ContactStatus, InterfaceLaw, InterfaceState, InterfaceTangent, OPEN_TANGENT_FRACTION, sticks,
 };
@@ -19,35 +20,49 @@ pub struct LinearCoulomb {
     pub friction: f64,
 }
 
+/// The law in the table of interface laws: `law = { type = "linear_coulomb", ... }`.
+pub const LAW: LawDescriptor = LawDescriptor {
+    name: "linear_coulomb",
+    doc: "Linear normal stiffness (compression only), linear tangential stiffness and ideal\n\
+          Coulomb friction.",
+    parameters: &[
+        ParameterDescriptor {
+            key: "normal_stiffness",
+            unit: "MPa/mm",
+            default: ParameterDefault::Required,
+            bound: Bound::Positive,
+            doc: "k_N in MPa/mm.",
+        },
+        ParameterDescriptor {
+            key: "tangential_stiffness",
+            unit: "MPa/mm",
+            default: ParameterDefault::Required,
+            bound: Bound::Positive,
+            doc: "k_T in MPa/mm.",
+        },
+        ParameterDescriptor {
+            key: "friction",
+            unit: "",
+            default: ParameterDefault::Value(0.0),
+            bound: Bound::NonNegative,
+            doc: "Coulomb coefficient μ (default 0: frictionless).",
+        },
+    ],
+    build: |x| Ok(Box::new(LinearCoulomb::new(x[0], x[1], x[2])?)),
+    unused: |_| None,
+};
+
 impl LinearCoulomb {
-    /// Checks k_N > 0, k_T > 0, μ ≥ 0.
+    /// Checks k_N > 0, k_T > 0, μ ≥ 0 (the bounds of [`LAW`]).
     pub fn new(
         normal_stiffness: f64,
         tangential_stiffness: f64,
         friction: f64,
     ) -> Result<Self, ParameterError> {
-        let positive = |x: f64| x.is_finite() && x > 0.0;
-        if !positive(normal_stiffness) {
-            return Err(ParameterError::new(
-                "normal_stiffness",
-                normal_stiffness,
-                "must be positive (MPa/mm)",
-            ));
-        }
-        if !positive(tangential_stiffness) {
-            return Err(ParameterError::new(
-                "tangential_stiffness",
-                tangential_stiffness,
-                "must be positive (MPa/mm)",
-            ));
-        }
-        if !(friction.is_finite() && friction >= 0.0) {
-            return Err(ParameterError::new(
-                "friction",
-                friction,
-                "must be zero or positive",
-            ));
-        }
+        check(
+            LAW.parameters,
+            &[normal_stiffness, tangential_stiffness, friction],
+        )?;
         Ok(Self {
             normal_stiffness,
             tangential_stiffness,

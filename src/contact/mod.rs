@@ -10,6 +10,7 @@
 //! committed at the last converged step; the solver commits trial states only after a step
 //! converged.
 
+pub mod laws;
 pub mod linear;
 pub mod rough;
 pub mod wear;
@@ -181,11 +182,6 @@ pub trait InterfaceLaw: Send + Sync + std::fmt::Debug {
 
     /// Short description for logs.
     fn describe(&self) -> String;
-
-    /// The wear model of the surfaces this law joins ([`wear::Worn`]); none by default.
-    fn wear(&self) -> Option<&WearModel> {
-        None
-    }
 }
 
 /// Whether a closed point sticks, given F = |p_T^trial| − μ|p_N| (paper Eq. 11) and the

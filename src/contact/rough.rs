@@ -37,6 +37,7 @@
 //!
 //! Stresses of the normal law always come from the exact total law.
 
+use super::laws::{Bound, Built, LawDescriptor, ParameterDefault, ParameterDescriptor, check};
 use super::{
     ContactStatus, InterfaceLaw, InterfaceState, InterfaceTangent, OPEN_TANGENT_FRACTION, sticks,
 };
@@ -62,39 +63,151 @@ pub struct RoughJoint {
     pub starting_pressure: f64,
 }
 
-impl RoughJoint {
-    /// Checks the parameters and names the first wrong one.
-    pub fn new(law: RoughJoint) -> Result<Self, ParameterError> {
-        let check = |ok: bool, name: &'static str, x: f64, reason: &str| {
-            if ok {
-                Ok(())
-            } else {
-                Err(ParameterError::new(name, x, reason))
+/// The law in the table of interface laws: `law = { type = "rough_joint", ... }`.
+pub const LAW: LawDescriptor = LawDescriptor {
+    name: "rough_joint",
+    doc: "The rough-joint law of Buczkowski & Kleiber (1994), Eqs. 1–5: power-law normal\n\
+          compliance u_N = c_N p^m, tangential stiffness k_T = p^S / R, slip-hardening friction\n\
+          μ_F = μ_m [1 − (1 − β) exp(−n ū)].",
+    parameters: &[
+        ParameterDescriptor {
+            key: "c_n",
+            unit: "mm/MPa^m",
+            default: ParameterDefault::Required,
+            bound: Bound::Positive,
+            doc: "c_N in mm/MPa^m (values given in µm/MPa^m: multiply them by 1e-3).",
+        },
+        ParameterDescriptor {
+            key: "m",
+            unit: "",
+            default: ParameterDefault::Required,
+            bound: Bound::Positive,
+            doc: "Exponent m of the normal compliance u_N = c_N p^m.",
+        },
+        ParameterDescriptor {
+            key: "unloading_c_n",
+            unit: "mm/MPa^m",
+            default: ParameterDefault::Optional,
+            bound: Bound::Positive,
+            doc: "Optional unloading curve (c_N, m); default: the loading curve.",
+        },
+        ParameterDescriptor {
+            key: "unloading_m",
+            unit: "",
+            default: ParameterDefault::Optional,
+            bound: Bound::Positive,
+            doc: "Exponent m of the optional unloading curve (given with `unloading_c_n`).",
+        },
+        ParameterDescriptor {
+            key: "R",
+            unit: "",
+            default: ParameterDefault::Optional,
+            bound: Bound::Positive,
+            doc: "R such that p^S / R is in MPa/mm (values given per µm: × 1e-3), and S. Required\n\
+                  when `mu_m > 0`; unused (and optional) without friction.",
+        },
+        ParameterDescriptor {
+            key: "S",
+            unit: "",
+            default: ParameterDefault::Optional,
+            bound: Bound::NonNegative,
+            doc: "Exponent S of the tangential stiffness k_T = p^S / R. Required when `mu_m > 0`;\n\
+                  unused (and optional) without friction.",
+        },
+        ParameterDescriptor {
+            key: "mu_m",
+            unit: "",
+            default: ParameterDefault::Required,
+            bound: Bound::NonNegative,
+            doc: "Macroscopic friction coefficient μ_m.",
+        },
+        ParameterDescriptor {
+            key: "beta",
+            unit: "",
+            default: ParameterDefault::Value(1.0),
+            bound: Bound::Fraction,
+            doc: "Initial friction as a fraction of μ_m (default 1: no hardening).",
+        },
+        ParameterDescriptor {
+            key: "n",
+            unit: "1/mm",
+            default: ParameterDefault::Value(0.0),
+            bound: Bound::NonNegative,
+            doc: "Slip-hardening rate n in 1/mm (default 0).",
+        },
+        ParameterDescriptor {
+            key: "starting_pressure",
+            unit: "MPa",
+            default: ParameterDefault::Value(0.1),
+            bound: Bound::Positive,
+            doc: "Pressure (MPa) below which stiffnesses are evaluated at this value (default 0.1).",
+        },
+    ],
+    build,
+    unused: |x| {
+        let tangential_given = !(x[4].is_nan() && x[5].is_nan());
+        (x[6] == 0.0 && tangential_given)
+            .then_some("R and S are not used when mu_m = 0 (no friction)")
+    },
+};
+
+/// The law at the values of [`LAW`]'s parameters: the unloading curve is given whole or not
+/// at all, and k_T = p^S / R (Eq. 3) only matters with friction, so R and S are required when
+/// mu_m > 0.
+fn build(x: &[f64]) -> Built {
+    let given = |v: f64| (!v.is_nan()).then_some(v);
+    let (unloading_c_n, unloading_m, r, s, mu_m) =
+        (given(x[2]), given(x[3]), given(x[4]), given(x[5]), x[6]);
+    let half = match (unloading_c_n, unloading_m) {
+        (Some(v), None) => Some(("unloading_c_n", v)),
+        (None, Some(v)) => Some(("unloading_m", v)),
+        _ => None,
+    };
+    if let Some((key, v)) = half {
+        let reason = "give both unloading_c_n and unloading_m, or neither";
+        return Err(ParameterError::new(key, v, reason));
+    }
+    if mu_m != 0.0 {
+        for (key, value) in [("R", r), ("S", s)] {
+            if value.is_none() {
+                let reason =
+                    format!("the rough-joint law needs R and S (k_T = p^S / R) when mu_m = {mu_m}");
+                return Err(ParameterError::new(key, f64::NAN, reason));
             }
-        };
-        let positive = |x: f64, name| check(x.is_finite() && x > 0.0, name, x, "must be positive");
-        let non_negative = |x: f64, name, unit: &str| {
-            let reason = format!("must be zero or positive{unit}");
-            check(x.is_finite() && x >= 0.0, name, x, &reason)
-        };
-        positive(law.c_n, "c_n")?;
-        positive(law.m, "m")?;
-        if let Some((c, m)) = law.unloading {
-            positive(c, "unloading_c_n")?;
-            positive(m, "unloading_m")?;
         }
-        positive(law.r, "R")?;
-        non_negative(law.s, "S", "")?;
-        non_negative(law.mu_m, "mu_m", "")?;
-        let beta = law.beta;
-        check(
-            beta.is_finite() && beta > 0.0 && beta <= 1.0,
-            "beta",
-            beta,
-            "must lie in (0, 1]",
-        )?;
-        non_negative(law.n, "n", " (1/mm)")?;
-        positive(law.starting_pressure, "starting_pressure")?;
+    }
+    Ok(Box::new(RoughJoint::new(RoughJoint {
+        c_n: x[0],
+        m: x[1],
+        unloading: unloading_c_n.zip(unloading_m),
+        // Only absent when mu_m = 0, where the tangential traction is bounded by μ_F |p| = 0
+        // and k_T never shows in a result; R = 1, S = 0 is a valid placeholder (k_T = 1 MPa/mm).
+        r: r.unwrap_or(1.0),
+        s: s.unwrap_or(0.0),
+        mu_m,
+        beta: x[7],
+        n: x[8],
+        starting_pressure: x[9],
+    })?))
+}
+
+impl RoughJoint {
+    /// Checks the parameters against the bounds of [`LAW`] and names the first wrong one.
+    pub fn new(law: RoughJoint) -> Result<Self, ParameterError> {
+        let (unloading_c_n, unloading_m) = law.unloading.unwrap_or((f64::NAN, f64::NAN));
+        let values = [
+            law.c_n,
+            law.m,
+            unloading_c_n,
+            unloading_m,
+            law.r,
+            law.s,
+            law.mu_m,
+            law.beta,
+            law.n,
+            law.starting_pressure,
+        ];
+        check(LAW.parameters, &values)?;
         Ok(law)
     }
 

@@ -1,5 +1,6 @@
-//! Wear of the surfaces of a contact pair: the local wear laws and the law wrapper that
-//! carries a pair's wear model to its interface elements.
+//! Wear of the surfaces of a contact pair: the local wear laws and a pair's wear model, which
+//! the pair's interface elements apply next to its interface law
+//! ([`crate::element::set::ContactPair`]).
 //!
 //! Wear depth h ≥ 0 (mm) removes material from a surface and so opens the gap: the interface
 //! law of a worn point sees u_N + h_A + h_B (the committed depths; explicit in time, see
@@ -13,8 +14,6 @@
 //!   dh = α |p_T Δu_T^p|, α in 1/MPa.
 //!
 //! Each surface has its own coefficient (0: that surface does not wear).
-
-use super::{InterfaceLaw, InterfaceState, InterfaceTangent};
 
 /// Default stability limit of a wear jump: the depth a jump adds at a point may be at most
 /// this fraction of the point's elastic closure |p_N| / k_N (see
@@ -67,36 +66,6 @@ impl WearModel {
             "{law}, coefficients A {} and B {} 1/MPa",
             self.coefficients[0], self.coefficients[1]
         )
-    }
-}
-
-/// An interface law whose surfaces wear: the law itself is unchanged (the element adds the
-/// wear to the gap it hands the law), the wrapper only carries the pair's [`WearModel`].
-#[derive(Debug)]
-pub struct Worn {
-    pub law: Box<dyn InterfaceLaw>,
-    pub wear: WearModel,
-}
-
-impl InterfaceLaw for Worn {
-    fn update(
-        &self,
-        relative: [f64; 2],
-        committed: &InterfaceState,
-    ) -> (InterfaceState, InterfaceTangent) {
-        self.law.update(relative, committed)
-    }
-
-    fn elastic_tangent(&self, state: &InterfaceState) -> InterfaceTangent {
-        self.law.elastic_tangent(state)
-    }
-
-    fn describe(&self) -> String {
-        format!("{}; wear: {}", self.law.describe(), self.wear.describe())
-    }
-
-    fn wear(&self) -> Option<&WearModel> {
-        Some(&self.wear)
     }
 }
 

@@ -18,6 +18,7 @@ use serde::Deserialize;
 use super::quadrature::{GAUSS3, LOBATTO3};
 use super::shape::line3;
 use super::{Analysis, ElementInput, ElementOutput};
+use crate::contact::wear::WearModel;
 use crate::contact::{InterfaceLaw, InterfaceState};
 
 /// Integration rule of an interface element.
@@ -129,14 +130,15 @@ pub fn relative_operator(p: &InterfacePoint) -> nalgebra::SMatrix<f64, 2, 16> {
 
 /// Tangent and internal force of one interface element for nodal displacements `input.u`
 /// (dofs of [a0, a1, a_mid, b0, b1, b_mid]), updating the trial states from the committed
-/// ones, with their fretting and wear history ([`crate::contact::PointHistory`]); the law
-/// sees the gap opened by the committed wear. The tangent is the one of `input.algorithm`
+/// ones, with their fretting and wear history ([`crate::contact::PointHistory`]; `wear` is the
+/// pair's wear model); the law sees the gap opened by the committed wear. The tangent is the one of `input.algorithm`
 /// (the consistent one, Buczkowski & Kleiber (1994), Eq. 21, for Newton).
 pub fn evaluate_interface(
     analysis: &Analysis,
     element: &InterfaceElement,
     interference: f64,
     law: &dyn InterfaceLaw,
+    wear: Option<&WearModel>,
     input: &ElementInput<InterfaceState>,
     output: ElementOutput<InterfaceState>,
 ) {
@@ -146,7 +148,6 @@ pub fn evaluate_interface(
         algorithm,
     } = *input;
     let ElementOutput { trial, mut k, f } = output;
-    let wear = law.wear();
     for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
         let p = interface_point(analysis, &element.b_coords, xi, w);
         let b = relative_operator(&p);
@@ -211,7 +212,7 @@ mod tests {
             k,
             f,
         };
-        evaluate_interface(analysis, e, 0.0, law, &input, output);
+        evaluate_interface(analysis, e, 0.0, law, None, &input, output);
     }
 
     /// A straight horizontal element from x = 1 to x = 3 at y = 0 (B walks +x, so n = +y).

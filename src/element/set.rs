@@ -147,12 +147,14 @@ impl ContinuumSet {
     }
 }
 
-/// A contact pair: its law, interference and the range of its elements in
-/// [`InterfaceSet::elements`].
+/// A contact pair: its law, the wear of its surfaces, its interference and the range of its
+/// elements in [`InterfaceSet::elements`].
 #[derive(Debug)]
 pub struct ContactPair {
     pub name: String,
     pub law: Box<dyn InterfaceLaw>,
+    /// How the pair's surfaces wear (`None`: they do not).
+    pub wear: Option<WearModel>,
     /// Initial interference δ in mm (positive: overlap).
     pub interference: f64,
     pub elements: std::ops::Range<usize>,
@@ -161,7 +163,15 @@ pub struct ContactPair {
 impl ContactPair {
     /// The wear model of the pair's surfaces, if they wear.
     pub fn wear(&self) -> Option<&WearModel> {
-        self.law.wear()
+        self.wear.as_ref()
+    }
+
+    /// Short description for logs: the law, and the wear model if the surfaces wear.
+    pub fn describe(&self) -> String {
+        match &self.wear {
+            Some(wear) => format!("{}; wear: {}", self.law.describe(), wear.describe()),
+            None => self.law.describe(),
+        }
     }
 }
 
@@ -214,6 +224,7 @@ impl ElementSet for InterfaceSet {
             element,
             pair.interference,
             law,
+            pair.wear(),
             input,
             output,
         );

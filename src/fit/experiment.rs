@@ -17,8 +17,8 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use super::data::{Dimension, Table};
-use super::params::LawKind;
 use super::specimen::Specimen;
+use crate::contact::laws::LawDescriptor;
 use crate::contact::{InterfaceLaw, InterfaceState};
 use crate::{Error, Result};
 
@@ -187,9 +187,14 @@ impl Experiment {
         })
     }
 
-    /// The simulated responses with `law` (a model test gets the law's `kind` and parameter
-    /// values `x`).
-    pub fn simulate(&self, law: &dyn InterfaceLaw, kind: LawKind, x: &[f64]) -> Result<Vec<f64>> {
+    /// The simulated responses with `law` (a model test gets the law's table entry `kind` and
+    /// parameter values `x`).
+    pub fn simulate(
+        &self,
+        law: &dyn InterfaceLaw,
+        kind: &LawDescriptor,
+        x: &[f64],
+    ) -> Result<Vec<f64>> {
         Ok(match &self.kind {
             Kind::Normal { closure } => normal(law, closure),
             Kind::Tangential {

@@ -39,7 +39,7 @@ use serde::Deserialize;
 
 pub use data::{Dimension, Table};
 pub use experiment::{Experiment, TestSpec};
-pub use params::{LawKind, ParameterSpec, Parameters};
+pub use params::{ParameterSpec, Parameters};
 pub use report::write;
 
 use crate::{Error, Result};
@@ -60,7 +60,8 @@ const NORMAL_975: f64 = 1.959_963_984_540_054;
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FitFile {
-    pub law: LawKind,
+    /// The law's name in the table of interface laws ([`crate::contact::laws`]).
+    pub law: &'static crate::contact::laws::LawDescriptor,
     pub parameters: BTreeMap<String, ParameterSpec>,
     #[serde(rename = "test")]
     pub tests: Vec<TestSpec>,
@@ -260,7 +261,14 @@ impl Fit {
         }
         let simulated = self.simulate(&x)?;
         let mut parameters = Vec::new();
-        for (i, (name, _)) in self.parameters.law.parameters().iter().enumerate() {
+        for (i, name) in self
+            .parameters
+            .law
+            .parameters
+            .iter()
+            .map(|p| p.key)
+            .enumerate()
+        {
             if x[i].is_nan() {
                 continue;
             }
@@ -295,7 +303,7 @@ impl Fit {
         }
         Ok(FitResult {
             fit_file: self.path.clone(),
-            law: self.parameters.law.name(),
+            law: self.parameters.law.name,
             parameters,
             free: self.parameters.free.iter().map(|f| f.name).collect(),
             correlation: stats.correlation,

@@ -14,72 +14,8 @@ use nalgebra::DVector;
 use serde::Deserialize;
 
 use crate::contact::InterfaceLaw;
-use crate::contact::linear::LinearCoulomb;
-use crate::contact::rough::RoughJoint;
-use crate::error::ParameterError;
+use crate::contact::laws::{self, LawDescriptor};
 use crate::{Error, Result};
-
-/// The interface law whose parameters are fitted.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum LawKind {
-    RoughJoint,
-    LinearCoulomb,
-}
-
-impl LawKind {
-    /// The case-file `type` of the law.
-    pub fn name(self) -> &'static str {
-        match self {
-            LawKind::RoughJoint => "rough_joint",
-            LawKind::LinearCoulomb => "linear_coulomb",
-        }
-    }
-
-    /// Parameter names (as in a case file's `law = {...}`) and defaults (`None`: required,
-    /// NaN: optional without default).
-    pub fn parameters(self) -> &'static [(&'static str, Option<f64>)] {
-        match self {
-            LawKind::RoughJoint => &[
-                ("c_n", None),
-                ("m", None),
-                ("unloading_c_n", Some(f64::NAN)),
-                ("unloading_m", Some(f64::NAN)),
-                ("R", None),
-                ("S", None),
-                ("mu_m", None),
-                ("beta", Some(1.0)),
-                ("n", Some(0.0)),
-                ("starting_pressure", Some(0.1)),
-            ],
-            LawKind::LinearCoulomb => &[
-                ("normal_stiffness", None),
-                ("tangential_stiffness", None),
-                ("friction", Some(0.0)),
-            ],
-        }
-    }
-
-    /// The law with parameter values `x` (in the order of [`LawKind::parameters`]; NaN for
-    /// an optional parameter left out).
-    pub fn build(self, x: &[f64]) -> std::result::Result<Box<dyn InterfaceLaw>, ParameterError> {
-        let given = |v: f64| (!v.is_nan()).then_some(v);
-        Ok(match self {
-            LawKind::RoughJoint => Box::new(RoughJoint::new(RoughJoint {
-                c_n: x[0],
-                m: x[1],
-                unloading: given(x[2]).zip(given(x[3])),
-                r: x[4],
-                s: x[5],
-                mu_m: x[6],
-                beta: x[7],
-                n: x[8],
-                starting_pressure: x[9],
-            })?),
-            LawKind::LinearCoulomb => Box::new(LinearCoulomb::new(x[0], x[1], x[2])?),
-        })
-    }
-}
 
 /// One `[parameters]` entry of the fit file.
 #[derive(Clone, Copy, Debug, Default, Deserialize)]
@@ -142,9 +78,9 @@ pub struct Free {
 /// The law, its parameter values, and which of them are free.
 #[derive(Clone, Debug)]
 pub struct Parameters {
-    pub law: LawKind,
+    pub law: &'static LawDescriptor,
     /// Every parameter's value (fixed values, defaults, and the initial values of the free
-    /// ones), in the order of [`LawKind::parameters`].
+    /// ones), in the order of the law's parameters (NaN: an optional one left out).
     pub values: Vec<f64>,
     pub free: Vec<Free>,
     /// The fit file (for messages).
@@ -153,29 +89,33 @@ pub struct Parameters {
 
 impl Parameters {
     /// Checks the `[parameters]` table of fit file `path` against `law`.
-    pub fn new(law: LawKind, specs: &BTreeMap<String, ParameterSpec>, path: &Path) -> Result<Self> {
+    pub fn new(
+        law: &'static LawDescriptor,
+        specs: &BTreeMap<String, ParameterSpec>,
+        path: &Path,
+    ) -> Result<Self> {
         let invalid = |key: &str, value: String, reason: String| Error::InvalidParameter {
             path: path.to_path_buf(),
             key: format!("parameters.{key}"),
             value,
             reason,
         };
-        let names = law.parameters();
-        if let Some(unknown) = specs.keys().find(|k| !names.iter().any(|(n, _)| n == k)) {
-            let known: Vec<&str> = names.iter().map(|(n, _)| *n).collect();
+        if let Some(unknown) = specs.keys().find(|k| law.index(k).is_none()) {
+            let known: Vec<&str> = law.parameters.iter().map(|p| p.key).collect();
             return Err(invalid(
                 unknown,
                 String::new(),
                 format!(
                     "not a parameter of {} (those are: {})",
-                    law.name(),
+                    law.name,
                     known.join(", ")
                 ),
             ));
         }
-        let mut values = Vec::with_capacity(names.len());
+        let mut values = Vec::with_capacity(law.parameters.len());
         let mut free = Vec::new();
-        for (index, &(name, default)) in names.iter().enumerate() {
+        for (index, parameter) in law.parameters.iter().enumerate() {
+            let (name, default) = (parameter.key, parameter.default_value());
             let spec = specs.get(name).copied();
             let value = match (spec, default) {
                 (None, Some(d)) => d,
@@ -185,7 +125,7 @@ impl Parameters {
                         String::new(),
                         format!(
                             "missing: {} needs it fixed (`value`) or free (`initial`)",
-                            law.name()
+                            law.name
                         ),
                     ));
                 }
@@ -277,7 +217,7 @@ impl Parameters {
             Error::InvalidParameter {
                 path: self.path.clone(),
                 key: format!("parameters.{}", e.name),
-                value: e.value.to_string(),
+                value: laws::shown(e.value),
                 reason: format!("{}{hint}", e.reason),
             }
         })
@@ -287,15 +227,15 @@ impl Parameters {
     pub fn snippet(&self, x: &[f64]) -> String {
         let items: Vec<String> = self
             .law
-            .parameters()
+            .parameters
             .iter()
             .zip(x)
             .filter(|(_, v)| !v.is_nan())
-            .map(|((name, _), v)| format!("{name} = {}", toml::Value::Float(*v)))
+            .map(|(p, v)| format!("{} = {}", p.key, toml::Value::Float(*v)))
             .collect();
         format!(
             "law = {{ type = \"{}\", {} }}",
-            self.law.name(),
+            self.law.name,
             items.join(", ")
         )
     }
@@ -368,16 +308,13 @@ mod tests {
         }
         specs.get_mut("m").unwrap().value = None;
         specs.get_mut("m").unwrap().initial = Some(0.5);
-        let p = Parameters::new(LawKind::RoughJoint, &specs, Path::new("f.toml")).unwrap();
+        let law = &crate::contact::rough::LAW;
+        let p = Parameters::new(law, &specs, Path::new("f.toml")).unwrap();
         let line = p.snippet(&p.values);
         let table: toml::Table = toml::from_str(&line).unwrap();
-        let law: crate::config::LawSpec = table["law"].clone().try_into().unwrap();
-        let crate::config::LawSpec::RoughJoint {
-            c_n, m, s, beta, ..
-        } = law
-        else {
-            panic!("{line}")
-        };
-        assert_eq!((c_n, m, s, beta), (2e-3, 0.5, Some(0.5), 1.0));
+        let spec: crate::config::LawSpec = table["law"].clone().try_into().unwrap();
+        assert_eq!(spec.law.name, "rough_joint", "{line}");
+        let values = ["c_n", "m", "S", "beta"].map(|k| spec.get(k));
+        assert_eq!(values, [Some(2e-3), Some(0.5), Some(0.5), Some(1.0)]);
     }
 }

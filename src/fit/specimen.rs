@@ -6,8 +6,8 @@
 
 use std::path::Path;
 
-use super::params::LawKind;
 use crate::config::Case;
+use crate::contact::laws::LawDescriptor;
 use crate::mesh::Mesh;
 use crate::run::{self, folder::OutputFolder};
 use crate::sweep::keys;
@@ -87,10 +87,10 @@ impl Specimen {
     }
 
     /// The case with the fitted law (`kind`, parameters `x` in its order; NaN: left out).
-    fn case_with(&self, x: &[f64], kind: LawKind) -> Result<Case> {
+    fn case_with(&self, x: &[f64], kind: &LawDescriptor) -> Result<Case> {
         let mut law = toml::Table::new();
-        law.insert("type".into(), toml::Value::String(kind.name().into()));
-        let names = kind.parameters().iter().map(|(n, _)| n);
+        law.insert("type".into(), toml::Value::String(kind.name.into()));
+        let names = kind.parameters.iter().map(|p| p.key);
         for (name, v) in names.zip(x).filter(|(_, v)| !v.is_nan()) {
             law.insert(name.to_string(), toml::Value::Float(*v));
         }
@@ -113,7 +113,7 @@ impl Specimen {
     }
 
     /// The quantity at the measured steps with the law's parameters `x`.
-    pub fn simulate(&self, x: &[f64], kind: LawKind) -> Result<Vec<f64>> {
+    pub fn simulate(&self, x: &[f64], kind: &LawDescriptor) -> Result<Vec<f64>> {
         let case = self.case_with(x, kind)?;
         let tmp = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
         let folder = OutputFolder::scratch(tmp.path())?;

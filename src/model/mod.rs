@@ -235,6 +235,7 @@ fn build_interface(
             rule,
             interference,
             law,
+            wear,
             ..
         } = contact;
         let start = elements.len();
@@ -260,17 +261,20 @@ fn build_interface(
                 message: "no interface elements were found".into(),
             });
         }
-        tracing::info!(
-            "contact '{name}': {} interface elements, {}",
-            elements.len() - start,
-            law.describe()
-        );
-        pairs.push(ContactPair {
+        let pair = ContactPair {
             name,
             law,
+            wear,
             interference,
             elements: start..elements.len(),
-        });
+        };
+        tracing::info!(
+            "contact '{}': {} interface elements, {}",
+            pair.name,
+            pair.elements.len(),
+            pair.describe()
+        );
+        pairs.push(pair);
     }
     Ok(InterfaceSet {
         analysis,

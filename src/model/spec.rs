@@ -7,12 +7,11 @@ use super::loads::{History, Schedule, Table, factors_history};
 use super::timeline::{StepPlan, Timeline};
 use crate::config::wear::{WearLawKind, WearSpec};
 use crate::config::{
-    AnalysisSpec, Case, ContactAlgorithmKind, ControlKind, Faces, FormulationKind, IntegrationKind,
-    LawSpec, Leg, MaterialSpec, Motion, PairingKind, Role, Steps,
+    AnalysisSpec, Case, ContactAlgorithmKind, ContactSpec, ControlKind, Faces, FormulationKind,
+    IntegrationKind, Leg, MaterialSpec, Motion, PairingKind, Role, Steps,
 };
-use crate::contact::linear::LinearCoulomb;
-use crate::contact::rough::RoughJoint;
-use crate::contact::wear::{DEFAULT_JUMP_LIMIT, WearLaw, WearModel, Worn};
+use crate::contact::laws;
+use crate::contact::wear::{DEFAULT_JUMP_LIMIT, WearLaw, WearModel};
 use crate::contact::{ContactAlgorithm, InterfaceLaw};
 use crate::element::Analysis;
 use crate::element::continuum::Formulation;
@@ -130,8 +129,8 @@ pub enum LineLoad {
     Traction([f64; 2]),
 }
 
-/// A contact pair: how its faces are found, the integration rule, the initial interference
-/// and the interface law.
+/// A contact pair: how its faces are found, the integration rule, the initial interference,
+/// the interface law and the wear of its surfaces.
 #[derive(Debug)]
 pub struct Contact {
     pub name: String,
@@ -139,6 +138,7 @@ pub struct Contact {
     pub rule: InterfaceRule,
     pub interference: f64,
     pub law: Box<dyn InterfaceLaw>,
+    pub wear: Option<WearModel>,
 }
 
 impl ModelSpec {
@@ -194,20 +194,7 @@ impl ModelSpec {
             .enumerate()
             .map(|(i, c)| {
                 let name = c.name();
-                let law = build_law(&c.law).map_err(|e| {
-                    invalid(
-                        &format!("contact[{i}].law"),
-                        &format!("contact '{name}'"),
-                        e,
-                    )
-                })?;
-                let law = match &c.wear {
-                    Some(w) => Box::new(Worn {
-                        law,
-                        wear: wear_model(w),
-                    }),
-                    None => law,
-                };
+                let law = build_law(case, i, c)?;
                 let pairing = c.faces().map(pairing).ok_or_else(|| Error::Case {
                     path: case.path.clone(),
                     message: format!("[[contact]] '{name}': the faces are not given"),
@@ -218,6 +205,7 @@ impl ModelSpec {
                     rule: c.integration.into(),
                     interference: c.interference,
                     law,
+                    wear: c.wear.as_ref().map(wear_model),
                 })
             })
             .collect::<Result<_>>()?;
@@ -431,43 +419,23 @@ fn wear_model(spec: &WearSpec) -> WearModel {
     }
 }
 
-/// The interface law of a pair.
-fn build_law(spec: &LawSpec) -> std::result::Result<Box<dyn InterfaceLaw>, ParameterError> {
-    Ok(match *spec {
-        LawSpec::LinearCoulomb {
-            normal_stiffness,
-            tangential_stiffness,
-            friction,
-        } => Box::new(LinearCoulomb::new(
-            normal_stiffness,
-            tangential_stiffness,
-            friction,
-        )?),
-        LawSpec::RoughJoint {
-            c_n,
-            m,
-            unloading_c_n,
-            unloading_m,
-            r,
-            s,
-            mu_m,
-            beta,
-            n,
-            starting_pressure,
-        } => Box::new(RoughJoint::new(RoughJoint {
-            c_n,
-            m,
-            unloading: unloading_c_n.zip(unloading_m),
-            // Only read when mu_m = 0 (the case check requires both otherwise), where the
-            // tangential traction is bounded by μ_F |p| = 0 and k_T never shows in a result;
-            // R = 1, S = 0 is a valid placeholder (k_T = 1 MPa/mm).
-            r: r.unwrap_or(1.0),
-            s: s.unwrap_or(0.0),
-            mu_m,
-            beta,
-            n,
-            starting_pressure,
-        })?),
+/// The interface law of contact `i` of `case`, from the table of laws; a parameter given to
+/// no effect is a warning, a wrong one an [`Error::InvalidParameter`] naming its key.
+fn build_law(case: &Case, i: usize, contact: &ContactSpec) -> Result<Box<dyn InterfaceLaw>> {
+    let (law, values) = (contact.law.law, contact.law.numbers());
+    if let Some(note) = (law.unused)(&values) {
+        tracing::warn!(
+            "{}: contact[{i}] ('{}'): {note}",
+            case.path.display(),
+            contact.name()
+        );
+    }
+    law.build(&values).map_err(|e| {
+        case.invalid(
+            format!("contact[{i}].law.{}", e.name),
+            laws::shown(e.value),
+            format!("{} (contact '{}')", e.reason, contact.name()),
+        )
     })
 }
 

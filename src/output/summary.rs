@@ -443,7 +443,7 @@ impl std::fmt::Display for ModelReport<'_> {
                 "contact '{}': {} interface elements, {}, interference {} mm",
                 p.name,
                 p.elements.len(),
-                p.law.describe(),
+                p.describe(),
                 p.interference
             )?;
         }

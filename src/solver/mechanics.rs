@@ -61,7 +61,15 @@ impl ElementSet for ElasticContactCorrection<'_> {
                 algorithm,
                 ..*input
             };
-            evaluate_interface(analysis, element, pair.interference, law, &input, output);
+            evaluate_interface(
+                analysis,
+                element,
+                pair.interference,
+                law,
+                pair.wear(),
+                &input,
+                output,
+            );
         };
         let mut consistent = ElementMatrix::zeros();
         let mut elastic = ElementMatrix::zeros();
