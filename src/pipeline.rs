@@ -41,12 +41,11 @@ use crate::model::{Model, ModelSpec, Schedule};
 use crate::output::atomic::write_text;
 use crate::output::csv::{CsvTable, GrowingCsv};
 use crate::output::pvd::PvdEntry;
-use crate::output::restart::{
-    Content, OutputView, RESTART_FILE, Record, RecordWriter, read_record,
-};
+use crate::output::restart::{OutputView, RESTART_FILE, Record, read_record};
 use crate::output::summary::{
     ContactResultant, EnergyMark, Force, ModelSize, Named, Status, StepSummary, Summary,
 };
+use crate::output::writer::{Content, RecordWriter};
 use crate::post::fretting::{FrettingTables, TracedPoint, is_fretting_file, trace_point};
 use crate::post::interface::{InterfaceOutput, resultants};
 use crate::post::quantities::evaluate;
