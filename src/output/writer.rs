@@ -48,8 +48,8 @@ const MAX_WAITING_FILES: usize = 32;
 
 /// Writes a run's committed files in the background: the files of a converged step (VTU,
 /// CSV), the restart record of a converged increment (`case` is the case file's text, which
-/// [`read_record`] compares with the case being resumed) and the indexes, in the order they
-/// were queued, on one thread, one commit at a time.
+/// [`read_record`](super::restart::read_record) compares with the case being resumed) and
+/// the indexes, in the order they were queued, on one thread, one commit at a time.
 ///
 /// The caller queues a commit's files ([`RecordWriter::queue`],
 /// [`RecordWriter::queue_record`]), then [`RecordWriter::commit`]s them: when the writer
