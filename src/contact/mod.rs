@@ -24,7 +24,7 @@ use wear::WearModel;
 pub type InterfaceTangent = SMatrix<f64, 2, 2>;
 
 /// State of one interface integration point.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum ContactStatus {
     /// The faces are apart: no stress.
     #[default]
@@ -36,7 +36,7 @@ pub enum ContactStatus {
 }
 
 /// History and results at one interface integration point.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct InterfaceState {
     /// Relative displacement (u_T, u_N), including the initial gap or interference.
     pub relative: [f64; 2],
@@ -67,7 +67,7 @@ pub struct InterfaceState {
 ///
 /// The element advances it after every law update ([`PointHistory::advanced`]); the cycle
 /// hooks of [`crate::solver::cycles`] close and restart the cycle.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PointHistory {
     /// Accumulated frictional dissipation per unit area, ∫ p_T du_T^p (N/mm), counting the
     /// cycles a wear jump stands for.

@@ -30,7 +30,7 @@ pub enum OutOfPlane {
 }
 
 /// History and results at one integration point.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PointState {
     /// Total strain, including the out-of-plane component the material determined in plane
     /// stress.

@@ -1,5 +1,6 @@
 //! Result output: VTU files ([`vtu`]), the `.pvd` series that lists them ([`pvd`]), CSV
-//! tables ([`csv`]) and the run's `summary.json` ([`summary`]).
+//! tables ([`csv`]), the run's `summary.json` ([`summary`]) and restart record ([`restart`]),
+//! and the background thread that writes a run's files in order ([`writer`]).
 //!
 //! Writers never leave a half-written file behind: each writes to a temporary file in the
 //! target folder and renames it into place once it is complete. They also refuse to write
@@ -13,6 +14,7 @@ pub mod pvd;
 pub mod restart;
 pub mod summary;
 pub mod vtu;
+pub mod writer;
 
 use crate::mesh::CellKind;
 

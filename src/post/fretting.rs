@@ -14,7 +14,7 @@ use std::path::Path;
 
 use crate::Result;
 use crate::output::csv::{Cell, CsvTable, GrowingCsv};
-use crate::output::restart::Content;
+use crate::output::writer::Content;
 use crate::post::interface::InterfaceOutput;
 use crate::solver::stepping::StepResult;
 

@@ -31,7 +31,7 @@ use crate::model::Model;
 use crate::solver::stepping::Solution;
 
 /// Energy totals from the unloaded start (N·mm = mJ; per unit thickness as the forces are).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Energy {
     /// Work of the external forces and of the reactions at prescribed displacements.
     pub external_work: f64,
@@ -92,13 +92,14 @@ impl Sub for Energy {
 
 /// The running energy totals and what the next increment's trapezoidal work needs of the
 /// last converged state.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct EnergyLedger {
     pub total: Energy,
     /// Total nodal force (external loads at free dofs, reactions at prescribed dofs) of the
     /// last converged state; empty before the first increment.
     pub previous_force: Vec<f64>,
     /// The integration weights of the model's points, built at the first increment.
+    #[serde(skip)]
     pub weights: Weights,
 }
 

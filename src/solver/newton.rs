@@ -162,7 +162,7 @@ impl Flux {
 /// The converged increments' part of the time-averaged force q̃: the sum of their fluxes and
 /// their number. Carried across increments by [`Newton`], and by a restart record across a
 /// resumed run ([`Newton::force_average`], [`Newton::restore_force_average`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ForceAverage {
     pub sum: f64,
     pub count: usize,

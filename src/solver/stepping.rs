@@ -103,7 +103,7 @@ pub struct StepResult<'a> {
 }
 
 /// Timings and counters of a whole run.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct RunStatistics {
     pub steps: usize,
     pub increments: usize,
@@ -111,11 +111,14 @@ pub struct RunStatistics {
     pub cutbacks: usize,
     pub unsymmetric_solves: usize,
     pub krylov_iterations: usize,
+    /// Measured again by a resumed run (with `factor_nnz`): not in its restart record.
+    #[serde(skip)]
     pub symbolic_seconds: f64,
     pub assembly_seconds: f64,
     pub factorization_seconds: f64,
     pub solve_seconds: f64,
     pub output_seconds: f64,
+    #[serde(skip)]
     pub factor_nnz: usize,
     /// Final relative residual of the last step.
     pub last_residual: f64,
@@ -135,7 +138,7 @@ impl RunStatistics {
 
 /// Where the stepping loop stands after a converged increment: with the [`Solution`] and the
 /// [`RunStatistics`], everything a run needs to continue bit for bit ([`Resume`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LoopState {
     /// The step being worked on (1-based); `steps() + 1` once every step has converged.
     pub step: usize,
@@ -779,7 +782,7 @@ fn unsupported_bodies(model: &Model) -> Option<String> {
 
 /// Secant stiffnesses Δλ/‖Δu‖ of the converged increments of a run: the first one (the
 /// reference) and the latest.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StiffnessHistory {
     pub first: Option<f64>,
     pub last: Option<f64>,

@@ -1,0 +1,410 @@
+//! The background writer of a run's files ([`RecordWriter`]): a converged step's result
+//! files, the restart record of its increment and the indexes are committed together and
+//! written in order on one thread while the next increment computes.
+
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+
+use super::Grid;
+use super::atomic::write_bytes;
+use super::csv::{Cell, CsvTable, write_csv};
+use super::pvd::{PvdEntry, write_pvd};
+use super::restart::{OutputView, encode_record};
+use super::vtu::write_vtu_with;
+use crate::solver::stepping::{LoopState, Progress, RunStatistics, Solution};
+use crate::{Error, Result};
+
+/// A file handed to the [`RecordWriter`], encoded and written on its thread.
+#[derive(Debug)]
+pub enum Content {
+    Vtu(Grid),
+    Csv(CsvTable),
+    /// A table with text or empty cells.
+    Table(CsvTable<Cell>),
+    Pvd(Vec<PvdEntry>),
+    /// A file's text, already formatted (a [`super::csv::GrowingCsv`]).
+    Text(Vec<u8>),
+    /// A restart record, already encoded (by [`RecordWriter::queue_record`]).
+    Record(Vec<u8>),
+}
+
+impl Content {
+    /// Writes the file, a VTU file through `buffer` (the writer thread's, reused).
+    fn write(&self, path: &Path, buffer: &mut Vec<u8>) -> Result<()> {
+        match self {
+            Content::Vtu(grid) => write_vtu_with(path, grid, buffer),
+            Content::Csv(table) => write_csv(path, table),
+            Content::Table(table) => write_csv(path, table),
+            Content::Pvd(entries) => write_pvd(path, entries),
+            Content::Record(bytes) | Content::Text(bytes) => write_bytes(path, bytes),
+        }
+    }
+}
+
+/// Files that may wait for the writer thread before a commit waits for it: a few steps'
+/// files (each step writes its VTU files and a table per contact pair) besides the record and
+/// the tables that every commit rewrites.
+const MAX_WAITING_FILES: usize = 32;
+
+/// Writes a run's committed files in the background: the files of a converged step (VTU,
+/// CSV), the restart record of a converged increment (`case` is the case file's text, which
+/// [`read_record`](super::restart::read_record) compares with the case being resumed) and
+/// the indexes, in the order they were queued, on one thread, one commit at a time.
+///
+/// The caller queues a commit's files ([`RecordWriter::queue`],
+/// [`RecordWriter::queue_record`]), then [`RecordWriter::commit`]s them: when the writer
+/// thread is idle, that hands them to it, so that encoding and writing a step's files (~10 MB
+/// of VTU data and ~10 MB of record for a 60k-unknown model) overlaps the next increment
+/// instead of adding to the run's time. When it is still writing an earlier commit, the new
+/// files wait, merged with those of the commits that came after that one: a file queued
+/// again (the record, `history.csv`, the growing tables, the indexes) keeps only its latest
+/// content, so a thread that falls behind (thousands of short increments, each rewriting
+/// tables that grow with the run) skips the versions that a later commit replaces instead of
+/// making the run wait for each. The merged files keep their order (each file where its
+/// latest commit put it, after the files of earlier commits), so the record and the indexes
+/// still come after the step files they refer to. Within a commit the files are written in
+/// order and the first error stops it, so a step's record and index entries are never on
+/// disk without its files; that error (an [`Error::Io`] naming the file) is returned by a
+/// later `commit` or by [`RecordWriter::finish`], which writes what waits and stops the run.
+///
+/// A run killed while commits are in flight or waiting has only complete files (each is
+/// written atomically), the index lists only complete steps, and a resumed run repeats the
+/// increments after the record on disk bit for bit, rewriting their files and index rows
+/// identically.
+#[derive(Debug, Default)]
+pub struct RecordWriter {
+    /// The files of the next commit, in order.
+    queued: Vec<(PathBuf, Content)>,
+    /// Committed files waiting for the writer thread to finish the commit in flight, merged
+    /// (the latest content of each path, in order).
+    waiting: Vec<(PathBuf, Content)>,
+    /// The writer thread, started at the first commit.
+    worker: Option<Worker>,
+    /// Whether a commit is being written (its outcome not yet received).
+    in_flight: bool,
+    /// A record buffer to encode into: reusing it spares the page faults of ~10 MB of
+    /// fresh memory per record.
+    spare: Vec<u8>,
+}
+
+/// The writer thread: commits go to it through one channel, their outcomes (the record's
+/// buffer for reuse, or the error) come back through the other. One thread for the whole
+/// run: spawning one per commit cost up to a millisecond on a busy machine.
+#[derive(Debug)]
+struct Worker {
+    commits: mpsc::Sender<Vec<(PathBuf, Content)>>,
+    outcomes: mpsc::Receiver<Result<Vec<u8>>>,
+    thread: std::thread::JoinHandle<()>,
+}
+
+impl Worker {
+    fn start() -> Self {
+        let (commits, inbox) = mpsc::channel::<Vec<(PathBuf, Content)>>();
+        let (outbox, outcomes) = mpsc::channel();
+        let thread = std::thread::spawn(move || {
+            let mut buffer = Vec::new();
+            for files in inbox {
+                if outbox.send(write_in_order(files, &mut buffer)).is_err() {
+                    break;
+                }
+            }
+        });
+        Self {
+            commits,
+            outcomes,
+            thread,
+        }
+    }
+
+    /// Ends the thread once it has written what it was sent; passes on its panic.
+    fn stop(self) {
+        drop(self.commits);
+        if let Err(panic) = self.thread.join() {
+            std::panic::resume_unwind(panic);
+        }
+    }
+}
+
+impl RecordWriter {
+    /// Adds `path` with `content` to the next commit.
+    pub fn queue(&mut self, path: PathBuf, content: Content) {
+        self.queued.push((path, content));
+    }
+
+    /// Encodes the record of the converged increment `progress` and adds it to the next
+    /// commit.
+    pub fn queue_record(
+        &mut self,
+        path: &Path,
+        case: &str,
+        progress: &Progress,
+        output: &OutputView,
+    ) -> Result<()> {
+        let mut buffer = std::mem::take(&mut self.spare);
+        encode_record(&mut buffer, case, progress, output).map_err(|e| Error::io(path, e))?;
+        self.queue(path.to_path_buf(), Content::Record(buffer));
+        Ok(())
+    }
+
+    /// Commits the queued files: hands them to the writer thread if it is idle, else merges
+    /// them into the files waiting for it. Returns the error of a finished commit.
+    pub fn commit(&mut self) -> Result<()> {
+        let files = std::mem::take(&mut self.queued);
+        self.merge(files);
+        if self.in_flight && !self.poll()? {
+            if self.waiting.len() <= MAX_WAITING_FILES {
+                return Ok(());
+            }
+            // Files that no later commit replaces (each step's VTU and contact tables) pile
+            // up while the thread is behind: wait for it rather than hold them all in memory.
+            self.wait()?;
+        }
+        self.send_waiting();
+        Ok(())
+    }
+
+    /// Adds `files` to the waiting ones: a path already waiting is replaced (its superseded
+    /// record buffer kept for reuse) and takes its new place in the order.
+    fn merge(&mut self, files: Vec<(PathBuf, Content)>) {
+        for (path, content) in files {
+            let earlier = self.waiting.iter().position(|(p, _)| *p == path);
+            if let Some((_, Content::Record(bytes))) = earlier.map(|i| self.waiting.remove(i)) {
+                self.keep_spare(bytes);
+            }
+            self.waiting.push((path, content));
+        }
+    }
+
+    /// Hands the waiting files, if any, to the writer thread (started at the first commit).
+    fn send_waiting(&mut self) {
+        let files = std::mem::take(&mut self.waiting);
+        if files.is_empty() {
+            return;
+        }
+        let worker = self.worker.get_or_insert_with(Worker::start);
+        if worker.commits.send(files).is_err() {
+            // The thread is gone, which only a panic does.
+            if let Some(worker) = self.worker.take() {
+                worker.stop();
+            }
+        }
+        self.in_flight = true;
+    }
+
+    /// A record buffer for the next encoding, if larger than the one kept.
+    fn keep_spare(&mut self, mut bytes: Vec<u8>) {
+        if bytes.capacity() > self.spare.capacity() {
+            bytes.clear();
+            self.spare = bytes;
+        }
+    }
+
+    /// Queues and commits the record of a converged increment.
+    pub fn write(
+        &mut self,
+        path: &Path,
+        case: &str,
+        state: &LoopState,
+        stats: &RunStatistics,
+        solution: &Solution,
+        output: &OutputView,
+    ) -> Result<()> {
+        let progress = Progress {
+            state: *state,
+            stats,
+            solution,
+        };
+        self.queue_record(path, case, &progress, output)?;
+        self.commit()
+    }
+
+    /// Writes everything committed: waits for the commit in flight, then for the files
+    /// waiting behind it; reports the first error.
+    pub fn finish(&mut self) -> Result<()> {
+        let start = std::time::Instant::now();
+        self.wait()?;
+        self.send_waiting();
+        self.wait()?;
+        tracing::debug!(
+            seconds = start.elapsed().as_secs_f64(),
+            "waited for the background writer"
+        );
+        Ok(())
+    }
+
+    /// Whether the commit in flight is done (then its outcome is taken: its error returned,
+    /// its record buffer kept), without waiting.
+    fn poll(&mut self) -> Result<bool> {
+        let Some(worker) = self.worker.as_ref().filter(|_| self.in_flight) else {
+            return Ok(true);
+        };
+        match worker.outcomes.try_recv() {
+            Ok(outcome) => self.take_outcome(Some(outcome)).map(|()| true),
+            Err(mpsc::TryRecvError::Empty) => Ok(false),
+            Err(mpsc::TryRecvError::Disconnected) => self.take_outcome(None).map(|()| true),
+        }
+    }
+
+    /// Waits for the commit in flight, if any, and takes its outcome.
+    fn wait(&mut self) -> Result<()> {
+        let Some(worker) = self.worker.as_ref().filter(|_| self.in_flight) else {
+            return Ok(());
+        };
+        let outcome = worker.outcomes.recv().ok();
+        self.take_outcome(outcome)
+    }
+
+    /// The outcome of the commit in flight (None: the thread panicked). After an error the
+    /// waiting files are dropped: their record and indexes may refer to the files that failed.
+    fn take_outcome(&mut self, outcome: Option<Result<Vec<u8>>>) -> Result<()> {
+        self.in_flight = false;
+        match outcome {
+            Some(Err(e)) => {
+                self.waiting.clear();
+                return Err(e);
+            }
+            Some(Ok(spare)) => self.keep_spare(spare),
+            None => {
+                if let Some(worker) = self.worker.take() {
+                    worker.stop();
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Writes `files` in order, stopping at the first error; returns the record's buffer.
+fn write_in_order(files: Vec<(PathBuf, Content)>, buffer: &mut Vec<u8>) -> Result<Vec<u8>> {
+    let mut spare = Vec::new();
+    for (path, content) in files {
+        content.write(&path, buffer)?;
+        if let Content::Record(mut bytes) = content {
+            bytes.clear();
+            spare = bytes;
+        }
+    }
+    Ok(spare)
+}
+
+impl Drop for RecordWriter {
+    /// A run that stops with an error still leaves its last commit complete (files queued
+    /// but not committed are dropped: they belong to a step whose commit never came).
+    fn drop(&mut self) {
+        if !std::thread::panicking()
+            && let Err(e) = self.finish()
+        {
+            tracing::warn!("{e}");
+        }
+        // Not `stop`: a panic of the thread must not become a second one while this thread
+        // unwinds.
+        if let Some(Worker {
+            commits, thread, ..
+        }) = self.worker.take()
+        {
+            drop(commits);
+            let _ = thread.join();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn table(x: f64) -> Content {
+        Content::Csv(CsvTable {
+            columns: vec!["x".into()],
+            rows: vec![vec![x]],
+        })
+    }
+
+    /// A folder where a file should go makes its rename fail, as a full or read-only disk
+    /// would make a write fail.
+    #[test]
+    fn a_failed_write_stops_its_commit_and_a_later_commit_or_finish_reports_it_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = |name: &str| dir.path().join(name);
+        std::fs::create_dir(path("b.csv")).unwrap();
+        std::fs::write(path("b.csv").join("keep"), "x").unwrap();
+        let mut writer = RecordWriter::default();
+        for name in ["a.csv", "b.csv", "c.csv"] {
+            writer.queue(path(name), table(1.0));
+        }
+        writer.commit().unwrap();
+        writer.queue(path("d.csv"), table(2.0));
+        // The next commit reports the failure if the thread is done by then; else its files
+        // wait and `finish` reports it (and drops them).
+        let err = match writer.commit() {
+            Err(e) => e,
+            Ok(()) => writer.finish().unwrap_err(),
+        };
+        assert!(
+            matches!(&err, Error::Io { path: p, .. } if p == &path("b.csv")),
+            "{err}"
+        );
+        assert!(err.to_string().contains("b.csv"), "{err}");
+        // The files before the failure are complete; none after it, in that commit or the
+        // refused one, was written.
+        assert_eq!(std::fs::read_to_string(path("a.csv")).unwrap(), "x\n1\n");
+        assert!(!path("c.csv").exists() && !path("d.csv").exists());
+        writer.finish().unwrap();
+    }
+
+    #[test]
+    fn commits_waiting_for_the_thread_keep_the_latest_content_of_each_file_in_order() {
+        let name = |n: &str| PathBuf::from(n);
+        let mut writer = RecordWriter::default();
+        let batch = |step: &str, x: f64| {
+            vec![
+                (name(step), table(x)),
+                (name("restart.bin"), Content::Record(vec![x as u8])),
+                (name("results.pvd"), table(x)),
+            ]
+        };
+        writer.merge(batch("bodies_0001.vtu", 1.0));
+        writer.merge(batch("bodies_0002.vtu", 2.0));
+        let order: Vec<&str> = writer
+            .waiting
+            .iter()
+            .map(|(p, _)| p.to_str().unwrap())
+            .collect();
+        // Both steps' files, then the latest record and index: the index still comes last.
+        assert_eq!(
+            order,
+            [
+                "bodies_0001.vtu",
+                "bodies_0002.vtu",
+                "restart.bin",
+                "results.pvd"
+            ]
+        );
+        assert!(matches!(&writer.waiting[2].1, Content::Record(b) if b == &[2]));
+        writer.waiting.clear();
+    }
+
+    #[test]
+    fn commits_are_written_in_order_and_finish_waits_for_the_last() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("history.csv");
+        let mut writer = RecordWriter::default();
+        for x in 0..20 {
+            writer.queue(path.clone(), table(f64::from(x)));
+            writer.commit().unwrap();
+        }
+        writer.finish().unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "x\n19\n");
+    }
+
+    #[test]
+    fn a_nan_found_in_the_background_is_an_error_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("contact_joint_0003.csv");
+        let mut writer = RecordWriter::default();
+        writer.queue(path.clone(), table(f64::NAN));
+        writer.commit().unwrap();
+        let err = writer.finish().unwrap_err();
+        assert!(err.to_string().contains("contact_joint_0003.csv"), "{err}");
+        assert!(!path.exists());
+    }
+}
