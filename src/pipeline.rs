@@ -53,7 +53,7 @@ use crate::post::quantities::evaluate;
 use crate::post::{BodyPoints, StepInfo, reactions, step_grids};
 use crate::solver::newton::{LinearSolver, NewtonLog, NewtonSettings};
 use crate::solver::stepping::{
-    Observer, Progress, Resume, RunStatistics, Solution, StepResult, run_steps, run_steps_from,
+    Observer, Progress, Resume, RunStatistics, Solution, StepResult, run_steps_from,
 };
 use crate::{Error, Result};
 
@@ -366,12 +366,6 @@ fn solve(
         Some(r) if r.resume => resume_record(&model, out_dir, &r.case_text)?,
         _ => None,
     };
-    if record.is_some() && model.control.arc_length.is_some() {
-        return Err(Error::Restart {
-            path: out_dir.join(RESTART_FILE),
-            reason: "arc-length runs cannot be resumed yet; run without --resume".into(),
-        });
-    }
     let settings = newton_settings(&case.solver);
     let traced = traced_points(case, &model)?;
     let mut writer = StepWriter::new(case, &model, session, summary, traced, on_step);
@@ -382,11 +376,7 @@ fn solve(
             None
         }
     };
-    let mut stats = if model.control.arc_length.is_some() {
-        run_steps(&model, &settings, |step| writer.step(step, None))?.1
-    } else {
-        run_steps_from(&model, &settings, resume, &mut writer)?.1
-    };
+    let mut stats = run_steps_from(&model, &settings, resume, &mut writer)?.1;
     stats.output_seconds += writer.finish()?;
     writer.bar.finish();
     Ok(RunSummary {

@@ -104,6 +104,7 @@ fn state() -> LoopState {
             sum: 1.0 / 3.0,
             count: 5,
         },
+        arc: None,
     }
 }
 
@@ -362,7 +363,7 @@ impl asperity::solver::stepping::Observer for Frames {
         }
         self.frames.push((step.step, values));
         self.resumes.push(asperity::solver::stepping::Resume {
-            state: progress.state,
+            state: progress.state.clone(),
             stats: progress.stats.clone(),
             solution: progress.solution.clone(),
         });

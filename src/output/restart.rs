@@ -2,7 +2,9 @@
 //! converged increment as if it had never stopped (`asperity run CASE --resume`).
 //!
 //! It holds the stepping loop's state ([`LoopState`]: step, pseudo-time, next increment
-//! size, counters, force floor, stiffness history), the run's counters, the displacements,
+//! size, counters, force floor, stiffness history; under arc-length control its
+//! [`ArcState`]: load factor, largest load factor, arc and its bounds, the last increment's
+//! Δu over the free dofs), the run's counters, the displacements,
 //! every integration point's committed state (strain, stress, plastic strain, equivalent
 //! plastic strain, yield flag; at interface points relative displacement, contact stress,
 //! plastic and accumulated slip, largest closure, friction, stiffness, contact status), and
@@ -28,8 +30,8 @@ use crate::contact::{ContactStatus, InterfaceState, PointHistory};
 use crate::material::{PointState, Voigt};
 use crate::solver::energy::{Energy, EnergyLedger};
 use crate::solver::newton::ForceAverage;
-use crate::solver::stepping::{
-    LoopState, Progress, Resume, RunStatistics, Solution, StiffnessHistory,
+use crate::solver::state::{
+    ArcState, LoopState, Progress, Resume, RunStatistics, Solution, StiffnessHistory,
 };
 use crate::{Error, Result};
 
@@ -37,7 +39,7 @@ use crate::{Error, Result};
 pub const RESTART_FILE: &str = "restart.bin";
 
 /// First bytes of a record; the trailing digit is the format version.
-const MAGIC: &[u8; 16] = b"asperity-rst-v2\n";
+const MAGIC: &[u8; 16] = b"asperity-rst-v3\n";
 
 /// What a record holds besides the solver's state: the output's tables (rows of numbers,
 /// e.g. `history.csv`) and the PVD series.
@@ -269,7 +271,7 @@ impl RecordWriter {
         output: &OutputView,
     ) -> Result<()> {
         let progress = Progress {
-            state: *state,
+            state: state.clone(),
             stats,
             solution,
         };
@@ -532,6 +534,7 @@ fn encode_state(e: &mut Encoder, s: &LoopState) -> io::Result<()> {
         force_floor,
         stiffness: StiffnessHistory { first, last },
         force_average: ForceAverage { sum, count },
+        ref arc,
     } = *s;
     for n in [step, cutbacks, increments, iterations, count] {
         e.len(n)?;
@@ -540,7 +543,22 @@ fn encode_state(e: &mut Encoder, s: &LoopState) -> io::Result<()> {
         e.f64(v)?;
     }
     e.option(first)?;
-    e.option(last)
+    e.option(last)?;
+    e.bytes(&[u8::from(arc.is_some())])?;
+    let Some(ArcState {
+        load_factor,
+        largest_load_factor,
+        radius,
+        min_radius,
+        max_radius,
+        previous_increment,
+    }) = arc
+    else {
+        return Ok(());
+    };
+    e.floats(&[*load_factor, *largest_load_factor, *min_radius, *max_radius])?;
+    e.option(*radius)?;
+    e.floats(previous_increment)
 }
 
 fn decode_state(d: &mut Decoder) -> io::Result<LoopState> {
@@ -550,6 +568,22 @@ fn decode_state(d: &mut Decoder) -> io::Result<LoopState> {
     let stiffness = StiffnessHistory {
         first: d.option()?,
         last: d.option()?,
+    };
+    let arc = if d.flag()? {
+        let f = d.floats()?;
+        let [load_factor, largest_load_factor, min_radius, max_radius] = f[..] else {
+            return Err(corrupt("arc-length state"));
+        };
+        Some(ArcState {
+            load_factor,
+            largest_load_factor,
+            radius: d.option()?,
+            min_radius,
+            max_radius,
+            previous_increment: d.floats()?,
+        })
+    } else {
+        None
     };
     Ok(LoopState {
         step,
@@ -561,6 +595,7 @@ fn decode_state(d: &mut Decoder) -> io::Result<LoopState> {
         force_floor,
         stiffness,
         force_average: ForceAverage { sum, count },
+        arc,
     })
 }
 

@@ -16,7 +16,7 @@ use crate::Result;
 use crate::output::csv::{Cell, CsvTable, GrowingCsv};
 use crate::output::restart::Content;
 use crate::post::interface::InterfaceOutput;
-use crate::solver::stepping::StepResult;
+use crate::solver::state::StepResult;
 
 /// The cycle table's file name.
 pub const CYCLES_FILE: &str = "cycles.csv";
