@@ -2,6 +2,8 @@
 //! bit it was given, and a record that does not belong to the case is refused with a clear
 //! error instead of continuing a different model. (Resuming killed runs is `tests/crash.rs`.)
 
+mod common;
+
 use std::path::Path;
 use std::process::Command;
 
@@ -408,6 +410,53 @@ fn a_multi_step_cyclic_run_resumed_from_any_frame_is_bit_identical() {
         assert!(
             resumed.frames == reference.frames[k + 1..],
             "resumed after frame {} differs",
+            k + 1
+        );
+    }
+}
+
+/// Arc-length control continues from its restart record bit for bit: the arc, its bounds,
+/// the load factor and the last increment's direction travel in the record
+/// ([`asperity::solver::state::ArcState`]), so a run resumed after any increment repeats the
+/// uninterrupted one (here through the limit point, with arcs cut back on the plateau).
+#[test]
+fn an_arc_length_run_resumed_from_any_increment_is_bit_identical() {
+    use asperity::solver::stepping::run_steps_from;
+    let (mesh, builder) = common::plastic_cylinder_under_arc_length();
+    let (case, text) = (builder.case(), builder.text());
+    let model = common::model(mesh, &case).unwrap();
+    let settings = common::settings(&case);
+    let mut reference = Frames::default();
+    let (_, stats) = run_steps_from(&model, &settings, None, &mut reference).unwrap();
+    let increments = reference.frames.len();
+    assert!(
+        increments > 10 && stats.cutbacks > 0,
+        "the path must adapt and cut back its arc: {increments} increments, {} cut-backs",
+        stats.cutbacks
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("restart.bin");
+    for (k, resume) in reference.resumes.iter().enumerate() {
+        let arc = resume
+            .state
+            .arc
+            .as_ref()
+            .expect("the record holds the arc state");
+        assert_eq!(arc.previous_increment.len(), model.dofs.free_count());
+        let mut writer = RecordWriter::default();
+        let output = OutputState::default();
+        let (state, stats, solution) = (&resume.state, &resume.stats, &resume.solution);
+        writer
+            .write(&path, &text, state, stats, solution, &output.view())
+            .unwrap();
+        writer.finish().unwrap();
+        let record = read_record(&path, &text, &Solution::new(&model)).unwrap();
+        assert_eq!(&record.resume.state, state);
+        let mut resumed = Frames::default();
+        run_steps_from(&model, &settings, Some(record.resume), &mut resumed).unwrap();
+        assert!(
+            resumed.frames == reference.frames[k + 1..],
+            "resumed after increment {} differs",
             k + 1
         );
     }

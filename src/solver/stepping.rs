@@ -21,7 +21,7 @@ use crate::solver::diagnosis::{diagnose, implausible_increment, step_failure};
 use crate::solver::newton::Problem;
 use crate::solver::newton::{Newton, NewtonLog, NewtonSettings, distance, norm};
 pub use crate::solver::state::{
-    LoopState, Observer, Progress, Resume, RunStatistics, Solution, StepResult,
+    LoopState, Observer, Progress, Resume, RunStatistics, Solution, StepResult, StiffnessHistory,
 };
 use crate::{Error, Result};
 
