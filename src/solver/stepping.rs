@@ -7,7 +7,7 @@
 //! and only the scheduled increments are handed to the output. The load cycles' hooks
 //! ([`Solution::start_cycle`], [`Solution::end_cycle`]) run before the first increment of
 //! every step and cycle and after the commit of its last one; a wear jump is followed by a
-//! re-equilibrium under the same loads ([`settle_after_jump`]), the driver's own increment.
+//! re-equilibrium under the same loads (`settle_after_jump`), the driver's own increment.
 //!
 //! The run's state is [`crate::solver::state`] (re-exported here), its failure diagnosis
 //! [`crate::solver::diagnosis`]; a case under arc-length control is handed to
