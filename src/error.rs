@@ -154,9 +154,16 @@ pub enum Error {
         #[source]
         source: Box<Error>,
     },
-    /// Arc-length control cannot start (no load to scale) or its first increment failed.
-    #[error("arc-length control: {0}")]
-    ArcLength(String),
+    /// Arc-length control has no load to scale: every load of the case is zero.
+    #[error(
+        "arc-length control: [steps] control = \"arc_length\" needs a non-zero load (pressure, \
+         traction or force)"
+    )]
+    ArcLengthNoLoad,
+    /// The first arc-length increment failed, even with its arc halved down to
+    /// `min_arc_length`.
+    #[error("arc-length control: the first increment failed: {0}")]
+    ArcLengthStart(ArcFailure),
     /// The output folder holds the files of an earlier run (`files` of them, e.g.
     /// `example`): a run does not overwrite results unless told to (`--force`, `--resume`).
     #[error(
@@ -240,6 +247,34 @@ pub enum Error {
 /// Result with [`Error`].
 pub type Result<T> = std::result::Result<T, Error>;
 
+/// Why an arc-length increment failed (it is retried with half the arc).
+#[derive(Debug, thiserror::Error)]
+pub enum ArcFailure {
+    /// The tangent is unsymmetric (slipping friction): the constraint's two solves and its
+    /// quadratic need a symmetric one.
+    #[error("arc-length control needs a symmetric tangent (no slipping friction)")]
+    UnsymmetricTangent,
+    /// The linear solver failed (a tangent that is not positive definite).
+    #[error(transparent)]
+    Solver(Box<Error>),
+    #[error("the residual is not finite")]
+    NotFinite,
+    /// The quadratic constraint ‖Δu + δu_r + δλ δu_f‖² = Δl² has no real root δλ.
+    #[error("the arc-length constraint has no real root")]
+    NoRealRoot,
+    #[error("no convergence in {iterations} iterations")]
+    NoConvergence { iterations: usize },
+    /// The increment converged but is implausible for small-strain theory (the reason).
+    #[error("{0}")]
+    Implausible(String),
+}
+
+impl From<Error> for ArcFailure {
+    fn from(e: Error) -> Self {
+        ArcFailure::Solver(Box::new(e))
+    }
+}
+
 impl Error {
     /// Shorthand for an [`Error::Mesh`].
     pub fn mesh(
@@ -265,7 +300,8 @@ impl Error {
     pub fn exit_code(&self) -> u8 {
         match self {
             Error::NoConvergence(_)
-            | Error::ArcLength(_)
+            | Error::ArcLengthNoLoad
+            | Error::ArcLengthStart(_)
             | Error::Linear(_)
             | Error::WearJump { .. }
             | Error::WornThrough { .. }

@@ -5,6 +5,9 @@
 //! unsymmetric one (slipping contact, Buczkowski & Kleiber (1994), Eq. 21: BiCGSTAB
 //! preconditioned with the elastic contact matrix) and in the line search.
 //!
+//! The iterations of arc-length increments (their predictor's two solves and the
+//! constraint's root) run on the same solver and allocate nothing either.
+//!
 //! Workspaces made once per run may be allocated in the first step (the warm-up): the Krylov
 //! workspace and the preconditioner values, which the first unsymmetric solve sizes. Every
 //! iteration of the later steps must then allocate nothing at all.
@@ -25,9 +28,13 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use asperity::assembly::{AssemblyInput, DenseScatter, DofMap, GlobalSystem, SparsityPattern};
 use asperity::model::Model;
 use asperity::solver::mechanics::Mechanics;
-use asperity::solver::newton::{LinearSolver, Newton, NewtonSettings, Problem, norm};
-use asperity::solver::stepping::Solution;
-use common::{block_on_base, linear_coulomb, settings, sliding_block_mesh};
+use asperity::solver::newton::{
+    ArcIncrement, LinearSolver, Newton, NewtonLog, NewtonSettings, Problem, norm,
+};
+use asperity::solver::state::Solution;
+use common::{
+    block_on_base, linear_coulomb, plastic_cylinder_under_arc_length, settings, sliding_block_mesh,
+};
 use faer::MatMut;
 
 /// The system allocator, counting the allocations and reallocations of the threads that
@@ -334,4 +341,106 @@ fn allocations_after_the_first_step(linear_solver: LinearSolver) -> (usize, Stri
         "both paths and the line search must be measured:\n{table}"
     );
     (allocated, table)
+}
+
+/// Solves the arc-length increments of the plastic cylinder as the arc-length driver does
+/// (a fixed arc; the first increment is the warm-up) and counts the allocations of every
+/// iteration after the first increment: from the start of an iteration's tangent assembly
+/// to the next one's (factorisation, the two solves, the constraint's root), or to the end
+/// of the increment.
+fn arc_length_allocations_after_the_first_increment() -> (usize, usize, String) {
+    let (mesh, builder) = plastic_cylinder_under_arc_length();
+    let case = builder.case();
+    let model = common::model(mesh, &case).expect("model builds");
+    let settings = settings(&case);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .start_handler(|_| COUNTED.set(true))
+        .build()
+        .expect("pool");
+    let (record, ends) = pool.install(|| {
+        let mut newton = Newton::new(settings, &model.dofs, &model.pattern).expect("solver");
+        let mut reference = vec![0.0; model.dofs.dof_count()];
+        for &(dof, value, _) in &model.nodal_loads {
+            reference[dof] += value;
+        }
+        newton.set_arc_reference(&reference);
+        let mut solution = Solution::new(&model);
+        let mut converged_u = solution.u.clone();
+        let mut previous = vec![0.0; model.dofs.free_count()];
+        let mut record = Record {
+            marks: Vec::with_capacity(10_000),
+            line_search_assemblies: 0,
+        };
+        let mut ends = Vec::new();
+        let (mut load_factor, mut radius) = (0.0, None);
+        for step in 1..=8 {
+            let mut log = NewtonLog::sized(settings.max_iterations);
+            ends.reserve(1);
+            let (u, inner) = solution.split(&model);
+            let mut problem = Marked {
+                inner,
+                step,
+                record: &mut record,
+            };
+            let tangent = newton
+                .arc_tangent(&mut problem, u, &mut log)
+                .expect("tangent");
+            let arc = *radius.get_or_insert(0.2 * tangent);
+            let increment = ArcIncrement {
+                load_factor,
+                radius: arc,
+                previous: &previous,
+            };
+            let converged = newton
+                .solve_arc_increment(&mut problem, u, &increment, &mut log)
+                .expect("increment converges");
+            ends.push(allocations());
+            load_factor += converged.load_change;
+            for (dof, (a, b)) in solution.u.iter().zip(&converged_u).enumerate() {
+                if let Some(eq) = model.dofs.equation(dof) {
+                    previous[eq] = a - b;
+                }
+            }
+            solution.commit();
+            converged_u.copy_from_slice(&solution.u);
+        }
+        (record, ends)
+    });
+    let marks = &record.marks;
+    let (mut table, mut allocated, mut solves) = (Vec::new(), 0, 0);
+    for (i, mark) in marks.iter().enumerate() {
+        let next = marks.get(i + 1).filter(|next| next.step == mark.step);
+        let end = next.map_or(ends[mark.step - 1], |next| next.allocations);
+        table.push(format!(
+            "increment {} solve {}: {} allocations",
+            mark.step,
+            next.is_some(),
+            end - mark.allocations
+        ));
+        if mark.step > 1 {
+            allocated += end - mark.allocations;
+            solves += usize::from(next.is_some());
+        }
+    }
+    (allocated, solves, table.join("\n"))
+}
+
+#[test]
+fn arc_length_iterations_allocate_nothing_after_the_first_increment() {
+    let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    // As above: one clean run of three passes (the thread pool's own bookkeeping).
+    let mut tables = Vec::new();
+    for _ in 0..3 {
+        let (allocated, solves, table) = arc_length_allocations_after_the_first_increment();
+        assert!(solves > 8, "the corrector must iterate:\n{table}");
+        if allocated == 0 {
+            return;
+        }
+        tables.push(table);
+    }
+    panic!(
+        "arc-length iterations after the first increment allocated in three runs:\n{}",
+        tables.join("\n--\n")
+    );
 }

@@ -47,7 +47,7 @@ fn cantilever_tip_deflection_matches_beam_theory() {
 /// Internal forces of the converged solution (reassembled).
 fn internal_force(
     model: &asperity::model::Model,
-    solution: &asperity::solver::stepping::Solution,
+    solution: &asperity::solver::state::Solution,
 ) -> Vec<f64> {
     let mut system =
         asperity::assembly::GlobalSystem::new(model.pattern.clone(), model.dofs.dof_count());

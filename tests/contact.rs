@@ -8,7 +8,7 @@ use asperity::config::Case;
 use asperity::mesh::Mesh;
 use asperity::model::Model;
 use asperity::post::interface::{InterfaceOutput, resultants};
-use asperity::solver::stepping::Solution;
+use asperity::solver::state::Solution;
 use common::shrink_fit::{E, NU};
 use common::*;
 

@@ -10,7 +10,8 @@ mod common;
 use asperity::Error;
 use asperity::config::Case;
 use asperity::solver::newton::{Criteria, NewtonSettings};
-use asperity::solver::stepping::{RunStatistics, Solution, run_steps};
+use asperity::solver::state::{RunStatistics, Solution};
+use asperity::solver::stepping::run_steps;
 use common::{
     CaseBuilder, block_on_base, elastic, linear_coulomb, rectangle, settings, sliding_block_mesh,
 };

@@ -15,7 +15,7 @@ use std::path::Path;
 use asperity::config::Case;
 use asperity::model::Model;
 use asperity::run::{self, folder::OutputFolder};
-use asperity::solver::stepping::StepResult;
+use asperity::solver::state::StepResult;
 use common::{CaseBuilder, PLATE_MSH, elastic, list, table, with_keys};
 use toml::{Table, Value};
 

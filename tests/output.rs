@@ -860,7 +860,7 @@ mod step_grids {
         assert!(slid, "the last step slides");
         // Names of the indices in the cell data.
         let names = |grid: &Grid, key: &str| field(&grid.field_data, key).values.clone();
-        let state = asperity::solver::stepping::Solution::new(&model);
+        let state = asperity::solver::state::Solution::new(&model);
         let bodies = asperity::post::body_grid(&model, &points, &state.u, &state.committed);
         assert_eq!(
             names(&bodies, "body_names"),
@@ -908,7 +908,7 @@ mod step_grids {
     /// The quantities of `[[quantity]]`/`[[history]]` (`name:kind:keys`) on `step`.
     fn quantities(
         model: &asperity::model::Model,
-        step: &asperity::solver::stepping::StepResult,
+        step: &asperity::solver::state::StepResult,
         specs: &[&str],
     ) -> Vec<f64> {
         let specs: Vec<_> = specs

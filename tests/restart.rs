@@ -14,7 +14,7 @@ use asperity::output::restart::{OutputState, read_record};
 use asperity::output::writer::RecordWriter;
 use asperity::solver::energy::{Energy, EnergyLedger};
 use asperity::solver::newton::ForceAverage;
-use asperity::solver::stepping::{LoopState, RunStatistics, Solution, StiffnessHistory};
+use asperity::solver::state::{LoopState, RunStatistics, Solution, StiffnessHistory};
 use common::{CaseBuilder, fixture, held_block, list, table, two_blocks};
 use toml::Table;
 
@@ -109,6 +109,7 @@ fn state() -> LoopState {
             sum: 1.0 / 3.0,
             count: 5,
         },
+        arc: None,
     }
 }
 
@@ -345,15 +346,15 @@ fn multi_step() -> CaseBuilder {
 #[derive(Default)]
 struct Frames {
     frames: Vec<(usize, Vec<u64>)>,
-    resumes: Vec<asperity::solver::stepping::Resume>,
+    resumes: Vec<asperity::solver::state::Resume>,
     slipping: bool,
 }
 
-impl asperity::solver::stepping::Observer for Frames {
+impl asperity::solver::state::Observer for Frames {
     fn step(
         &mut self,
-        step: &asperity::solver::stepping::StepResult,
-        progress: &asperity::solver::stepping::Progress,
+        step: &asperity::solver::state::StepResult,
+        progress: &asperity::solver::state::Progress,
     ) -> asperity::Result<f64> {
         let s = step.solution;
         let mut values = bits(&s.u);
@@ -362,8 +363,8 @@ impl asperity::solver::stepping::Observer for Frames {
             self.slipping |= p.status == ContactStatus::Slip;
         }
         self.frames.push((step.step, values));
-        self.resumes.push(asperity::solver::stepping::Resume {
-            state: progress.state,
+        self.resumes.push(asperity::solver::state::Resume {
+            state: progress.state.clone(),
             stats: progress.stats.clone(),
             solution: progress.solution.clone(),
         });
@@ -404,6 +405,53 @@ fn a_multi_step_cyclic_run_resumed_from_any_frame_is_bit_identical() {
         assert!(
             resumed.frames == reference.frames[k + 1..],
             "resumed after frame {} differs",
+            k + 1
+        );
+    }
+}
+
+/// Arc-length control continues from its restart record bit for bit: the arc, its bounds,
+/// the load factor and the last increment's direction travel in the record
+/// ([`asperity::solver::state::ArcState`]), so a run resumed after any increment repeats the
+/// uninterrupted one (here through the limit point, with arcs cut back on the plateau).
+#[test]
+fn an_arc_length_run_resumed_from_any_increment_is_bit_identical() {
+    use asperity::solver::stepping::run_steps_from;
+    let (mesh, builder) = common::plastic_cylinder_under_arc_length();
+    let (case, text) = (builder.case(), builder.text());
+    let model = common::model(mesh, &case).unwrap();
+    let settings = common::settings(&case);
+    let mut reference = Frames::default();
+    let (_, stats) = run_steps_from(&model, &settings, None, &mut reference).unwrap();
+    let increments = reference.frames.len();
+    assert!(
+        increments > 10 && stats.cutbacks > 0,
+        "the path must adapt and cut back its arc: {increments} increments, {} cut-backs",
+        stats.cutbacks
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("restart.bin");
+    for (k, resume) in reference.resumes.iter().enumerate() {
+        let arc = resume
+            .state
+            .arc
+            .as_ref()
+            .expect("the record holds the arc state");
+        assert_eq!(arc.previous_increment.len(), model.dofs.free_count());
+        let mut writer = RecordWriter::default();
+        let output = OutputState::default();
+        let (state, stats, solution) = (&resume.state, &resume.stats, &resume.solution);
+        writer
+            .write(&path, &text, state, stats, solution, &output.view())
+            .unwrap();
+        writer.finish().unwrap();
+        let record = read_record(&path, &text, &Solution::new(&model)).unwrap();
+        assert_eq!(&record.resume.state, state);
+        let mut resumed = Frames::default();
+        run_steps_from(&model, &settings, Some(record.resume), &mut resumed).unwrap();
+        assert!(
+            resumed.frames == reference.frames[k + 1..],
+            "resumed after increment {} differs",
             k + 1
         );
     }

@@ -17,7 +17,8 @@ use asperity::element::set::INTERFACE_POINTS;
 use asperity::model::Model;
 use asperity::post::interface::resultants;
 use asperity::solver::newton::NewtonSettings;
-use asperity::solver::stepping::{RunStatistics, Solution, run_steps};
+use asperity::solver::state::{RunStatistics, Solution};
+use asperity::solver::stepping::run_steps;
 use common::{
     CaseBuilder, add_curve_group, elastic, linear_coulomb, merge, settings, tensor, uniform,
 };

@@ -17,10 +17,10 @@ use asperity::model::timeline::Frame;
 use asperity::post::fretting::{CYCLES, FrettingTables, HYSTERESIS, POINT_LOOPS, WEAR};
 use asperity::post::interface::{FRETTING, InterfaceOutput};
 use asperity::run::folder::RunFile;
-use asperity::solver::cycles::{end_cycle, start_cycle};
 use asperity::solver::newton::NewtonLog;
-use asperity::solver::stepping::StepResult;
-use asperity::solver::stepping::{Solution, run_steps};
+use asperity::solver::state::Solution;
+use asperity::solver::state::StepResult;
+use asperity::solver::stepping::run_steps;
 use common::{
     CaseBuilder, block_on_base, linear_coulomb, list, settings, sliding_block_mesh,
     sliding_rough_joint, table, two_blocks,
@@ -114,10 +114,10 @@ impl Driver {
 
     /// One cycle δ → −δ → δ between the cycle hooks, standing for `jump` cycles.
     fn cycle(&mut self, delta: f64, n: usize, jump: f64) -> asperity::Result<()> {
-        start_cycle(&mut self.solution);
+        self.solution.start_cycle();
         self.ramp(delta, -delta, n);
         self.ramp(-delta, delta, n);
-        end_cycle(&self.model, &mut self.solution, jump).map(|_worn| ())
+        self.solution.end_cycle(&self.model, jump).map(|_worn| ())
     }
 
     fn point(&self) -> &InterfaceState {
@@ -306,13 +306,13 @@ fn a_jump_beyond_the_stability_limit_is_refused_and_changes_nothing() {
         "{share}"
     );
     let jumped = d.solution.interface_committed.clone();
-    start_cycle(&mut d.solution);
+    d.solution.start_cycle();
     d.ramp(DELTA, -DELTA, 5);
     d.ramp(-DELTA, DELTA, 5);
     let cycle_end = d.solution.interface_committed.clone();
     // 93 extrapolated cycles are within the limit, 94 are not.
     assert!(93.0 * per_cycle < limit_expected && 94.0 * per_cycle > limit_expected);
-    let error = end_cycle(&d.model, &mut d.solution, 95.0).unwrap_err();
+    let error = d.solution.end_cycle(&d.model, 95.0).unwrap_err();
     assert_eq!(d.solution.interface_committed, cycle_end);
     assert_ne!(jumped, cycle_end);
     match &error {
@@ -840,7 +840,7 @@ fn the_friction_work_of_a_cycle_is_the_area_of_its_hysteresis_loop() {
     for step in 1..=factors.len() {
         let first_of_cycle = step > 10 && (step - 11) % (2 * half) == 0;
         if first_of_cycle {
-            start_cycle(&mut solution);
+            solution.start_cycle();
         }
         let time = step as f64;
         model.apply_prescribed(time, &mut solution.u);
@@ -854,7 +854,7 @@ fn the_friction_work_of_a_cycle_is_the_area_of_its_hysteresis_loop() {
         let internal = &newton.system().internal_force;
         force_floor = force_floor.max(1e-3 * norm(internal));
         if step > 10 && (step - 10) % (2 * half) == 0 {
-            end_cycle(&model, &mut solution, 1.0).unwrap();
+            solution.end_cycle(&model, 1.0).unwrap();
         }
         // Supports in case order: ground, block_top.
         force.push(reactions(&model, internal, &f_ext)[1][0]);

@@ -26,7 +26,7 @@ use super::pvd::PvdEntry;
 use crate::contact::InterfaceState;
 use crate::material::PointState;
 use crate::solver::energy::EnergyLedger;
-use crate::solver::stepping::{LoopState, Progress, Resume, RunStatistics, Solution};
+use crate::solver::state::{LoopState, Progress, Resume, RunStatistics, Solution};
 use crate::{Error, Result};
 
 /// First bytes of a record; the trailing digit is the format version (3: `postcard`).
@@ -83,7 +83,7 @@ struct Header<'a> {
 /// starts them from the committed ones.
 #[derive(Serialize, Deserialize)]
 struct Body<'a> {
-    state: LoopState,
+    state: Cow<'a, LoopState>,
     stats: Cow<'a, RunStatistics>,
     u: Cow<'a, [f64]>,
     committed: Cow<'a, [PointState]>,
@@ -105,13 +105,13 @@ pub(super) fn encode_record(
         state,
         stats,
         solution,
-    } = *progress;
+    } = progress;
     let header = Header {
         version: env!("CARGO_PKG_VERSION"),
         case,
     };
     let body = Body {
-        state,
+        state: Cow::Borrowed(state),
         stats: Cow::Borrowed(stats),
         u: Cow::Borrowed(&solution.u),
         committed: Cow::Borrowed(&solution.committed),
@@ -215,7 +215,7 @@ impl Body<'_> {
         };
         Record {
             resume: Resume {
-                state: self.state,
+                state: self.state.into_owned(),
                 stats: self.stats.into_owned(),
                 solution,
             },
@@ -230,7 +230,7 @@ impl Body<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solver::stepping::LoopState;
+    use crate::solver::state::LoopState;
 
     fn solution() -> Solution {
         Solution {

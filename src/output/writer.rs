@@ -11,7 +11,7 @@ use super::csv::{Cell, CsvTable, write_csv};
 use super::pvd::{PvdEntry, write_pvd};
 use super::restart::{OutputView, encode_record};
 use super::vtu::write_vtu_with;
-use crate::solver::stepping::{LoopState, Progress, RunStatistics, Solution};
+use crate::solver::state::{LoopState, Progress, RunStatistics, Solution};
 use crate::{Error, Result};
 
 /// A file handed to the [`RecordWriter`], encoded and written on its thread.
@@ -210,7 +210,7 @@ impl RecordWriter {
         output: &OutputView,
     ) -> Result<()> {
         let progress = Progress {
-            state: *state,
+            state: state.clone(),
             stats,
             solution,
         };

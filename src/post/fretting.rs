@@ -16,7 +16,7 @@ use crate::Result;
 use crate::output::csv::{Cell, CsvTable, GrowingCsv};
 use crate::output::writer::Content;
 use crate::post::interface::InterfaceOutput;
-use crate::solver::stepping::StepResult;
+use crate::solver::state::StepResult;
 
 /// A fretting table of a run; the output folder names its file
 /// ([`crate::run::folder::RunFile::Fretting`]).

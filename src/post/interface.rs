@@ -22,7 +22,7 @@ use crate::model::Model;
 use crate::output::csv::CsvTable;
 use crate::output::{Field, FieldValues, Grid};
 use crate::post::{BodyPoints, nodal_values};
-use crate::solver::stepping::Solution;
+use crate::solver::state::Solution;
 
 /// Names of the scalar point fields, in the order of [`NodalContact::values`].
 pub const FIELDS: [&str; 10] = [

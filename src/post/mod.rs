@@ -19,7 +19,7 @@ use crate::material::{PointState, Voigt, ZZ, von_mises};
 use crate::mesh::CellKind;
 use crate::model::Model;
 use crate::output::{Field, FieldValues, Grid, tensor_component_names, vtk_cell_type};
-use crate::solver::stepping::StepResult;
+use crate::solver::state::StepResult;
 use interface::InterfaceOutput;
 
 pub mod fretting;

@@ -13,7 +13,7 @@ use crate::element::set::INTERFACE_POINTS;
 use crate::model::Model;
 use crate::post::interface::{ContactExtent, FIELDS, InterfaceOutput, contact_extent, resultants};
 use crate::post::reactions;
-use crate::solver::stepping::StepResult;
+use crate::solver::state::StepResult;
 
 /// Values of `quantities` for the converged `step` of `model`.
 pub fn evaluate(quantities: &[QuantitySpec], model: &Model, step: &StepResult) -> Result<Vec<f64>> {

@@ -5,7 +5,7 @@
 use crate::config::Case;
 use crate::model::{Model, Schedule};
 use crate::output::summary::{ContactResultant, Force, Named, StepSummary};
-use crate::solver::stepping::StepResult;
+use crate::solver::state::StepResult;
 
 /// The columns of `history.csv` before the reactions: where each value of a row is, so that
 /// the summary's step records can be read back from the rows a restart record keeps.

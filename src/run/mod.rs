@@ -53,7 +53,8 @@ use crate::model::{Model, ModelSpec};
 use crate::output::restart::{Record, read_record};
 use crate::output::summary::Summary;
 use crate::solver::newton::{LinearSolver, NewtonSettings};
-use crate::solver::stepping::{RunStatistics, Solution, StepResult, run_steps, run_steps_from};
+use crate::solver::state::{RunStatistics, Solution, StepResult};
+use crate::solver::stepping::run_steps_from;
 use crate::{Error, Result};
 use folder::{FolderPlan, OutputFolder, OutputMode, RunFile};
 use info::RunInfo;
@@ -362,12 +363,6 @@ fn solve(
         Some(r) if r.resume => Some(resume_record(&model, folder, &r.case_text)?),
         _ => None,
     };
-    if record.is_some() && model.control.arc_length.is_some() {
-        return Err(Error::Restart {
-            path: folder.dir().join(RunFile::Restart.name()),
-            reason: "arc-length runs cannot be resumed yet; run without --resume".into(),
-        });
-    }
     let settings = newton_settings(&case.solver);
     let traced = traced_points(case, &model)?;
     let mut writer = StepWriter::new(case, &model, session, summary, traced, on_step);
@@ -378,11 +373,7 @@ fn solve(
             None
         }
     };
-    let mut stats = if model.control.arc_length.is_some() {
-        run_steps(&model, &settings, |step| writer.step(step, None))?.1
-    } else {
-        run_steps_from(&model, &settings, resume, &mut writer)?.1
-    };
+    let mut stats = run_steps_from(&model, &settings, resume, &mut writer)?.1;
     stats.output_seconds += writer.finish()?;
     writer.bar.finish();
     Ok(RunSummary {

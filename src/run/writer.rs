@@ -20,7 +20,7 @@ use crate::post::interface::{InterfaceOutput, resultants};
 use crate::post::quantities::evaluate;
 use crate::post::{BodyPoints, StepInfo, reactions, step_grids};
 use crate::solver::newton::NewtonLog;
-use crate::solver::stepping::{Observer, Progress, Resume, Solution, StepResult};
+use crate::solver::state::{Observer, Progress, Resume, Solution, StepResult};
 use crate::{Error, Result};
 
 /// Writes the files of each converged step and the restart record of each converged

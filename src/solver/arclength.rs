@@ -2,318 +2,231 @@
 //! `[steps] control = "arc_length"`. The load is λ f_ref (f_ref: the case's loads at factor 1)
 //! and each increment is constrained to a displacement "arc" ‖Δu‖ = Δl (Crisfield 1981,
 //! cylindrical: no load term), so the load factor λ is an unknown and the path can be
-//! followed up to a limit point, where load control fails.
+//! followed up to a limit point, where load control fails. The increments are solved by the
+//! run's [`Newton`] solver ([`crate::solver::newton::arc`]); this driver chooses their arcs
+//! and hands them to the output.
 //!
-//! Per iteration one tangent is assembled and factorised and two systems are solved with it
-//! (K δu_r = r, K δu_f = f_ref); δλ is the root of the quadratic constraint
-//! ‖Δu + δu_r + δλ δu_f‖² = Δl² closer to the previous direction. Converged increments are
-//! handed to the output as steps 1, 2, ... with their λ. The arc grows or shrinks with the
-//! iteration count; a failed increment (no convergence, a complex root, a tangent that is not
-//! positive definite, an implausible increment) is retried with half the arc. The run ends
-//! normally at `max_load_factor`, after `max_increments`, when the path returns to λ ≤ 0, or
-//! when the arc falls below
-//! `min_arc_length` (the path cannot be followed further: for a perfectly plastic structure,
-//! the plateau of the limit load); the largest λ reached is logged.
+//! Converged increments are handed to the output as steps 1, 2, ... with their λ, and with
+//! the loop state ([`ArcState`] in [`LoopState::arc`]) from which a restart record continues
+//! them bit for bit. The arc grows or shrinks with the iteration count; a failed increment
+//! (no convergence, a complex root, a tangent that is not symmetric or not positive definite,
+//! an implausible increment) is retried with half the arc. The run ends normally at
+//! `max_load_factor`, after `max_increments`, when the path returns to λ ≤ 0, or when the arc
+//! falls below `min_arc_length` (the path cannot be followed further: for a perfectly plastic
+//! structure, the plateau of the limit load); the largest λ reached is logged.
 
-use crate::assembly::{AssemblyInput, GlobalSystem};
+use crate::error::ArcFailure;
 use crate::model::timeline::Frame;
 use crate::model::{ArcLength, Model};
-use crate::solver::energy;
-use crate::solver::linear::CholeskySolver;
-use crate::solver::newton::{NewtonLog, NewtonSettings, Problem, norm};
-use crate::solver::stepping::{
-    RunStatistics, Solution, StepResult, distance, implausible_increment,
+use crate::solver::diagnosis::implausible_increment;
+use crate::solver::newton::{
+    ArcConverged, ArcIncrement, Newton, NewtonLog, NewtonSettings, distance,
+};
+use crate::solver::state::{
+    ArcState, LoopState, Observer, Progress, Resume, RunStatistics, Solution, StepResult,
 };
 use crate::{Error, Result};
 
 /// Iterations per increment the arc length is adapted to.
 const DESIRED_ITERATIONS: f64 = 5.0;
 
-/// Runs the arc-length stepping of `model` (see the module docs), calling `on_step` after each
-/// converged increment.
+/// Runs the arc-length stepping of `model` (see the module docs) from `resume` when given,
+/// reporting each converged increment to `observer` as a step.
 pub fn run_arc_length(
     model: &Model,
     settings: &NewtonSettings,
     arc: &ArcLength,
-    mut on_step: impl FnMut(&StepResult) -> Result<f64>,
+    resume: Option<Resume>,
+    observer: &mut impl Observer,
 ) -> Result<(Solution, RunStatistics)> {
     let dofs = &model.dofs;
-    let free = dofs.free_count();
-    let n = dofs.dof_count();
-    let mut stats = RunStatistics::default();
-    let mut linear = CholeskySolver::new(&model.pattern)?;
-    stats.symbolic_seconds = linear.symbolic_seconds();
-    stats.factor_nnz = linear.factor_nnz();
-    let mut system = GlobalSystem::new(model.pattern.clone(), n);
-    let mut solution = Solution::new(model);
-    // The reference load over all dofs and over the free ones.
-    let mut f_ref_full = vec![0.0; n];
+    let mut newton = Newton::new(*settings, dofs, &model.pattern)?;
+    // The reference load over all dofs.
+    let mut reference = vec![0.0; dofs.dof_count()];
     for &(dof, value, _) in &model.nodal_loads {
-        f_ref_full[dof] += value;
+        reference[dof] += value;
     }
-    let mut f_ref = vec![0.0; free];
-    dofs.gather_free(&f_ref_full, &mut f_ref);
-    if norm(&f_ref) == 0.0 {
-        return Err(Error::ArcLength(
-            "[steps] control = \"arc_length\" needs a non-zero load (pressure, traction or force)"
-                .into(),
-        ));
+    if newton.set_arc_reference(&reference) == 0.0 {
+        return Err(Error::ArcLengthNoLoad);
     }
-    let (mut u_c, mut lambda) = (solution.u.clone(), 0.0_f64);
-    let mut previous = vec![0.0; free]; // Δu of the last converged increment (free dofs)
-    let (mut du_r, mut du_f, mut r) = (vec![0.0; free], vec![0.0; free], vec![0.0; free]);
-    let mut delta = vec![0.0; free];
-    let mut arc_length: Option<f64> = None;
-    let (mut min_arc, mut max_arc) = (0.0, f64::INFINITY);
-    let mut lambda_max: f64 = 0.0;
-    let mut step = 0;
-    let mut f_ext = vec![0.0; n];
-    let mut stop = "max_increments reached";
-    while step < arc.max_increments {
-        // --- predictor: the tangent at the converged state ---------------------------------
-        solution.u.copy_from_slice(&u_c);
-        let mut log = NewtonLog::default();
-        let outcome = (|| -> std::result::Result<(f64, usize), String> {
-            assemble(model, settings, &mut solution, &mut system, &mut log)?;
-            factorize_and_solve(&mut linear, &system, &mut [&mut du_f], &[&f_ref], &mut log)?;
-            let dl = *arc_length.get_or_insert_with(|| {
-                let l = arc.initial_increment * norm(&du_f);
-                min_arc = arc.min_arc_length * l;
-                max_arc = arc.max_arc_length * l;
-                l
-            });
-            // Direction: along the previous increment (Feng's criterion), forward at first.
-            let along: f64 = previous.iter().zip(&du_f).map(|(a, b)| a * b).sum();
-            let sign = if along < 0.0 { -1.0 } else { 1.0 };
-            let mut d_lambda = sign * dl / norm(&du_f);
-            for (d, f) in delta.iter_mut().zip(&du_f) {
-                *d = d_lambda * f;
-            }
-            // --- corrector --------------------------------------------------------------
-            for iteration in 1..=settings.max_iterations {
-                solution.u.copy_from_slice(&u_c);
-                dofs.add_free(1.0, &delta, &mut solution.u);
-                assemble(model, settings, &mut solution, &mut system, &mut log)?;
-                let lam = lambda + d_lambda;
-                dofs.gather_free(&system.internal_force, &mut r);
-                for (ri, fi) in r.iter_mut().zip(&f_ref) {
-                    *ri = lam * fi - *ri;
-                }
-                let reference = (lam.abs() * norm(&f_ref))
-                    .max(norm(&system.internal_force))
-                    .max(f64::MIN_POSITIVE);
-                let residual = norm(&r) / reference;
-                log.residuals.push(residual);
-                if !residual.is_finite() {
-                    return Err("the residual is not finite".into());
-                }
-                let converged_force = residual <= settings.force_tolerance;
-                let correction = log.corrections.last().copied().unwrap_or(f64::INFINITY);
-                if converged_force
-                    && (iteration > 1 && correction <= settings.displacement_tolerance
-                        || residual <= 1e-3 * settings.force_tolerance)
-                {
-                    return Ok((d_lambda, iteration));
-                }
-                factorize_and_solve(
-                    &mut linear,
-                    &system,
-                    &mut [&mut du_r, &mut du_f],
-                    &[&r, &f_ref],
-                    &mut log,
-                )?;
-                // ‖Δu + δu_r + δλ δu_f‖² = Δl²
-                let w: Vec<f64> = delta.iter().zip(&du_r).map(|(a, b)| a + b).collect();
-                let a = dot(&du_f, &du_f);
-                let b = 2.0 * dot(&du_f, &w);
-                let c = dot(&w, &w) - dl * dl;
-                let disc = b * b - 4.0 * a * c;
-                if disc < 0.0 || a == 0.0 {
-                    return Err("the arc-length constraint has no real root".into());
-                }
-                let roots = [
-                    (-b + disc.sqrt()) / (2.0 * a),
-                    (-b - disc.sqrt()) / (2.0 * a),
-                ];
-                // The root whose new increment points closer to the current one.
-                let score = |x: f64| {
-                    w.iter()
-                        .zip(&du_f)
-                        .zip(&delta)
-                        .map(|((wi, fi), di)| (wi + x * fi) * di)
-                        .sum::<f64>()
-                };
-                let dlam = if score(roots[0]) >= score(roots[1]) {
-                    roots[0]
-                } else {
-                    roots[1]
-                };
-                d_lambda += dlam;
-                let mut step_norm = 0.0;
-                for ((d, ri), fi) in delta.iter_mut().zip(&du_r).zip(&du_f) {
-                    let s = ri + dlam * fi;
-                    *d += s;
-                    step_norm += s * s;
-                }
-                let u_norm = norm(&solution.u).max(f64::MIN_POSITIVE);
-                log.corrections.push(step_norm.sqrt() / u_norm);
-                log.iterations = iteration;
-            }
-            Err(format!(
-                "no convergence in {} iterations",
-                settings.max_iterations
-            ))
-        })();
-        let accepted = match outcome {
-            Ok((d_lambda, iterations)) => match implausible_increment(model, &solution, &u_c) {
-                Some(reason) => Err(reason),
-                None => Ok((d_lambda, iterations)),
-            },
-            Err(e) => Err(e),
-        };
-        log.converged = accepted.is_ok();
-        stats.iterations += log.iterations;
-        stats.assembly_seconds += log.assembly_seconds;
-        stats.factorization_seconds += log.factorization_seconds;
-        stats.solve_seconds += log.solve_seconds;
-        let dl = arc_length.unwrap_or(0.0);
-        match accepted {
-            Ok((d_lambda, iterations)) => {
-                step += 1;
-                stats.increments += 1;
-                stats.steps += 1;
-                lambda += d_lambda;
-                lambda_max = lambda_max.max(lambda);
-                dofs.gather_free(&solution.u, &mut previous);
-                let mut old = vec![0.0; free];
-                dofs.gather_free(&u_c, &mut old);
-                for (p, o) in previous.iter_mut().zip(&old) {
-                    *p -= o;
-                }
-                tracing::info!(
-                    "arc-length increment {step}: load factor {lambda:.6}, arc {dl:.3e}, \
-                     {iterations} iterations, ‖Δu‖ {:.3e}",
-                    distance(&solution.u, &u_c)
-                );
-                for (f, r) in f_ext.iter_mut().zip(&f_ref_full) {
-                    *f = lambda * r;
-                }
-                energy::record(model, &mut solution, &u_c, &f_ext, &system.internal_force);
-                solution.commit();
-                u_c.copy_from_slice(&solution.u);
-                stats.last_residual = *log.residuals.last().unwrap_or(&0.0);
-                // One analysis step, its time the load factor's progress to its bound.
-                let frame = Frame {
-                    analysis_step: 1,
-                    cycle: 1,
-                    cycles: 1.0,
-                    step_time: (lambda / arc.max_load_factor).clamp(0.0, 1.0),
-                    cycle_end: false,
-                };
-                let result = StepResult {
-                    frame,
-                    step,
-                    load_factor: lambda,
-                    newton: log,
-                    increments: 1,
-                    cutbacks: 0,
-                    solution: &solution,
-                    internal_force: &system.internal_force,
-                    external_force: &f_ext,
-                };
-                stats.output_seconds += on_step(&result)?;
-                let factor = (DESIRED_ITERATIONS / iterations.max(1) as f64)
-                    .sqrt()
-                    .clamp(0.5, 2.0);
-                arc_length = Some((dl * factor).clamp(min_arc, max_arc));
-                if lambda >= arc.max_load_factor {
-                    stop = "max_load_factor reached";
-                    break;
-                }
-                if lambda_max > 0.0 && lambda <= 0.0 {
-                    stop = "the path returned to zero load";
-                    break;
-                }
-            }
+    let (mut state, mut stats, mut solution) = match resume {
+        Some(r) => (r.state, r.stats, r.solution),
+        None => (
+            LoopState::start(),
+            RunStatistics::default(),
+            Solution::new(model),
+        ),
+    };
+    // A record of this case always holds the arc state (a record of another case is refused).
+    let mut path = state.arc.take().unwrap_or_else(ArcState::start);
+    solution.reset_trial();
+    let mut converged_u = solution.u.clone();
+    let mut f_ext = vec![0.0; dofs.dof_count()];
+    let stop = loop {
+        if path.load_factor >= arc.max_load_factor {
+            break "max_load_factor reached";
+        }
+        if path.largest_load_factor > 0.0 && path.load_factor <= 0.0 {
+            break "the path returned to zero load";
+        }
+        if state.step > arc.max_increments {
+            break "max_increments reached";
+        }
+        let step = state.step;
+        solution.u.copy_from_slice(&converged_u);
+        let mut log = NewtonLog::sized(settings.max_iterations);
+        let outcome = attempt(
+            model,
+            arc,
+            &mut newton,
+            &mut solution,
+            &converged_u,
+            &mut path,
+            &mut log,
+        );
+        log.converged = outcome.is_ok();
+        stats.add_work(&log);
+        let (radius, converged) = match outcome {
+            Ok(converged) => converged,
             Err(reason) => {
                 stats.cutbacks += 1;
                 tracing::info!("arc-length increment failed ({reason}); halving the arc");
-                if dl * 0.5 < min_arc || arc_length.is_none() {
-                    if step == 0 {
-                        return Err(Error::ArcLength(format!(
-                            "the first increment failed: {reason}"
-                        )));
+                let halved = path.radius.map(|r| r * 0.5);
+                if halved.is_none_or(|r| r < path.min_radius) {
+                    if step == 1 {
+                        return Err(Error::ArcLengthStart(reason));
                     }
-                    stop = "the arc fell below min_arc_length (limit point: the path cannot be \
-                            followed further)";
-                    break;
+                    break "the arc fell below min_arc_length (limit point: the path cannot be \
+                           followed further)";
                 }
-                arc_length = Some(dl * 0.5);
+                path.radius = halved;
+                continue;
             }
+        };
+        stats.increments += 1;
+        stats.steps += 1;
+        path.load_factor += converged.load_change;
+        path.largest_load_factor = path.largest_load_factor.max(path.load_factor);
+        record_increment(
+            model,
+            &solution.u,
+            &converged_u,
+            &mut path.previous_increment,
+        );
+        let lambda = path.load_factor;
+        tracing::info!(
+            "arc-length increment {step}: load factor {lambda:.6}, arc {radius:.3e}, \
+             {} iterations, ‖Δu‖ {:.3e}",
+            converged.evaluations,
+            distance(&solution.u, &converged_u)
+        );
+        for (f, r) in f_ext.iter_mut().zip(&reference) {
+            *f = lambda * r;
         }
-    }
+        let internal_force = newton.system().internal_force.as_slice();
+        solution.record_energy(model, &converged_u, &f_ext, internal_force);
+        solution.commit();
+        converged_u.copy_from_slice(&solution.u);
+        stats.last_residual = *log.residuals.last().unwrap_or(&0.0);
+        path.radius = Some(next_radius(radius, &converged, &path));
+        // One analysis step, its time the load factor's progress to its bound.
+        let frame = Frame {
+            analysis_step: 1,
+            cycle: 1,
+            cycles: 1.0,
+            step_time: (lambda / arc.max_load_factor).clamp(0.0, 1.0),
+            cycle_end: false,
+        };
+        let result = StepResult {
+            frame,
+            step,
+            load_factor: lambda,
+            newton: log,
+            increments: 1,
+            cutbacks: 0,
+            solution: &solution,
+            internal_force,
+            external_force: &f_ext,
+        };
+        state = state.next_step(step);
+        let progress = Progress {
+            state: LoopState {
+                arc: Some(path.clone()),
+                ..state.clone()
+            },
+            stats: &stats,
+            solution: &solution,
+        };
+        stats.output_seconds += observer.step(&result, &progress)?;
+    };
     tracing::info!(
-        "arc-length control stopped after {step} increments ({stop}): largest load factor \
-         {lambda_max:.6}, last {lambda:.6}"
+        "arc-length control stopped after {} increments ({stop}): largest load factor \
+         {:.6}, last {:.6}",
+        state.step - 1,
+        path.largest_load_factor,
+        path.load_factor
     );
     // Leave the converged state (not a failed attempt's) in the solution.
-    solution.u.copy_from_slice(&u_c);
-    solution.trial.copy_from_slice(&solution.committed);
-    solution
-        .interface_trial
-        .copy_from_slice(&solution.interface_committed);
+    solution.u.copy_from_slice(&converged_u);
+    solution.reset_trial();
+    stats.symbolic_seconds = newton.linear().symbolic_seconds();
+    stats.factor_nnz = newton.linear().factor_nnz();
     Ok((solution, stats))
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// Assembles internal force and tangent at `solution.u`; an unsymmetric tangent (friction)
-/// is refused.
-fn assemble(
+/// One attempt at the next increment from the converged displacements `converged_u` (also in
+/// `solution.u`): the predictor's tangent, the arc (the first increment's is set from that
+/// tangent), the corrector, and the plausibility of the result. Returns the arc with the
+/// converged increment.
+fn attempt(
     model: &Model,
-    settings: &NewtonSettings,
+    arc: &ArcLength,
+    newton: &mut Newton,
     solution: &mut Solution,
-    system: &mut GlobalSystem,
+    converged_u: &[f64],
+    path: &mut ArcState,
     log: &mut NewtonLog,
-) -> std::result::Result<(), String> {
-    let t = std::time::Instant::now();
-    system.clear(true);
+) -> std::result::Result<(f64, ArcConverged), ArcFailure> {
     let (u, mut problem) = solution.split(model);
-    let input = AssemblyInput {
-        dofs: &model.dofs,
-        u,
-        tangent: true,
-        algorithm: settings.contact_algorithm,
+    let tangent = newton.arc_tangent(&mut problem, u, log)?;
+    let radius = match path.radius {
+        Some(radius) => radius,
+        None => {
+            let first = arc.initial_increment * tangent;
+            path.min_radius = arc.min_arc_length * first;
+            path.max_radius = arc.max_arc_length * first;
+            path.radius = Some(first);
+            first
+        }
     };
-    let symmetric = problem.assemble(system, &input);
-    log.assembly_seconds += t.elapsed().as_secs_f64();
-    if symmetric {
-        Ok(())
-    } else {
-        Err("arc-length control needs a symmetric tangent (no slipping friction)".into())
+    let increment = ArcIncrement {
+        load_factor: path.load_factor,
+        radius,
+        previous: &path.previous_increment,
+    };
+    let converged = newton.solve_arc_increment(&mut problem, u, &increment, log)?;
+    match implausible_increment(model, solution, converged_u) {
+        Some(reason) => Err(ArcFailure::Implausible(reason)),
+        None => Ok((radius, converged)),
     }
 }
 
-/// Factorises the tangent once and solves it for each right-hand side.
-fn factorize_and_solve(
-    linear: &mut CholeskySolver,
-    system: &GlobalSystem,
-    out: &mut [&mut Vec<f64>],
-    rhs: &[&Vec<f64>],
-    log: &mut NewtonLog,
-) -> std::result::Result<(), String> {
-    let t = std::time::Instant::now();
-    linear
-        .factorize(system.matrix())
-        .map_err(|e| e.to_string())?;
-    log.factorization_seconds += t.elapsed().as_secs_f64();
-    let t = std::time::Instant::now();
-    for (x, b) in out.iter_mut().zip(rhs) {
-        x.copy_from_slice(b);
-        linear.solve_in_place(x);
+/// Stores Δu = `u` − `converged_u` over the free dofs in `previous` (sized at the first).
+fn record_increment(model: &Model, u: &[f64], converged_u: &[f64], previous: &mut Vec<f64>) {
+    let dofs = &model.dofs;
+    previous.resize(dofs.free_count(), 0.0);
+    for (dof, (a, b)) in u.iter().zip(converged_u).enumerate() {
+        if let Some(eq) = dofs.equation(dof) {
+            previous[eq] = a - b;
+        }
     }
-    log.solve_seconds += t.elapsed().as_secs_f64();
-    Ok(())
+}
+
+/// The arc after a converged increment of arc `radius`: scaled by √(desired / actual
+/// iterations) within [½, 2], and kept within the run's bounds.
+fn next_radius(radius: f64, converged: &ArcConverged, path: &ArcState) -> f64 {
+    let factor = (DESIRED_ITERATIONS / converged.evaluations.max(1) as f64)
+        .sqrt()
+        .clamp(0.5, 2.0);
+    (radius * factor).clamp(path.min_radius, path.max_radius)
 }

@@ -3,7 +3,9 @@
 //!
 //! The stepping loop calls [`start_cycle`] before the first increment of every simulated
 //! cycle and of every step, and [`end_cycle`] right after committing the cycle's last
-//! increment (before its output), so that every output record is a state to continue from.
+//! increment (before its output), so that every output record is a state to continue from
+//! (through [`crate::solver::state::Solution`]'s hooks; these functions take the committed
+//! interface states and the energy ledger only).
 //!
 //! **Cycle jumping.** A simulated cycle stands for ΔN cycles: the wear it added is
 //! extrapolated linearly, h += (ΔN − 1)(h − h_cycle start) (explicit Euler in the cycle
@@ -32,18 +34,15 @@
 use crate::contact::{ContactStatus, InterfaceState, PointHistory};
 use crate::element::set::INTERFACE_POINTS;
 use crate::model::Model;
-use crate::solver::stepping::Solution;
+use crate::solver::energy::EnergyLedger;
 use crate::{Error, Result};
 
-/// Starts a load cycle (or a step) at every interface point of the committed state: the
-/// cycle trackers restart from the current values (trial states follow).
-pub fn start_cycle(solution: &mut Solution) {
-    for s in &mut solution.interface_committed {
+/// Starts a load cycle (or a step) at every interface point of the committed `states`: the
+/// cycle trackers restart from the current values (the caller makes the trial states follow).
+pub fn start_cycle(states: &mut [InterfaceState]) {
+    for s in states {
         restart_trackers(s);
     }
-    solution
-        .interface_trial
-        .copy_from_slice(&solution.interface_committed);
 }
 
 /// The trackers of a cycle starting at state `s`: no slip yet, the current shear as the
@@ -60,30 +59,42 @@ fn restart_trackers(s: &mut InterfaceState) {
     h.cycle_elastic_closure = 0.0;
 }
 
-/// Ends a simulated load cycle that stands for `jump_cycles` ≥ 1 cycles: the last-cycle
-/// results are stored and the wear (and dissipation) of the cycle is extrapolated over the
-/// `jump_cycles − 1` cycles not simulated. Errs, leaving the solution unchanged, when the
-/// depth a jump adds exceeds the stability limit at some point ([`Error::WearJump`]) or the
-/// total depth would exceed the pair's `max_depth` ([`Error::WornThrough`]); the caller adds
-/// the step with [`Error::in_analysis_step`]. Returns whether the jump added wear (then the
-/// worn gaps no longer match the converged displacements: the caller re-equilibrates).
-pub fn end_cycle(model: &Model, solution: &mut Solution, jump_cycles: f64) -> Result<bool> {
+/// What the end of a cycle did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CycleEnd {
+    /// Whether the jump added wear (then the worn gaps no longer match the converged
+    /// displacements: the caller re-equilibrates).
+    pub worn: bool,
+    /// Per contact pair, the largest share of its stability limit the jump added at a point.
+    pub jump_use: Vec<f64>,
+}
+
+/// Ends a simulated load cycle that stands for `jump_cycles` ≥ 1 cycles at the committed
+/// interface `states`: the last-cycle results are stored and the wear (and dissipation) of
+/// the cycle is extrapolated over the `jump_cycles − 1` cycles not simulated, its work moved
+/// to the wear work of `energy`. Errs, leaving the states unchanged, when the depth a jump
+/// adds exceeds the stability limit at some point ([`Error::WearJump`]) or the total depth
+/// would exceed the pair's `max_depth` ([`Error::WornThrough`]); the caller adds the step
+/// with [`Error::in_analysis_step`].
+pub fn end_cycle(
+    model: &Model,
+    states: &mut [InterfaceState],
+    energy: &mut EnergyLedger,
+    jump_cycles: f64,
+) -> Result<CycleEnd> {
     let extra = (jump_cycles - 1.0).max(0.0);
-    solution.jump_use = check_jump(model, &solution.interface_committed, jump_cycles, extra)?;
+    let jump_use = check_jump(model, states, jump_cycles, extra)?;
     let mut worn = false;
-    for (point, s) in solution.interface_committed.iter_mut().enumerate() {
+    for (point, s) in states.iter_mut().enumerate() {
         let [a, b] = cycle_wear(&s.history);
         close_cycle(&mut s.history, extra);
         if extra > 0.0 && a + b > 0.0 {
             // The jump's wear takes its work out of the interface's stored energy.
-            (solution.energy).record_wear_jump(model, point, s, extra * (a + b));
+            energy.record_wear_jump(model, point, s, extra * (a + b));
             worn = true;
         }
     }
-    solution
-        .interface_trial
-        .copy_from_slice(&solution.interface_committed);
-    Ok(worn)
+    Ok(CycleEnd { worn, jump_use })
 }
 
 /// Wear depth (A, B) added since the cycle started.

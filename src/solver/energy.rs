@@ -27,8 +27,8 @@ use crate::element::continuum::point_kinematics;
 use crate::element::interface6::{InterfacePoint, interface_point, relative_operator};
 use crate::element::quadrature::{MAX_CELL_POINTS, cell_rule};
 use crate::element::set::INTERFACE_POINTS;
+use crate::material::PointState;
 use crate::model::Model;
-use crate::solver::stepping::Solution;
 
 /// Energy totals from the unloaded start (N·mm = mJ; per unit thickness as the forces are).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -163,23 +163,30 @@ struct InterfaceWork {
     wear: f64,
 }
 
+/// A converged increment as the ledger reads it: the displacements before and after it, the
+/// integration-point states at its start (committed) and end (trial), and the converged
+/// state's forces over all dofs.
+#[derive(Clone, Copy, Debug)]
+pub struct Increment<'a> {
+    pub u_old: &'a [f64],
+    pub u: &'a [f64],
+    pub committed: &'a [PointState],
+    pub trial: &'a [PointState],
+    pub interface_committed: &'a [InterfaceState],
+    pub interface_trial: &'a [InterfaceState],
+    pub external_force: &'a [f64],
+    pub internal_force: &'a [f64],
+}
+
 impl EnergyLedger {
-    /// Adds the converged increment from the committed to the trial states of `solution`
-    /// (displacements from `u_old` to `solution.u`); `external_force` and `internal_force`
-    /// are those of the converged state over all dofs.
-    pub fn record_increment(
-        &mut self,
-        model: &Model,
-        solution: &Solution,
-        u_old: &[f64],
-        external_force: &[f64],
-        internal_force: &[f64],
-    ) {
+    /// Adds the converged `increment`; the drivers call this (through
+    /// [`crate::solver::state::Solution::record_energy`]) just before committing the trial
+    /// states.
+    pub fn record_increment(&mut self, model: &Model, increment: &Increment) {
         self.weights.ensure(model);
-        self.total.external_work +=
-            self.external_work(model, &solution.u, u_old, external_force, internal_force);
-        self.record_bodies(model, solution);
-        let i = self.interface_work(model, solution, u_old);
+        self.total.external_work += self.external_work(model, increment);
+        self.record_bodies(model, increment);
+        let i = self.interface_work(model, increment);
         let t = &mut self.total;
         t.friction_dissipation += i.friction;
         t.wear_work += i.wear;
@@ -207,14 +214,14 @@ impl EnergyLedger {
 
     /// The trapezoidal work of the nodal forces F (loads at free dofs, reactions at
     /// prescribed ones) over the increment; keeps F_{n+1} for the next increment.
-    fn external_work(
-        &mut self,
-        model: &Model,
-        u: &[f64],
-        u_old: &[f64],
-        external_force: &[f64],
-        internal_force: &[f64],
-    ) -> f64 {
+    fn external_work(&mut self, model: &Model, increment: &Increment) -> f64 {
+        let Increment {
+            u,
+            u_old,
+            external_force,
+            internal_force,
+            ..
+        } = *increment;
         let n = model.dofs.dof_count();
         if self.previous_force.len() != n {
             // The unloaded start: no force.
@@ -236,13 +243,13 @@ impl EnergyLedger {
 
     /// The bodies' stored energy (from the trial states), plastic work and the numerical
     /// part of the trapezoidal rule on it.
-    fn record_bodies(&mut self, model: &Model, solution: &Solution) {
+    fn record_bodies(&mut self, model: &Model, increment: &Increment) {
         let (mut elastic, mut plastic, mut numerical) = (0.0, 0.0, 0.0);
         let cells = &model.continuum.cells;
-        let slots = solution
+        let slots = increment
             .trial
             .chunks_exact(MAX_CELL_POINTS)
-            .zip(solution.committed.chunks_exact(MAX_CELL_POINTS))
+            .zip(increment.committed.chunks_exact(MAX_CELL_POINTS))
             .zip(self.weights.volumes.chunks_exact(MAX_CELL_POINTS));
         for (cell, ((trial, committed), volumes)) in cells.iter().zip(slots) {
             let material = model.continuum.materials[cell.body as usize].as_ref();
@@ -260,20 +267,21 @@ impl EnergyLedger {
         t.numerical_dissipation += numerical;
     }
 
-    /// The interface terms of the increment from `u_old` to `solution.u`.
-    fn interface_work(&self, model: &Model, solution: &Solution, u_old: &[f64]) -> InterfaceWork {
+    /// The interface terms of the increment.
+    fn interface_work(&self, model: &Model, increment: &Increment) -> InterfaceWork {
+        let Increment { u, u_old, .. } = *increment;
         let mut sum = InterfaceWork::default();
-        let states = solution
+        let states = increment
             .interface_trial
             .chunks_exact(INTERFACE_POINTS)
-            .zip(solution.interface_committed.chunks_exact(INTERFACE_POINTS))
+            .zip(increment.interface_committed.chunks_exact(INTERFACE_POINTS))
             .zip(self.weights.interface.chunks_exact(INTERFACE_POINTS));
         for (element, ((trial, committed), points)) in model.interface.elements.iter().zip(states) {
             let mut du = ElementVector::zeros();
             for (i, &node) in element.nodes.iter().enumerate() {
                 for c in 0..2 {
                     let dof = 2 * node as usize + c;
-                    du[2 * i + c] = solution.u[dof] - u_old[dof];
+                    du[2 * i + c] = u[dof] - u_old[dof];
                 }
             }
             for ((t, c), p) in trial.iter().zip(committed).zip(points) {
@@ -293,19 +301,4 @@ impl EnergyLedger {
         }
         sum
     }
-}
-
-/// Records the converged increment of `solution` (from `u_old`) in its own ledger; see
-/// [`EnergyLedger::record_increment`]. The stepping loops call this just before
-/// committing the trial states.
-pub fn record(
-    model: &Model,
-    solution: &mut Solution,
-    u_old: &[f64],
-    external_force: &[f64],
-    internal_force: &[f64],
-) {
-    let mut ledger = std::mem::take(&mut solution.energy);
-    ledger.record_increment(model, solution, u_old, external_force, internal_force);
-    solution.energy = ledger;
 }

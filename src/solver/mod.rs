@@ -1,12 +1,16 @@
 //! Solvers: the sparse linear solver ([`linear`]), Newton-Raphson for one increment
-//! ([`newton`]), the mechanical problem it solves ([`mechanics`]) and the load stepping that
-//! drives it ([`stepping`]).
+//! ([`newton`]), the mechanical problem it solves ([`mechanics`]), the run's state
+//! ([`state`]) and the drivers that advance it: load stepping ([`stepping`]) and arc-length
+//! control ([`arclength`]), with the cycle hooks ([`cycles`]), the energy ledger
+//! ([`energy`]) and the failure diagnosis ([`diagnosis`]).
 
 pub mod arclength;
 pub mod condensed;
 pub mod cycles;
+pub mod diagnosis;
 pub mod energy;
 pub mod linear;
 pub mod mechanics;
 pub mod newton;
+pub mod state;
 pub mod stepping;

@@ -45,6 +45,10 @@
 //! [`Newton`] owns the global system, the linear solver and every vector the loop needs, all
 //! sized once for the model: an iteration allocates nothing, which keeps the many small
 //! iterations of contact problems free of allocator traffic.
+//!
+//! # Arc-length increments
+//! The same solver, with the same assembly, linear solves and workspaces, solves the
+//! increments of arc-length control, whose load factor is an unknown ([`arc`]).
 
 use faer::{Mat, MatMut};
 
@@ -53,6 +57,10 @@ use crate::assembly::{AssemblyInput, DenseScatter, DofMap, GlobalSystem, Sparsit
 use crate::contact::ContactAlgorithm;
 use crate::solver::condensed::CondensedSolver;
 use crate::solver::linear::CholeskySolver;
+
+pub mod arc;
+
+pub use arc::{ArcConverged, ArcIncrement};
 
 /// The linear solver of models with contact pairs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -86,6 +94,18 @@ pub struct NewtonSettings {
     /// Whether an increment proportional to the last converged one starts from the
     /// extrapolated displacements (`Predictor`).
     pub extrapolate: bool,
+}
+
+impl NewtonSettings {
+    /// The relative-norm test: ‖r‖ ≤ tol_f · reference (`residual`, already relative), and
+    /// the correction `correction` ≤ tol_u, unless the residual is 1000 × below tol_f or
+    /// this is the `first` evaluation of a load-controlled increment (no correction yet).
+    fn relative_norms_met(&self, residual: f64, first: bool, correction: f64) -> bool {
+        residual <= self.force_tolerance
+            && (first
+                || residual <= 1e-3 * self.force_tolerance
+                || correction <= self.displacement_tolerance)
+    }
 }
 
 /// Engineering convergence criteria (see the module docs): the field parameters of CalculiX's
@@ -464,9 +484,30 @@ pub struct NewtonLog {
     pub solve_seconds: f64,
 }
 
+impl NewtonLog {
+    /// An empty log sized for an increment of up to `max_iterations` solves, so that logging
+    /// an iteration allocates nothing.
+    pub fn sized(max_iterations: usize) -> Self {
+        Self {
+            residuals: Vec::with_capacity(max_iterations + 1),
+            corrections: Vec::with_capacity(max_iterations),
+            ..Self::default()
+        }
+    }
+}
+
 /// Euclidean norm.
 pub fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// The Euclidean distance between two displacement vectors.
+pub fn distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt()
 }
 
 /// Relative residual above which corrections are checked by a line search. Below it Newton is
@@ -497,6 +538,8 @@ pub struct Newton<'a> {
     condensed: Option<Condensed>,
     /// Whether the problem was found to have no interface (then Cholesky is used).
     no_interface: bool,
+    /// The workspaces of arc-length increments, made by [`Self::set_arc_reference`].
+    arc: Option<arc::ArcWork>,
 }
 
 impl<'a> Newton<'a> {
@@ -524,6 +567,7 @@ impl<'a> Newton<'a> {
             predictor: Predictor::new(dofs.dof_count()),
             condensed: None,
             no_interface: false,
+            arc: None,
         })
     }
 
@@ -681,22 +725,11 @@ impl<'a> Newton<'a> {
     ) -> Result<NewtonLog> {
         let settings = self.settings;
         let dofs = self.dofs;
-        // Sized for the longest increment, so that logging an iteration allocates nothing.
-        let mut log = NewtonLog {
-            residuals: Vec::with_capacity(settings.max_iterations + 1),
-            corrections: Vec::with_capacity(settings.max_iterations),
-            ..NewtonLog::default()
-        };
+        let mut log = NewtonLog::sized(settings.max_iterations);
         dofs.gather_free(f_ext, &mut self.external);
         self.increment_start.copy_from_slice(u);
         self.flux_history.start();
-        // Nothing cached from earlier increments may change this one's iterates (a resumed
-        // run must repeat the uninterrupted one): the kept elastic-cell sum is rebuilt and
-        // the bulk factor kept only for an unchanged tangent.
-        self.system.forget_reference();
-        if let Some(c) = &mut self.condensed {
-            c.solver.start_increment();
-        }
+        log.factorization_seconds += self.begin_increment(problem)?;
         if settings.extrapolate {
             log.predictor = self.predictor.predict(dofs, u, f_ext);
         }
@@ -704,7 +737,6 @@ impl<'a> Newton<'a> {
         let mut last_correction = f64::INFINITY;
         let mut correction_max = f64::INFINITY;
         let mut initial_residual = None;
-        log.factorization_seconds += self.prepare_condensed(problem)?;
         // The next evaluation runs the bulk's elements (start of the increment, or the check
         // of a converged state reached with extrapolated bulk forces).
         let mut fresh = true;
@@ -750,10 +782,11 @@ impl<'a> Newton<'a> {
             let next_correction =
                 previous.map_or(f64::INFINITY, |p| last_correction * residual / p);
             let norms = !criteria.relative_norms
-                || residual <= settings.force_tolerance
-                    && (log.iterations == 0
-                        || residual <= 1e-3 * settings.force_tolerance
-                        || last_correction.min(next_correction) <= settings.displacement_tolerance);
+                || settings.relative_norms_met(
+                    residual,
+                    log.iterations == 0,
+                    last_correction.min(next_correction),
+                );
             if engineering && norms {
                 if self.condensed.as_ref().is_some_and(|c| c.extrapolated) {
                     // Confirm with the continuum's elements (its states and reactions too).
@@ -771,25 +804,15 @@ impl<'a> Newton<'a> {
             if log.iterations == settings.max_iterations || !residual.is_finite() {
                 return Ok(log);
             }
-            let t = std::time::Instant::now();
-            if let Some(c) = self.condensed.as_mut() {
-                if c.bulk_dirty {
-                    c.solver.factor_bulk(self.system.matrix())?;
-                    c.bulk_dirty = false;
-                }
-                c.solver.factor_interface(c.block.as_ref())?;
-                log.factorization_seconds += t.elapsed().as_secs_f64();
+            if self.condensed.is_some() || symmetric {
+                self.factor(&mut log)?;
                 let t = std::time::Instant::now();
-                c.solver.solve_in_place(r);
+                solve_factored(&mut self.condensed, &mut self.linear, &mut self.residual);
+                log.solve_seconds += t.elapsed().as_secs_f64();
                 log.unsymmetric_solves += usize::from(!symmetric);
-                log.solve_seconds += t.elapsed().as_secs_f64();
-            } else if symmetric {
-                self.linear.factorize(self.system.matrix())?;
-                log.factorization_seconds += t.elapsed().as_secs_f64();
-                let t = std::time::Instant::now();
-                self.linear.solve_in_place(r);
-                log.solve_seconds += t.elapsed().as_secs_f64();
             } else {
+                let t = std::time::Instant::now();
+                let r = &mut self.residual;
                 // Inexact Newton (Eisenstat & Walker): solve only as accurately as the current
                 // residual warrants, η_k = 1e-2 ‖r_k‖ (relative), which keeps quadratic
                 // convergence.
@@ -819,6 +842,35 @@ impl<'a> Newton<'a> {
             log.corrections.push(last_correction);
             log.iterations += 1;
         }
+    }
+
+    /// Starts an increment of `problem`. Nothing cached from earlier increments may change
+    /// this one's iterates (a resumed run must repeat the uninterrupted one): the kept
+    /// elastic-cell sum is rebuilt and the bulk factor kept only for an unchanged tangent.
+    /// Makes the condensed solver at the first increment; returns the seconds that took.
+    fn begin_increment(&mut self, problem: &impl Problem) -> Result<f64> {
+        self.system.forget_reference();
+        if let Some(c) = &mut self.condensed {
+            c.solver.start_increment();
+        }
+        self.prepare_condensed(problem)
+    }
+
+    /// Factors the tangent of the last evaluation: on the condensed path the bulk (when its
+    /// tangent changed) and the interface block, otherwise by Cholesky (a symmetric tangent).
+    fn factor(&mut self, log: &mut NewtonLog) -> Result<()> {
+        let t = std::time::Instant::now();
+        if let Some(c) = self.condensed.as_mut() {
+            if c.bulk_dirty {
+                c.solver.factor_bulk(self.system.matrix())?;
+                c.bulk_dirty = false;
+            }
+            c.solver.factor_interface(c.block.as_ref())?;
+        } else {
+            self.linear.factorize(self.system.matrix())?;
+        }
+        log.factorization_seconds += t.elapsed().as_secs_f64();
+        Ok(())
     }
 
     /// Backtracking line search along the Newton correction δu held in the residual: takes
@@ -863,6 +915,14 @@ fn out_of_balance(dofs: &DofMap, internal: &[f64], external: &[f64], out: &mut [
     dofs.gather_free(internal, out);
     for (ri, ei) in out.iter_mut().zip(external) {
         *ri = ei - *ri;
+    }
+}
+
+/// Solves the tangent factored by [`Newton::factor`] for `x` (free dofs) in place.
+fn solve_factored(condensed: &mut Option<Condensed>, linear: &mut CholeskySolver, x: &mut [f64]) {
+    match condensed {
+        Some(c) => c.solver.solve_in_place(x),
+        None => linear.solve_in_place(x),
     }
 }
 

@@ -14,7 +14,8 @@ pub use fixtures::*;
 use asperity::config::Case;
 use asperity::mesh::{Cell, CellKind, Line3, Mesh, PhysicalGroup, PointElement};
 use asperity::model::Model;
-use asperity::solver::stepping::{Solution, run_steps};
+use asperity::solver::state::Solution;
+use asperity::solver::stepping::run_steps;
 
 /// Builds a structured quad8 (or tri6, `triangles = true`) mesh of the map
 /// `(s, t) ∈ [0,1]² → geometry(s, t)` with `nx × ny` cells. Mid-side nodes are mapped
@@ -467,4 +468,28 @@ pub mod shrink_fit {
             .contact(&keys, law)
             .case()
     }
+}
+
+/// A perfectly plastic thick cylinder a = 10 ≤ r ≤ b = 20 mm (axisymmetric, σ_Y = 100 MPa,
+/// u_z = 0 on both ends) under its limit pressure p_L = (2/√3) σ_Y ln(b/a) as the reference
+/// load of arc-length control, which follows it to the limit point (the path of
+/// `pipelines/thick_cylinder_riks.toml` on a coarse mesh; the arc adapts, shrinks and is cut
+/// back on the plateau). Groups: surface "wall", curves "bore" and "ends".
+pub fn plastic_cylinder_under_arc_length() -> (Mesh, CaseBuilder) {
+    let (a, b, h, sigma_y) = (10.0, 20.0, 2.5, 100.0);
+    let mut mesh = tensor(&uniform(a, b, 6), &uniform(0.0, h, 1), "wall");
+    add_curve_group(&mut mesh, "bore", |x| (x[0] - a).abs() < 1e-12);
+    add_curve_group(&mut mesh, "ends", |x| x[1] == 0.0 || x[1] == h);
+    let p_limit = 2.0 / 3f64.sqrt() * sigma_y * (b / a).ln();
+    let mut material = elastic(210_000.0, 0.3);
+    material.insert("yield_stress".into(), sigma_y.into());
+    let case = CaseBuilder::axisymmetric()
+        .body("wall", material)
+        .support("ends", &[("uz", 0.0)])
+        .pressure("bore", p_limit)
+        .set("steps", "control", "arc_length")
+        .set("steps", "initial_increment", 0.2)
+        .set("steps", "max_load_factor", 1.5)
+        .set("steps", "max_increments", 200);
+    (mesh, case)
 }
