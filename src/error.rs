@@ -176,6 +176,23 @@ pub enum Error {
         files: usize,
         example: String,
     },
+    /// The run was asked to stop (Ctrl-C, SIGTERM, SIGHUP) and stopped after its last
+    /// converged step, whose files are complete.
+    #[error(
+        "interrupted after step {step}: the converged steps' files in {} are complete{}",
+        dir.display(),
+        resume.as_ref().map_or(String::new(), |case| format!(
+            "; continue with `asperity run {} --out {} --resume`",
+            case.display(),
+            dir.display()
+        ))
+    )]
+    Interrupted {
+        step: usize,
+        dir: PathBuf,
+        /// The case file, when the run keeps restart records and so can be resumed.
+        resume: Option<PathBuf>,
+    },
     /// A file in the output folder that the run must not overwrite or write through: one it
     /// would write but that no run manifest lists as asperity's, a symbolic link, a foreign
     /// manifest ([`crate::run::folder`]).
@@ -307,6 +324,8 @@ impl Error {
             | Error::WornThrough { .. }
             | Error::JumpSettling { .. } => 1,
             Error::OutputExists { .. } | Error::OutputForeign { .. } => 2,
+            // The shell's code of a process ended by SIGINT.
+            Error::Interrupted { .. } => 130,
             Error::Mesh { .. }
             | Error::Case { .. }
             | Error::InvalidParameter { .. }

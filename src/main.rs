@@ -191,6 +191,24 @@ fn init_logging(cli: &Cli) -> LogFile {
     log_file
 }
 
+/// The first Ctrl-C (or SIGTERM, SIGHUP: a cluster's time limit, a closed terminal) asks the
+/// run to stop after its current increment, keeping its converged steps and writing its
+/// summary; a second one ends the process at once.
+fn stop_cleanly_on_signals() {
+    let handler = || {
+        if run::progress::request_stop() {
+            std::process::exit(130);
+        }
+        tracing::warn!(
+            "stopping after the current increment (its files complete); press Ctrl-C again to \
+             stop at once"
+        );
+    };
+    if let Err(e) = ctrlc::set_handler(handler) {
+        tracing::warn!("cannot catch Ctrl-C ({e}): it will stop the run at once");
+    }
+}
+
 /// Sizes rayon's global pool, which the assembly, the study's levels and faer's solvers
 /// (`Par::rayon(0)`: as many threads as the pool has) all run on.
 fn init_threads(threads: Option<u16>) -> asperity::Result<()> {
@@ -347,6 +365,7 @@ fn sweep_command(action: SweepAction) -> asperity::Result<bool> {
             retry_failed,
             ..
         } => {
+            stop_cleanly_on_signals();
             if !sweep::run_task(&study, k, retry_failed)? {
                 say!("run {k}: done before, skipped");
             }
@@ -418,6 +437,7 @@ fn execute(command: Command, log_file: &LogFile) -> asperity::Result<()> {
             };
             // log.txt belongs to the run: opened once the folder is the run's (after the
             // refusal of an earlier run's results, or their removal by --force).
+            stop_cleanly_on_signals();
             let summary = run::run_with(&parsed, &out_dir, &options, |folder| {
                 log_file.open(folder, folder.resumable())
             })?;

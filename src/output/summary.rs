@@ -55,6 +55,8 @@ pub enum Status {
     Converged,
     /// The run stopped with an error.
     Failed,
+    /// The run was asked to stop (Ctrl-C, SIGTERM); the converged steps are complete.
+    Interrupted,
 }
 
 /// Size of a model.
@@ -393,7 +395,10 @@ impl Summary {
 
     /// Marks the run as failed with `error`.
     pub fn fail(&mut self, error: &crate::Error) {
-        self.status = Status::Failed;
+        self.status = match error {
+            crate::Error::Interrupted { .. } => Status::Interrupted,
+            _ => Status::Failed,
+        };
         self.error = Some(error.to_string());
     }
 

@@ -13,7 +13,7 @@
 use std::collections::HashSet;
 use std::fs::File;
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
 
 use crate::output::atomic::write_text;
@@ -196,6 +196,7 @@ impl OutputFolder {
     /// manifest lists are removed, never an input of the run; a file the run would write that
     /// no manifest lists is an error ([`Error::OutputForeign`]), before anything is created.
     pub fn open(dir: &Path, mode: OutputMode, plan: &FolderPlan) -> Result<Self> {
+        let dir = &normalized(dir);
         if dir.exists() && !dir.is_dir() {
             return Err(foreign(dir, dir, "the output folder is a file"));
         }
@@ -276,6 +277,7 @@ impl OutputFolder {
     /// A folder of a run that is never resumed nor refused (a convergence study's level, a
     /// fit's temporary run): created if missing, its manifest continued.
     pub fn scratch(dir: &Path) -> Result<Self> {
+        let dir = &normalized(dir);
         let listed = read_manifest(dir)?;
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let manifest = open_manifest(dir, listed, true)?;
@@ -343,6 +345,33 @@ impl OutputFolder {
         // The manifest only ever holds whole lines: a panic elsewhere leaves it usable.
         self.manifest.lock().unwrap_or_else(|e| e.into_inner())
     }
+}
+
+/// `dir` with its `.` components removed and each `name/..` pair collapsed, as a shell's `cd`
+/// reads them: `cases/../results` is `results`, `../results` stays. The folder a user names
+/// is then the folder written to, however it was spelled (`--out a/../b`, an `[output] dir`
+/// relative to a case file in another folder), and no written path holds a `..` after a
+/// folder name, which the last check before writing refuses
+/// ([`crate::output::paths::check_output_path`]).
+fn normalized(dir: &Path) -> PathBuf {
+    let mut out = PathBuf::new();
+    for component in dir.components() {
+        match component {
+            Component::CurDir => {}
+            Component::ParentDir
+                if matches!(out.components().next_back(), Some(Component::Normal(_))) =>
+            {
+                out.pop();
+            }
+            // `/..` is `/`.
+            Component::ParentDir if out.components().next_back() == Some(Component::RootDir) => {}
+            other => out.push(other),
+        }
+    }
+    if out.as_os_str().is_empty() {
+        out.push(".");
+    }
+    out
 }
 
 /// The error of a file in `dir` that the run must not touch.
@@ -463,6 +492,22 @@ mod tests {
             temporary_of(".bodies_0001.vtu.a1B2c3.tmp"),
             Some("bodies_0001.vtu")
         );
+    }
+
+    #[test]
+    fn folders_are_normalised_as_a_shell_reads_them() {
+        for (given, expected) in [
+            ("a/../b", "b"),
+            ("cases/../results", "results"),
+            ("../results", "../results"),
+            ("./out/./x/", "out/x"),
+            ("a/b/../../..", ".."),
+            ("a/..", "."),
+            ("/tmp/a/../b", "/tmp/b"),
+            ("/..", "/"),
+        ] {
+            assert_eq!(normalized(Path::new(given)), Path::new(expected), "{given}");
+        }
     }
 
     #[test]

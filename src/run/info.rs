@@ -29,7 +29,7 @@ pub struct RunInfo {
     pub threads: usize,
     /// Whether the run continued from a restart record.
     pub resumed: bool,
-    /// `running`, `converged` or `failed`.
+    /// `running`, `converged`, `failed` or `interrupted`.
     pub status: &'static str,
     pub error: Option<String>,
 }
@@ -55,10 +55,10 @@ impl RunInfo {
 
     pub(super) fn finish<T>(&mut self, result: &Result<T>) {
         self.end = Some(utc_now());
-        self.status = if result.is_ok() {
-            "converged"
-        } else {
-            "failed"
+        self.status = match result {
+            Ok(_) => "converged",
+            Err(Error::Interrupted { .. }) => "interrupted",
+            Err(_) => "failed",
         };
         self.error = result.as_ref().err().map(ToString::to_string);
     }

@@ -236,9 +236,22 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             .collect();
         self.summary.push_step(summary);
         (self.on_step)(self.model, step)?;
+        if super::progress::stop_requested() {
+            return Err(self.interrupted(step.step));
+        }
         self.bar.0.inc(1);
         self.bar.0.set_message(self.progress_message(step));
         Ok(start.elapsed().as_secs_f64() + std::mem::take(&mut self.increment_seconds))
+    }
+
+    /// The error that stops the run after step `step` when a stop was asked for: its files
+    /// are committed; a run that keeps restart records can be resumed from it.
+    fn interrupted(&self, step: usize) -> Error {
+        Error::Interrupted {
+            step,
+            dir: self.folder.dir().to_path_buf(),
+            resume: self.case_text.map(|_| self.case.path.clone()),
+        }
     }
 
     /// The progress bar's message: the load factor, and in a case of several analysis steps

@@ -1,0 +1,288 @@
+//! The output folder is the user's folder too (README "Output folder"): a run removes or
+//! overwrites only what its manifest (`run_files.txt`) lists as written by asperity, never an
+//! input of the run, never writes through a symbolic link, resolves relative folders one way,
+//! and stops cleanly on Ctrl-C.
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use common::{fixture, held_block};
+
+/// `asperity ARGS` in `cwd`: the exit code and the output.
+fn asperity_in(cwd: &Path, args: &[&str]) -> (Option<i32>, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .expect("runs");
+    let text =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    (out.status.code(), text)
+}
+
+/// `asperity run CASE --out OUT [flags]` in `dir`.
+fn run(dir: &Path, case: &Path, out: &Path, flags: &[&str]) -> (Option<i32>, String) {
+    let mut args = vec![
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(flags);
+    asperity_in(dir, &args)
+}
+
+/// The held block of `tests/fixtures/two_bodies_ascii.msh` in `steps` steps, as `dir/case.toml`.
+fn block_case(dir: &Path, steps: i64) -> PathBuf {
+    held_block().steps(steps).write(&dir.join("case.toml"))
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// A user's files whose names look like results (`wear_*.csv`, `contact_*_NNNN.csv` of a pair
+/// the case does not have, `*.vtu`) survive `--force` and a `--resume` that starts over; the
+/// run's own files of the earlier run are gone.
+#[test]
+fn force_and_resume_remove_only_what_the_manifest_lists() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let case = block_case(dir.path(), 3);
+    let (code, text) = run(dir.path(), &case, &out, &[]);
+    assert_eq!(code, Some(0), "{text}");
+    let manifest = read(&out.join("run_files.txt"));
+    assert!(
+        manifest.lines().any(|l| l == "bodies_0003.vtu"),
+        "{manifest}"
+    );
+    let mine = [
+        "wear_measurements.csv",
+        "contact_measured_0001.csv",
+        "hysteresis_bench.csv",
+        "photo.vtu",
+        "notes.txt",
+    ];
+    for name in mine {
+        std::fs::write(out.join(name), "mine").unwrap();
+    }
+    let case = block_case(dir.path(), 2);
+    let (code, text) = run(dir.path(), &case, &out, &["--force"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(
+        !out.join("bodies_0003.vtu").exists(),
+        "a stale step file survived --force"
+    );
+    // No restart record (removed by hand): --resume starts over, removing only the run's files.
+    std::fs::remove_file(out.join("restart.bin")).unwrap();
+    let (code, text) = run(dir.path(), &case, &out, &["--resume"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(text.contains("no restart record"), "{text}");
+    for name in mine {
+        assert_eq!(read(&out.join(name)), "mine", "{name} was touched");
+    }
+    assert!(out.join("bodies_0002.vtu").is_file());
+}
+
+/// The case reads its mesh from the output folder under the name of the mesh a run writes
+/// (`mesh.msh`): `--force` keeps it, whether or not an earlier run listed it.
+#[test]
+fn force_never_removes_an_input_of_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::copy(fixture("two_bodies_ascii.msh"), out.join("mesh.msh")).unwrap();
+    let case = held_block()
+        .mesh_file(&out.join("mesh.msh"))
+        .steps(1)
+        .write(&dir.path().join("case.toml"));
+    for flags in [&[][..], &["--force"], &["--force"]] {
+        let (code, text) = run(dir.path(), &case, &out, flags);
+        assert_eq!(code, Some(0), "{flags:?}: {text}");
+        assert!(
+            out.join("mesh.msh").is_file(),
+            "{flags:?} removed the input mesh"
+        );
+    }
+    // Listed as the run's by a manifest (the mesh an earlier run meshed), still an input.
+    let manifest = out.join("run_files.txt");
+    let listed = read(&manifest) + "mesh.msh\n";
+    std::fs::write(&manifest, listed).unwrap();
+    let (code, text) = run(dir.path(), &case, &out, &["--force"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(
+        out.join("mesh.msh").is_file(),
+        "--force removed the listed input mesh"
+    );
+}
+
+/// A file the run would write but that no manifest lists (a log of the user's, results of
+/// another program) is refused, before anything is written, with --force too; it is left
+/// untouched.
+#[test]
+fn files_the_run_did_not_write_are_never_overwritten() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("log.txt"), "my notes").unwrap();
+    let case = block_case(dir.path(), 1);
+    for flags in [&[][..], &["--force"], &["--resume"]] {
+        let (code, text) = run(dir.path(), &case, &out, flags);
+        assert_eq!(code, Some(2), "{flags:?}: {text}");
+        assert!(
+            text.contains("log.txt") && text.contains("run_files.txt"),
+            "{text}"
+        );
+        assert_eq!(read(&out.join("log.txt")), "my notes");
+        assert_eq!(
+            common::file_names(&out),
+            ["log.txt"],
+            "{flags:?} wrote files"
+        );
+    }
+    // A file of the manifest's name that is not a manifest is not taken for one.
+    std::fs::remove_file(out.join("log.txt")).unwrap();
+    std::fs::write(out.join("run_files.txt"), "bodies_0001.vtu\n").unwrap();
+    std::fs::write(out.join("bodies_0001.vtu"), "mine").unwrap();
+    let (code, text) = run(dir.path(), &case, &out, &["--force"]);
+    assert_eq!(code, Some(2), "{text}");
+    assert_eq!(read(&out.join("bodies_0001.vtu")), "mine");
+}
+
+/// Symbolic links in the output folder are never followed: a `log.txt` pointing outside and
+/// a dangling `mesh.msh` that gmsh would create outside are refused, their targets untouched.
+#[cfg(unix)]
+#[test]
+fn symbolic_links_are_never_written_through() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let outside = dir.path().join("precious.txt");
+    std::fs::write(&outside, "keep").unwrap();
+    std::os::unix::fs::symlink(&outside, out.join("log.txt")).unwrap();
+    let case = block_case(dir.path(), 1);
+    for flags in [&[][..], &["--force"]] {
+        let (code, text) = run(dir.path(), &case, &out, flags);
+        assert_eq!(code, Some(2), "{flags:?}: {text}");
+        assert_eq!(read(&outside), "keep");
+    }
+    // A link put in place of a file the run listed is removed by --force (the link, not its
+    // target) and a file written in its place.
+    std::fs::remove_file(out.join("log.txt")).unwrap();
+    let (code, text) = run(dir.path(), &case, &out, &[]);
+    assert_eq!(code, Some(0), "{text}");
+    std::fs::remove_file(out.join("log.txt")).unwrap();
+    std::os::unix::fs::symlink(&outside, out.join("log.txt")).unwrap();
+    let (code, text) = run(dir.path(), &case, &out, &["--force"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert_eq!(read(&outside), "keep");
+    assert!(!out.join("log.txt").symlink_metadata().unwrap().is_symlink());
+
+    let geo_out = dir.path().join("geo_out");
+    std::fs::create_dir(&geo_out).unwrap();
+    let target = dir.path().join("elsewhere.msh");
+    std::os::unix::fs::symlink(&target, geo_out.join("mesh.msh")).unwrap();
+    let geo_case = held_block()
+        .mesh_geo(&dir.path().join("unused.geo"), 1.0)
+        .steps(1)
+        .write(&dir.path().join("geo_case.toml"));
+    std::fs::write(dir.path().join("unused.geo"), "Point(1) = {0, 0, 0};\n").unwrap();
+    let (code, text) = run(dir.path(), &geo_case, &geo_out, &["--force"]);
+    assert_eq!(code, Some(2), "{text}");
+    assert!(!target.exists(), "gmsh wrote through the dangling link");
+}
+
+/// A relative `[output] dir` is relative to the case file, whatever the working directory;
+/// `--out a/../b` is the folder `b` (relative to the working directory); neither fails after
+/// creating files.
+#[test]
+fn relative_output_folders_resolve_one_way() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = dir.path().join("cases");
+    std::fs::create_dir(&cases).unwrap();
+    let case = held_block()
+        .steps(1)
+        .set("output", "dir", "../results")
+        .write(&cases.join("case.toml"));
+    let elsewhere = dir.path().join("elsewhere");
+    std::fs::create_dir(&elsewhere).unwrap();
+    let (code, text) = asperity_in(&elsewhere, &["run", case.to_str().unwrap()]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(dir.path().join("results/history.csv").is_file(), "{text}");
+    assert!(!elsewhere.join("results").exists());
+
+    let (code, text) = asperity_in(
+        dir.path(),
+        &["run", case.to_str().unwrap(), "--out", "a/../b"],
+    );
+    assert_eq!(code, Some(0), "{text}");
+    assert!(dir.path().join("b/history.csv").is_file(), "{text}");
+}
+
+/// Ctrl-C (SIGINT) stops the run after its current increment: exit 130, the converged steps'
+/// files complete, `summary.json` and `run.json` with status "interrupted", and the message
+/// says how to resume; `--resume` then finishes with the files of an uninterrupted run.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_stops_cleanly_and_the_run_resumes() {
+    let dir = tempfile::tempdir().unwrap();
+    let steps = 4000;
+    let case = block_case(dir.path(), steps);
+    let out = dir.path().join("out");
+    let child = Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args([
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while !out.join("restart.bin").is_file() {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "no step converged"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let output = child.wait_with_output().unwrap();
+    let text = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(130), "{text}");
+    assert!(text.contains("--resume"), "{text}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&read(&out.join("summary.json"))).unwrap();
+    assert_eq!(summary["status"], "interrupted", "{summary}");
+    let info: serde_json::Value = serde_json::from_str(&read(&out.join("run.json"))).unwrap();
+    assert_eq!(info["status"], "interrupted");
+    let done = summary["steps"].as_array().unwrap().len();
+    assert!(done < steps as usize, "the run was not interrupted");
+    let history = read(&out.join("history.csv"));
+    assert_eq!(
+        history.lines().count(),
+        done + 2,
+        "header, step 0 and each converged step"
+    );
+
+    let (code, text) = run(dir.path(), &case, &out, &["--resume"]);
+    assert_eq!(code, Some(0), "{text}");
+    let reference = dir.path().join("reference");
+    let (code, text) = run(dir.path(), &case, &reference, &[]);
+    assert_eq!(code, Some(0), "{text}");
+    for name in ["history.csv", "results.pvd", "bodies_4000.vtu"] {
+        assert_eq!(
+            std::fs::read(out.join(name)).unwrap(),
+            std::fs::read(reference.join(name)).unwrap(),
+            "{name} differs from the uninterrupted run's"
+        );
+    }
+}
