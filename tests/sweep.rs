@@ -219,6 +219,12 @@ fn local_pool_runs_restarts_and_collect_reports_a_failed_run() {
     assert!(rows[4][5].is_empty());
     let (ok, text) = run_cli(&["sweep", "collect", s, "--no-plot"]);
     assert!(!ok && text.contains("run 4: failed"), "{text}");
+    // Repaired, the failed run is retried over its own files (its summary, log and manifest).
+    std::fs::copy(study.join("runs/0003/case.toml"), study.join("runs/0004/case.toml")).unwrap();
+    let (ok, text) = run_cli(&["sweep", "run", s, "--jobs", "2", "--retry-failed"]);
+    assert!(ok && text.contains("ran 1 runs (0 failed"), "{text}");
+    let c = sweep::collect(&study, false).unwrap();
+    assert!(c.failures.is_empty(), "{:?}", c.failures);
 }
 
 // ---- Hostile inputs: values and paths that reach generated job files and file names ----

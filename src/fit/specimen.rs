@@ -9,7 +9,10 @@ use std::path::Path;
 use crate::config::Case;
 use crate::contact::laws::LawDescriptor;
 use crate::mesh::Mesh;
-use crate::run::{self, folder::OutputFolder};
+use crate::run::{
+    self,
+    folder::{OutputFolder, RunFile},
+};
 use crate::sweep::keys;
 use crate::{Error, Result};
 
@@ -118,7 +121,7 @@ impl Specimen {
         let tmp = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
         let folder = OutputFolder::scratch(tmp.path())?;
         run::run_mesh(&case, self.mesh.clone(), 0.0, &folder, false, |_, _| Ok(()))?;
-        let file = tmp.path().join("summary.json");
+        let file = folder.dir().join(RunFile::Summary.name());
         let text = std::fs::read_to_string(&file).map_err(|e| Error::io(&file, e))?;
         let summary: serde_json::Value =
             serde_json::from_str(&text).map_err(|e| Error::External(e.to_string()))?;

@@ -253,7 +253,7 @@ impl OutputFolder {
                 false
             }
             OutputMode::Force | OutputMode::Resume => {
-                if mode == OutputMode::Resume {
+                if mode == OutputMode::Resume && !results.is_empty() {
                     tracing::warn!(
                         "{}: no restart record (the run stopped before its first increment \
                          converged); starting from the beginning",

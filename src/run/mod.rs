@@ -116,7 +116,8 @@ impl std::fmt::Display for RunSummary {
                 r[0], r[1]
             )?;
         }
-        write!(f, "results: {}", self.out_dir.join("results.pvd").display())
+        let series = self.out_dir.join(RunFile::Series.name());
+        write!(f, "results: {}", series.display())
     }
 }
 

@@ -9,7 +9,7 @@ use super::{Manifest, keys};
 use crate::config::Case;
 use crate::output::csv::{Cell, CsvTable, write_csv};
 use crate::output::summary::Summary;
-use crate::run::folder::{OutputFolder, RunFile};
+use crate::run::folder::{OutputFolder, OutputMode, RunFile};
 use crate::study::available_memory;
 use crate::{Error, Result};
 use crate::{python, run};
@@ -24,7 +24,7 @@ fn done(dir: &Path, retry_failed: bool) -> bool {
 }
 
 fn read_summary(dir: &Path) -> Result<serde_json::Value> {
-    let path = dir.join("summary.json");
+    let path = dir.join(RunFile::Summary.name());
     let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
     serde_json::from_str(&text).map_err(|e| Error::Case {
         path,
@@ -53,14 +53,27 @@ pub fn run_task(study: &Path, k: usize, retry_failed: bool) -> Result<bool> {
         return Ok(false);
     }
     let case_path = dir.join("case.toml");
-    let result = Case::from_file(&case_path).and_then(|case| run::run(&case, &dir, false));
+    // A retried run starts over; otherwise a run stopped part-way (a killed or pre-empted job)
+    // continues from its restart record, or starts over without one. Either way only the
+    // files the run folder's manifest lists are removed.
+    let options = run::RunOptions {
+        progress: false,
+        mode: if retry_failed {
+            OutputMode::Force
+        } else {
+            OutputMode::Resume
+        },
+        command_line: std::env::args().collect(),
+    };
+    let result = Case::from_file(&case_path)
+        .and_then(|case| run::run_with(&case, &dir, &options, |_| Ok(())));
     if let Err(e) = result {
         // Errors before the model exists leave no summary: record them, so that `collect`
         // reports the run with its error.
         if read_summary(&dir).is_err() {
             let mut summary = Summary::new(&case_path);
             summary.fail(&e);
-            summary.write(&dir.join("summary.json"))?;
+            summary.write(&OutputFolder::scratch(&dir)?.path(RunFile::Summary)?)?;
         }
         return Err(e);
     }
