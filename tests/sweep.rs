@@ -220,7 +220,11 @@ fn local_pool_runs_restarts_and_collect_reports_a_failed_run() {
     let (ok, text) = run_cli(&["sweep", "collect", s, "--no-plot"]);
     assert!(!ok && text.contains("run 4: failed"), "{text}");
     // Repaired, the failed run is retried over its own files (its summary, log and manifest).
-    std::fs::copy(study.join("runs/0003/case.toml"), study.join("runs/0004/case.toml")).unwrap();
+    std::fs::copy(
+        study.join("runs/0003/case.toml"),
+        study.join("runs/0004/case.toml"),
+    )
+    .unwrap();
     let (ok, text) = run_cli(&["sweep", "run", s, "--jobs", "2", "--retry-failed"]);
     assert!(ok && text.contains("ran 1 runs (0 failed"), "{text}");
     let c = sweep::collect(&study, false).unwrap();

@@ -25,7 +25,7 @@ pub struct Criteria {
     pub linear_residual: f64,
     /// q_u: a user-given average force (N) that replaces q̃.
     pub average_force: Option<f64>,
-    /// Whether the relative-norm tolerances of [`NewtonSettings`] are required as well.
+    /// Whether the relative-norm tolerances of [`super::NewtonSettings`] are required as well.
     pub relative_norms: bool,
 }
 
@@ -74,8 +74,8 @@ impl Flux {
 }
 
 /// The converged increments' part of the time-averaged force q̃: the sum of their fluxes and
-/// their number. Carried across increments by [`Newton`], and by a restart record across a
-/// resumed run ([`Newton::force_average`], [`Newton::restore_force_average`]).
+/// their number. Carried across increments by [`super::Newton`], and by a restart record across a
+/// resumed run ([`super::Newton::force_average`], [`super::Newton::restore_force_average`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ForceAverage {
     pub sum: f64,
