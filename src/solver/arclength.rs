@@ -49,14 +49,11 @@ pub fn run_arc_length(
     if newton.set_arc_reference(&reference) == 0.0 {
         return Err(Error::ArcLengthNoLoad);
     }
-    let (mut state, mut stats, mut solution) = match resume {
-        Some(r) => (r.state, r.stats, r.solution),
-        None => (
-            LoopState::start(),
-            RunStatistics::default(),
-            Solution::new(model),
-        ),
-    };
+    let Resume {
+        mut state,
+        mut stats,
+        mut solution,
+    } = resume.unwrap_or_else(|| Resume::start(model));
     // A record of this case always holds the arc state (a record of another case is refused).
     let mut path = state.arc.take().unwrap_or_else(ArcState::start);
     solution.reset_trial();

@@ -319,6 +319,17 @@ pub struct Resume {
     pub solution: Solution,
 }
 
+impl Resume {
+    /// The unloaded start of a run of `model`: what a driver continues without a record.
+    pub fn start(model: &Model) -> Self {
+        Self {
+            state: LoopState::start(),
+            stats: RunStatistics::default(),
+            solution: Solution::new(model),
+        }
+    }
+}
+
 /// A converged increment as the [`Observer`] sees it.
 #[derive(Clone, Debug)]
 pub struct Progress<'a> {

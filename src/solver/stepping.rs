@@ -68,14 +68,11 @@ pub fn run_steps_from(
         return crate::solver::arclength::run_arc_length(model, settings, arc, resume, observer);
     }
     let mut newton = Newton::new(*settings, &model.dofs, &model.pattern)?;
-    let (mut state, mut stats, mut solution) = match resume {
-        Some(r) => (r.state, r.stats, r.solution),
-        None => (
-            LoopState::start(),
-            RunStatistics::default(),
-            Solution::new(model),
-        ),
-    };
+    let Resume {
+        mut state,
+        mut stats,
+        mut solution,
+    } = resume.unwrap_or_else(|| Resume::start(model));
     newton.restore_force_average(state.force_average);
     solution.reset_trial();
     let mut converged_u = solution.u.clone();
