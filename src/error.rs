@@ -208,8 +208,8 @@ pub enum Error {
     Restart { path: PathBuf, reason: String },
     /// A wear jump (cycle jumping) would add more depth at a point than its stability limit
     /// allows: `depth` added over the `jump_cycles − 1` extrapolated cycles against `limit` =
-    /// `jump_limit` × |p_N| (1/k_N + c_B) (see [`crate::solver::cycles`]). `contact` is the pair's name, `contact_index` its place in
-    /// the case (`contact[j]`), `step_index` the `[[step]]` (0-based) when the caller knows
+    /// `jump_limit` × |p_N| (1/k_N + c_B) (see [`crate::solver::cycles`]). `contact` is the
+    /// pair's name, `contact_index` its place in the case (`contact[j]`), `step_index` the `[[step]]` (0-based) when the caller knows
     /// it ([`Error::in_analysis_step`]).
     #[error(
         "contact '{contact}': a wear jump over {jump_cycles} cycles would add a depth of {depth:.4e} mm at ({x}, {y}), more than its stability limit {limit:.4e} mm (contact[{contact_index}].wear.jump_limit = {jump_limit} times the point's elastic closure |p_N| (1/k_N + l/(pi E*)), interface and bodies in series); lower {} or raise contact[{contact_index}].wear.jump_limit (the results up to the cycle before are kept)",
@@ -251,6 +251,44 @@ pub enum Error {
         position: [f64; 2],
         depth: f64,
         max_depth: f64,
+    },
+    /// The wear depth of the surface of body `body` at a point of contact `contact`
+    /// (`contact[contact_index]`) would exceed the body's `extent` behind the surface along
+    /// the normal (from its bounding box): a depth the model cannot hold, so no result.
+    #[error(
+        "contact '{contact}': the wear depth of the surface of body '{body}' at ({x}, {y}) would reach {depth:.4e} mm{}, more than the body's extent behind it ({extent:.4e} mm along the normal): the model cannot hold that wear; lower the wear coefficient (contact[{contact_index}].wear) or the cycles, or let contact[{contact_index}].wear.max_depth stop the run at the depth of interest (the converged results before it are kept)",
+        step_index.map_or_else(String::new, |i| format!(" in step[{i}]")),
+        x = position[0], y = position[1]
+    )]
+    WornBeyondBody {
+        contact: String,
+        contact_index: usize,
+        step_index: Option<usize>,
+        position: [f64; 2],
+        body: String,
+        depth: f64,
+        extent: f64,
+    },
+    /// After a wear jump over `jump_cycles` cycles (and the re-equilibrium that follows it)
+    /// the energy balance of the run is broken: the interfaces' stored energy is below
+    /// −(½ `wear_work` + `tolerance` |`external_work`|), or the work imbalance beyond
+    /// ± `tolerance` |`external_work`| (see `crate::solver::energy::Energy::balanced_after_jump`).
+    /// `contact` (`contact[contact_index]`) is the pair whose jump used most of its
+    /// stability limit.
+    #[error(
+        "contact '{contact}': after a wear jump over {jump_cycles} cycles the energy balance is broken: the interfaces' stored energy is {interface_energy:.4e} N mm and the work imbalance {imbalance:.4e} N mm, with a wear work of {wear_work:.4e} N mm and an external work of {external_work:.4e} N mm (allowed: stored energy down to -(wear work / 2 + {tolerance} external work), imbalance within {tolerance} external work); the jump wore more than the loads can supply: lower {} or contact[{contact_index}].wear.jump_limit (the converged results before it are kept)",
+        step_key(*step_index, "cycles_per_jump")
+    )]
+    WearEnergy {
+        contact: String,
+        contact_index: usize,
+        step_index: Option<usize>,
+        jump_cycles: f64,
+        interface_energy: f64,
+        imbalance: f64,
+        wear_work: f64,
+        external_work: f64,
+        tolerance: f64,
     },
     /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]
@@ -310,7 +348,8 @@ impl Error {
 
     /// The process exit status for this error, shared by every subcommand (README "Exit
     /// codes"): 1 a computation that did not converge (a step, arc-length control, a
-    /// singular system), 3 bad input (case file, mesh, model, a quantity, gmsh on the `.geo`),
+    /// singular system) or wear the run cannot follow (a jump beyond its stability limit or
+    /// breaking the energy balance, worn through, worn deeper than the body), 3 bad input (case file, mesh, model, a quantity, gmsh on the `.geo`),
     /// 4 reading or writing a file, 5 plastic collapse (the load exceeds what the structure
     /// carries: a result, not a failure of the solver). 2 is a usage error: clap's own for
     /// bad arguments, and an output folder that would be overwritten.
@@ -322,6 +361,8 @@ impl Error {
             | Error::Linear(_)
             | Error::WearJump { .. }
             | Error::WornThrough { .. }
+            | Error::WornBeyondBody { .. }
+            | Error::WearEnergy { .. }
             | Error::JumpSettling { .. } => 1,
             Error::OutputExists { .. } | Error::OutputForeign { .. } => 2,
             // The shell's code of a process ended by SIGINT.
@@ -353,6 +394,8 @@ impl Error {
     pub fn in_analysis_step(mut self, index: usize) -> Self {
         if let Error::WearJump { step_index, .. }
         | Error::WornThrough { step_index, .. }
+        | Error::WornBeyondBody { step_index, .. }
+        | Error::WearEnergy { step_index, .. }
         | Error::JumpSettling { step_index, .. } = &mut self
         {
             *step_index = Some(index);

@@ -7,6 +7,21 @@ use serde::Deserialize;
 use super::Case;
 use crate::Result;
 
+/// What `jump_limit` is, for `asperity schema` and the error of a value out of range (the
+/// closure is the one `crate::solver::cycles` bounds a jump with).
+pub const JUMP_LIMIT_DOC: &str = "Stability limit of cycle jumping: the depth a jump adds at a \
+    place of the surface may be at most this multiple of its elastic closure \
+    |p_N| (1/k_N + l/(pi E*)), the interface (normal stiffness k_N) and the bodies' surfaces \
+    under the shortest pressure wave the mesh resolves (wavelength l, the interface element's \
+    length; 1/E* = (1 - nu_A^2)/E_A + (1 - nu_B^2)/E_B) in series; 0 < jump_limit <= 1 \
+    (default 0.5: accurate and monotone; 1 wears the whole closure away in one jump). See the \
+    README, \"Cycle jumping and its stability limit\".";
+
+/// Largest `jump_limit`: a jump adding more than a point's elastic closure overshoots the
+/// unloaded state of the shortest pressure wave (the pressure then alternates from node to
+/// node, and beyond 2 the alternation grows from jump to jump).
+pub const MAX_JUMP_LIMIT: f64 = 1.0;
+
 /// How the surfaces of a contact pair wear (`wear = { model = "archard", coefficient = 1e-8 }`).
 #[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
@@ -23,9 +38,8 @@ pub struct WearSpec {
     /// Total depth h_A + h_B (mm) at which the interface counts as worn through: the run
     /// stops there, keeping the converged results.
     pub max_depth: Option<f64>,
-    /// Stability limit of cycle jumping: the depth a jump adds at a point may be at most
-    /// this multiple of its elastic closure |p_N| / k_N (default 0.5; larger for a stiff penalty
-    /// interface, whose bodies dominate, see the README).
+    /// [`JUMP_LIMIT_DOC`].
+    #[schemars(description = JUMP_LIMIT_DOC, range(max = MAX_JUMP_LIMIT))]
     pub jump_limit: Option<f64>,
 }
 
@@ -126,14 +140,14 @@ impl WearSpec {
                 "the wear-through depth must be positive and finite (mm)".into(),
             ));
         }
-        if let Some(l) = self.jump_limit.filter(|l| !(l.is_finite() && *l > 0.0)) {
+        if let Some(l) = self
+            .jump_limit
+            .filter(|l| !(*l > 0.0 && *l <= MAX_JUMP_LIMIT))
+        {
             return Some((
                 "jump_limit",
                 l.to_string(),
-                "must be positive and finite: the largest depth a jump may add, in units of \
-                 the point's elastic closure |p_N|/k_N (0.5, the default, keeps a jump accurate \
-                 and monotone on a compliant interface; see the README for stiff ones)"
-                    .into(),
+                format!("must be in (0, {MAX_JUMP_LIMIT}]. {JUMP_LIMIT_DOC}"),
             ));
         }
         None

@@ -16,8 +16,8 @@
 //! Each surface has its own coefficient (0: that surface does not wear).
 
 /// Default stability limit of a wear jump: the depth a jump adds at a point may be at most
-/// this fraction of the point's elastic closure |p_N| / k_N (see
-/// [`crate::solver::cycles::end_cycle`]).
+/// this fraction of the point's elastic closure |p_N| (1/k_N + ℓ/(π E*)), the interface and
+/// the bodies' surfaces in series (see [`crate::solver::cycles`]).
 pub const DEFAULT_JUMP_LIMIT: f64 = 0.5;
 
 /// The local wear law.
@@ -37,7 +37,8 @@ pub struct WearModel {
     pub coefficients: [f64; 2],
     /// Largest total depth h_A + h_B (mm) before the interface counts as worn through.
     pub max_depth: Option<f64>,
-    /// Fraction of the elastic closure |p_N| / k_N a wear jump may add at a point.
+    /// Fraction of the elastic closure |p_N| (1/k_N + ℓ/(π E*)) a wear jump may add at a
+    /// point (0 < `jump_limit` ≤ 1, checked with the case).
     pub jump_limit: f64,
 }
 

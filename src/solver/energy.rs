@@ -66,11 +66,33 @@ impl Energy {
         self.external_work - self.stored() - self.dissipation() - self.numerical_dissipation
     }
 
+    /// Whether the books still hold after a wear jump and its re-equilibrium. A jump's wear
+    /// work (the pressure at the cycle's end times the depth) comes out of the interfaces'
+    /// stored energy, which the bodies' re-seating on the worn faces refills. Explicit, it
+    /// overestimates the work by what the pressure would have fallen while wearing: within
+    /// the stability limit the pressure falls by at most k_eff per unit depth, and the depth
+    /// is at most `jump_limit` ≤ 1 closures |p_N|/k_eff, so by at most half the jump's wear
+    /// work. The stored energy may therefore be negative by up to half the wear work (plus
+    /// [`JUMP_BALANCE_TOLERANCE`] |external work|); more means the jump wore more than the
+    /// loads could supply. The imbalance must stay within ± [`JUMP_BALANCE_TOLERANCE`]
+    /// |external work|.
+    pub fn balanced_after_jump(&self) -> bool {
+        let allowed = JUMP_BALANCE_TOLERANCE * self.external_work.abs();
+        self.interface_energy >= -(0.5 * self.wear_work + allowed)
+            && self.imbalance().abs() <= allowed
+    }
+
     /// [`Self::imbalance`] relative to |external work|; `None` when no work was done.
     pub fn relative_imbalance(&self) -> Option<f64> {
         (self.external_work != 0.0).then(|| self.imbalance() / self.external_work.abs())
     }
 }
+
+/// The share of |external work| by which the work imbalance may differ from zero, and the
+/// interfaces' stored energy may fall below what the wear jumps explain, after a wear jump
+/// ([`Energy::balanced_after_jump`]): the Newton criteria keep the imbalance orders of
+/// magnitude smaller (it is the work of the accepted residual).
+pub const JUMP_BALANCE_TOLERANCE: f64 = 1e-2;
 
 /// The change from `earlier` to `self`: work and dissipation of the interval, and the
 /// change of the stored energies.

@@ -135,6 +135,12 @@ impl Solution {
             .copy_from_slice(&self.interface_committed);
         Ok(end.worn)
     }
+
+    /// Checks the energy balance after a wear jump and the re-equilibrium that followed it
+    /// ([`cycles::check_jump_energy`]).
+    pub fn check_jump_energy(&self, model: &Model, jump_cycles: f64) -> Result<()> {
+        cycles::check_jump_energy(model, &self.energy.total, &self.jump_use, jump_cycles)
+    }
 }
 
 /// A converged step as handed to the output.

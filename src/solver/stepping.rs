@@ -210,6 +210,7 @@ pub fn run_steps_from(
                         jump_cycles: jump as f64,
                         reason,
                     })
+                    .and_then(|()| solution.check_jump_energy(model, jump as f64))
                 }
                 Ok(false) => Ok(()),
                 Err(e) => Err(e),
