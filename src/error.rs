@@ -737,9 +737,9 @@ impl fmt::Display for Mechanism {
             }
             Mechanism::FrictionCapacity { pairs, bodies } => write!(
                 f,
-                "friction capacity exceeded: every closed point of contact {} slips, so friction \
-                 cannot carry the tangential load ({}; raise the friction or the normal load, or \
-                 support the sliding body)",
+                "friction capacity exceeded at contact {}: every closed point that holds the \
+                 sliding body slips, so friction cannot carry the tangential load ({}; raise the \
+                 friction or the normal load, or support the sliding body)",
                 quoted(pairs),
                 free_list(bodies)
             ),
