@@ -124,26 +124,50 @@ pub enum Error {
     /// A load step did not converge, even after cutting it back.
     #[error("{0}")]
     NoConvergence(Box<NoConvergence>),
-    /// A step could not be completed because the structure collapsed: the load
-    /// exceeds what it can carry. The converged steps before it have been written.
+    /// A step could not be completed because the load exceeds what the model can carry:
+    /// `mechanism` says how (the bodies yield, a contact's friction is exhausted, a body
+    /// loses its support). The converged steps before it have been written.
     #[error(
-        "plastic collapse in step {step}: the load factor cannot exceed ≈ {converged_load_factor:.6} \
-         (between the last converged λ_c = {converged_load_factor:.6} and the smallest failed \
-         λ_f = {failed_load_factor:.6}; {indicator}); last converged load factor λ_c = \
-         {converged_load_factor:.6}"
+        "{mechanism} in {}: the load cannot exceed ≈ {} (the last converged state; the smallest \
+         failed attempt went to {}); the results up to it are kept",
+        details.reached.describe_step(), details.reached, details.failed_attempt()
     )]
     Collapse {
-        /// 1-based step that could not be completed.
-        step: usize,
+        /// What failed.
+        mechanism: Mechanism,
         /// Global load factor of the last converged state.
         converged_load_factor: f64,
         /// Smallest global load factor of a failed attempt of the step.
         failed_load_factor: f64,
-        /// What showed the collapse (the stiffness ratio, a tangent that lost positive
-        /// definiteness, implausible increments).
-        indicator: String,
-        /// The step's attempts, as for [`Error::NoConvergence`].
+        /// The step's attempts and where it stopped, as for [`Error::NoConvergence`].
         details: Box<NoConvergence>,
+    },
+    /// Supports and contact pairs leave rigid-body motions of some bodies free (the stiffness
+    /// matrix would be singular): found before anything is solved.
+    #[error("{}", rigid_message(bodies))]
+    RigidBodyMotion {
+        /// The bodies that can move, with their free motions.
+        bodies: Vec<FreeBody>,
+    },
+    /// The run would need more increment solves than `[solver] max_solves` allows: output
+    /// increments, their sub-increments at amplitude breakpoints and after cut-backs, and
+    /// every retried attempt all count. `planned`: found before solving, from the
+    /// breakpoints alone.
+    #[error(
+        "{}: the run needs more than [solver] max_solves = {limit} increment solves ({count} {}; \
+         every output increment, every sub-increment ending on an amplitude breakpoint or made by \
+         a cut-back, and every retried attempt is one); raise solver.max_solves, or use fewer \
+         increments or amplitude breakpoints in {}",
+        at.describe_step(), if *planned { "are planned before any cut-back" } else { "were made by then" },
+        at.step_key()
+    )]
+    TooManySolves {
+        /// Where the limit was reached (for a planned count: the step that passes it).
+        at: Box<LoadPoint>,
+        /// Solves counted when the limit was passed.
+        count: usize,
+        limit: usize,
+        planned: bool,
     },
     /// One level of a convergence study failed.
     #[error("{}: level {level} (size {size}) failed: {source}", case.display())]
@@ -319,9 +343,9 @@ pub enum ArcFailure {
     NoRealRoot,
     #[error("no convergence in {iterations} iterations")]
     NoConvergence { iterations: usize },
-    /// The increment converged but is implausible for small-strain theory (the reason).
+    /// The increment converged but is implausible for small-strain theory.
     #[error("{0}")]
-    Implausible(String),
+    Implausible(Implausible),
 }
 
 impl From<Error> for ArcFailure {
@@ -348,10 +372,13 @@ impl Error {
 
     /// The process exit status for this error, shared by every subcommand (README "Exit
     /// codes"): 1 a computation that did not converge (a step, arc-length control, a
-    /// singular system) or wear the run cannot follow (a jump beyond its stability limit or
-    /// breaking the energy balance, worn through, worn deeper than the body), 3 bad input (case file, mesh, model, a quantity, gmsh on the `.geo`),
-    /// 4 reading or writing a file, 5 plastic collapse (the load exceeds what the structure
-    /// carries: a result, not a failure of the solver). 2 is a usage error: clap's own for
+    /// singular system, a run that reached `[solver] max_solves` through cut-backs) or wear
+    /// the run cannot follow (a jump beyond its stability limit or breaking the energy
+    /// balance, worn through, worn deeper than the body), 3 bad input (case file, mesh, model,
+    /// a quantity, gmsh on the `.geo`, breakpoints that alone exceed `max_solves`), 4 reading
+    /// or writing a file, 5 a limit load (the load exceeds what the model can carry: plastic
+    /// collapse, friction capacity exceeded, a body losing its support; a result, not a
+    /// failure of the solver). 2 is a usage error: clap's own for
     /// bad arguments, and an output folder that would be overwritten.
     pub fn exit_code(&self) -> u8 {
         match self {
@@ -364,6 +391,13 @@ impl Error {
             | Error::WornBeyondBody { .. }
             | Error::WearEnergy { .. }
             | Error::JumpSettling { .. } => 1,
+            Error::TooManySolves { planned, .. } => {
+                if *planned {
+                    3
+                } else {
+                    1
+                }
+            }
             Error::OutputExists { .. } | Error::OutputForeign { .. } => 2,
             // The shell's code of a process ended by SIGINT.
             Error::Interrupted { .. } => 130,
@@ -381,7 +415,8 @@ impl Error {
             | Error::NothingToSolve
             | Error::Quantity { .. }
             | Error::External(_)
-            | Error::Restart { .. } => 3,
+            | Error::Restart { .. }
+            | Error::RigidBodyMotion { .. } => 3,
             Error::Io { .. } => 4,
             Error::Collapse { .. } => 5,
             Error::StudyLevel { source, .. } => source.exit_code(),
@@ -627,18 +662,22 @@ impl fmt::Display for ParameterError {
 
 impl std::error::Error for ParameterError {}
 
-/// A load step that could not be made to converge: where it stopped, every attempt, and
-/// what the last attempt shows about why.
+/// A load step that could not be made to converge: where it stopped (in the case's own
+/// `[[step]]` terms), every attempt, and what the last attempt shows about why.
 #[derive(Clone, Debug, Default)]
 pub struct NoConvergence {
-    /// 1-based step number.
+    /// 1-based output increment (over all steps and simulated cycles) being solved.
     pub step: usize,
-    /// Load factor at the end of the step.
+    /// Global load factor at the end of that increment.
     pub load_factor: f64,
-    /// Pseudo-time of the last converged state (step j ends at time j).
+    /// Pseudo-time of the last converged state (output increment j ends at time j).
     pub converged_time: f64,
     /// Global load factor of the last converged state.
     pub converged_load_factor: f64,
+    /// Where the last converged state lies in the load history.
+    pub reached: LoadPoint,
+    /// Where the increment was to end.
+    pub target: LoadPoint,
     /// Cut-backs made in this step.
     pub cutbacks: usize,
     /// Every attempt of the step, in order.
@@ -648,9 +687,223 @@ pub struct NoConvergence {
     /// Interface integration points whose contact status (open, stick, slip) in the last
     /// attempt differs from the last converged state.
     pub status_changes: usize,
-    /// A physical reading of the failure where one is recognisable (friction capacity
-    /// exceeded, a body without support).
-    pub hint: Option<String>,
+    /// The mechanism the contact states of the last attempt show (friction capacity
+    /// exhausted, a body that lost its support), if one does.
+    pub mechanism: Option<Mechanism>,
+    /// What else the run showed (the secant stiffness of the last converged increment).
+    pub note: Option<String>,
+}
+
+impl NoConvergence {
+    /// Where the smallest failed attempt was to end (the last one: each halves the last).
+    pub fn failed_attempt(&self) -> &LoadPoint {
+        self.attempts.last().map_or(&self.target, |a| &a.at)
+    }
+}
+
+/// A point of the case's load history in the user's terms: the `[[step]]` by name, the
+/// fraction of it reached, and the multipliers of the loads and supports with their own
+/// history; the load factor for the `[steps]` form.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoadPoint {
+    /// The `[[step]]`'s name and 0-based index; `None` for the `[steps]` form.
+    pub step: Option<(String, usize)>,
+    /// 1-based output increment containing the point (the `[steps]` load step).
+    pub increment: usize,
+    /// The simulated cycle of a cyclic step and the step's simulated cycles.
+    pub cycle: Option<(usize, usize)>,
+    /// Fraction of the step (of the cycle, in a cyclic step) reached, in [0, 1].
+    pub step_time: f64,
+    /// The global load factor: the `[steps]` factor (total analysis time with `[[step]]`).
+    pub load_factor: f64,
+    /// The multipliers of the loads and supports with their own history, by their
+    /// `history.csv` column (`factor_load_<name>`, `factor_support_<name>`).
+    pub multipliers: Vec<(String, f64)>,
+}
+
+impl LoadPoint {
+    /// "step 'press' (step[0])", or "load step 3" of the `[steps]` form.
+    pub fn step_name(&self) -> String {
+        match &self.step {
+            Some((name, i)) => format!("step '{name}' (step[{i}])"),
+            None => format!("load step {}", self.increment),
+        }
+    }
+
+    /// The step and, in a cyclic step, the cycle: "step 'service' (step[1]), cycle 3 of 21".
+    pub fn describe_step(&self) -> String {
+        match self.cycle {
+            Some((c, n)) => format!("{}, simulated cycle {c} of {n}", self.step_name()),
+            None => self.step_name(),
+        }
+    }
+
+    /// The case keys that set the step's increments: `step[i]` or `[steps]`.
+    pub fn step_key(&self) -> String {
+        match &self.step {
+            Some((_, i)) => format!("step[{i}]"),
+            None => "[steps]".into(),
+        }
+    }
+}
+
+impl fmt::Display for LoadPoint {
+    /// "62.5 % of step 'shear' (factor_load_shear = 0.625)", or "load factor 0.95".
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.step.is_none() {
+            return write!(f, "load factor {:.6}", self.load_factor);
+        }
+        let percent = 100.0 * self.step_time;
+        match self.cycle {
+            Some((c, _)) => write!(f, "{percent:.4} % of cycle {c} of {}", self.step_name())?,
+            None => write!(f, "{percent:.4} % of {}", self.step_name())?,
+        }
+        if !self.multipliers.is_empty() {
+            let list: Vec<String> = self
+                .multipliers
+                .iter()
+                .map(|(column, v)| format!("{column} = {v:.6}"))
+                .collect();
+            write!(f, " ({})", list.join(", "))?;
+        }
+        Ok(())
+    }
+}
+
+/// How a step's load exceeded what the model can carry ([`Error::Collapse`]), or what the
+/// contact states of a failed attempt show ([`NoConvergence::mechanism`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Mechanism {
+    /// The plastic bodies cannot carry the load: `indicator` says what showed it (the secant
+    /// stiffness, a tangent that lost positive definiteness, implausible increments).
+    PlasticCollapse { indicator: String },
+    /// Friction is exhausted: the closed points of contacts `pairs` that hold `bodies` all
+    /// slip, and nothing else holds those bodies along the contact (Buczkowski & Kleiber
+    /// (1994), Eq. 11: F = 0 at every point; with slip-hardening friction, μ has reached
+    /// what the slip gives).
+    FrictionCapacity {
+        pairs: Vec<String>,
+        bodies: Vec<FreeBody>,
+    },
+    /// `bodies` are no longer held: the contacts `open_pairs` that held them opened.
+    LostSupport {
+        open_pairs: Vec<String>,
+        bodies: Vec<FreeBody>,
+    },
+}
+
+impl fmt::Display for Mechanism {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Mechanism::PlasticCollapse { indicator } => {
+                write!(f, "plastic collapse ({indicator})")
+            }
+            Mechanism::FrictionCapacity { pairs, bodies } => write!(
+                f,
+                "friction capacity exceeded at contact {}: every closed point that holds the \
+                 sliding body slips, so friction cannot carry the tangential load ({}; raise the \
+                 friction or the normal load, or support the sliding body)",
+                quoted(pairs),
+                free_list(bodies)
+            ),
+            Mechanism::LostSupport { open_pairs, bodies } => {
+                write!(f, "loss of support: ")?;
+                if !open_pairs.is_empty() {
+                    write!(f, "contact {} opened and ", quoted(open_pairs))?;
+                }
+                write!(
+                    f,
+                    "nothing else holds the bodies against rigid-body motion ({})",
+                    free_list(bodies)
+                )
+            }
+        }
+    }
+}
+
+/// 'a', 'b'
+fn quoted(names: &[String]) -> String {
+    let list: Vec<String> = names.iter().map(|n| format!("'{n}'")).collect();
+    list.join(", ")
+}
+
+/// "body 'a' is free to move in x; body 'b' …"
+fn free_list(bodies: &[FreeBody]) -> String {
+    let list: Vec<String> = bodies.iter().map(ToString::to_string).collect();
+    list.join("; ")
+}
+
+/// A body that supports and contacts leave free to move as a rigid body, and how.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FreeBody {
+    pub body: String,
+    /// Unit directions of its free translations: none, one, or two (any direction).
+    pub translations: Vec<[f64; 2]>,
+    /// Whether it can rotate (plane models).
+    pub rotates: bool,
+    /// The one point it can rotate about, when it can rotate but not translate.
+    pub centre: Option<[f64; 2]>,
+}
+
+impl FreeBody {
+    /// "in x", "in x and y", "along (0.6, 0.8)".
+    fn translation(&self) -> Option<String> {
+        match self.translations.as_slice() {
+            [] => None,
+            [d] if d[1].abs() <= 1e-6 => Some("in x".into()),
+            [d] if d[0].abs() <= 1e-6 => Some("in y".into()),
+            [d] => Some(format!("along ({:.4}, {:.4})", d[0], d[1])),
+            _ => Some("in x and y".into()),
+        }
+    }
+
+    /// The support that would hold the body.
+    pub fn suggestion(&self) -> String {
+        let b = &self.body;
+        let components = match self.translations.as_slice() {
+            [] => None,
+            [d] if d[0].abs() >= d[1].abs() => Some("ux"),
+            [_] => Some("uy"),
+            _ => Some("ux and uy"),
+        };
+        match (components, self.rotates) {
+            (Some(c), false) => format!("hold {c} on a curve or point of '{b}'"),
+            (Some(c), true) => format!(
+                "hold {c} on a curve of '{b}' (or at two points of it, a point holding only \
+                 one direction together with a curve not parallel to that direction)"
+            ),
+            (None, _) => format!(
+                "hold a second point of '{b}', or a curve not parallel to the direction held \
+                 (a support at a single point, or one holding a curve only along itself, does \
+                 not stop rotation)"
+            ),
+        }
+    }
+}
+
+impl fmt::Display for FreeBody {
+    /// "body 'b' is free to move in x and to rotate".
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "body '{}' is free to ", self.body)?;
+        match (self.translation(), self.rotates, self.centre) {
+            (Some(t), false, _) => write!(f, "move {t}"),
+            (Some(t), true, _) => write!(f, "move {t} and to rotate"),
+            (None, true, Some(c)) => write!(f, "rotate about ({:.6}, {:.6})", c[0], c[1]),
+            (None, _, _) => write!(f, "rotate"),
+        }
+    }
+}
+
+/// The message of [`Error::RigidBodyMotion`].
+fn rigid_message(bodies: &[FreeBody]) -> String {
+    let fixes: Vec<String> = bodies.iter().map(FreeBody::suggestion).collect();
+    format!(
+        "model: the supports leave rigid-body motion free: {}. Add supports: {} (contacts \
+         count as defined: a contact holds its bodies against each other normal to it, and \
+         along it only with friction; a frictionless contact does not stop sliding)",
+        free_list(bodies),
+        fixes.join("; ")
+    )
 }
 
 /// Where the out-of-balance force of a failed attempt is largest.
@@ -672,12 +925,78 @@ pub struct Attempt {
     pub time: f64,
     /// Global load factor at that time.
     pub load_factor: f64,
+    /// Where that is in the load history.
+    pub at: LoadPoint,
     /// Newton iterations made.
     pub iterations: usize,
     /// Relative residual before each solve and after the last one.
     pub residuals: Vec<f64>,
-    /// Why it stopped when it was not for the iteration limit (e.g. a singular tangent).
-    pub reason: Option<String>,
+    /// Why it stopped when it was not for the iteration limit.
+    pub failure: Option<AttemptFailure>,
+}
+
+/// Why an attempt failed other than by running out of iterations.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AttemptFailure {
+    /// The linear solver could not factor the tangent (not positive definite, singular).
+    Tangent(String),
+    /// It converged, but to an increment implausible for small-strain theory.
+    Implausible(Implausible),
+    /// Any other error of the solve.
+    Other(String),
+}
+
+impl fmt::Display for AttemptFailure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            AttemptFailure::Tangent(m) => write!(f, "linear solver: {m}"),
+            AttemptFailure::Implausible(i) => write!(f, "{i}"),
+            AttemptFailure::Other(m) => f.write_str(m),
+        }
+    }
+}
+
+/// A converged increment that small-strain theory cannot describe (a collapse mechanism, or a
+/// locked mesh "carrying" a load above its limit load).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Implausible {
+    /// Node `node` (gmsh tag) moved by `increment` mm, more than `fraction`
+    /// (`[solver] max_displacement_increment`) of the model size `size`.
+    Displacement {
+        node: u64,
+        increment: f64,
+        fraction: f64,
+        size: f64,
+    },
+    /// An equivalent strain increment `increment` above `limit` (`[solver]
+    /// max_strain_increment`).
+    Strain { increment: f64, limit: f64 },
+}
+
+impl fmt::Display for Implausible {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Implausible::Displacement {
+                node,
+                increment,
+                fraction,
+                size,
+            } => write!(
+                f,
+                "implausible increment: node {node} moves by {increment:.3e} mm in one \
+                 increment, more than {fraction} of the model size {size:.3e} mm ([solver] \
+                 max_displacement_increment)"
+            )?,
+            Implausible::Strain { increment, limit } => write!(
+                f,
+                "implausible increment: an equivalent strain increment of {increment:.3e}, more \
+                 than {limit} ([solver] max_strain_increment)"
+            )?,
+        }
+        f.write_str(
+            "; small-strain theory does not hold there (a collapse mechanism, or a locked mesh)",
+        )
+    }
 }
 
 /// Attempts listed in full at each end of a [`NoConvergence`] message; the ones between are
@@ -690,16 +1009,18 @@ impl fmt::Display for NoConvergence {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "step {} (load factor {}) did not converge after {} cut-backs; the last converged state is at time \
-             {:.6} (load factor {:.6})",
-            self.step,
-            self.load_factor,
+            "{} did not converge after {} cut-backs: it reached {} (the last converged state), \
+             on the way to {}",
+            self.reached.describe_step(),
             self.cutbacks,
-            self.converged_time,
-            self.converged_load_factor
+            self.reached,
+            self.target
         )?;
-        if let Some(hint) = &self.hint {
-            write!(f, ".\n  Likely cause: {hint}")?;
+        if let Some(mechanism) = &self.mechanism {
+            write!(f, ".\n  Likely cause: {mechanism}")?;
+        }
+        if let Some(note) = &self.note {
+            write!(f, ".\n  {note}")?;
         }
         if let Some(r) = &self.largest_residual {
             write!(
@@ -724,23 +1045,24 @@ impl fmt::Display for NoConvergence {
         for (i, a) in self.attempts.iter().enumerate() {
             if n > 2 * SHOWN_ATTEMPTS && i == SHOWN_ATTEMPTS {
                 let hidden = &self.attempts[SHOWN_ATTEMPTS..n - SHOWN_ATTEMPTS];
-                let smallest = hidden.iter().map(|a| a.time).fold(f64::INFINITY, f64::min);
-                write!(
-                    f,
-                    "\n  … {} more attempts, down to time {smallest:.6} …",
-                    hidden.len()
-                )?;
+                let smallest = hidden
+                    .iter()
+                    .min_by(|a, b| a.time.total_cmp(&b.time))
+                    .map(|a| &a.at);
+                if let Some(smallest) = smallest {
+                    write!(
+                        f,
+                        "\n  … {} more attempts, down to {smallest} …",
+                        hidden.len()
+                    )?;
+                }
             }
             if n > 2 * SHOWN_ATTEMPTS && (SHOWN_ATTEMPTS..n - SHOWN_ATTEMPTS).contains(&i) {
                 continue;
             }
-            write!(
-                f,
-                "\n  at time {:.6} (load factor {:.6}): ",
-                a.time, a.load_factor
-            )?;
-            match &a.reason {
-                Some(reason) => write!(f, "{reason}")?,
+            write!(f, "\n  to {}: ", a.at)?;
+            match &a.failure {
+                Some(failure) => write!(f, "{failure}")?,
                 None => write!(f, "relative residuals {}", residual_history(&a.residuals))?,
             }
         }

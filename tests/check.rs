@@ -138,3 +138,42 @@ fn init_never_overwrites() {
     // All or nothing: the script was not written either.
     assert!(!dir.path().join("block_on_foundation.geo").exists());
 }
+
+/// A model free to move as a rigid body is an error of `check` and `run` alike, before
+/// anything is solved (exit code 3): the template with its x supports taken away (the base
+/// held in y only, the symmetry plane gone) leaves both bodies free to slide in x together
+/// (the contact's friction joins them), while y and the rotation stay held by the base.
+#[test]
+fn check_and_run_refuse_a_model_free_to_move() {
+    let dir = tempfile::tempdir().unwrap();
+    assert!(init(dir.path()).status.success());
+    let case = dir.path().join("case.toml");
+    let template = std::fs::read_to_string(&case).unwrap();
+    let base = "ux = 0.0\nuy = 0.0";
+    let symmetry = "group = \"symmetry\"";
+    assert!(template.contains(base) && template.contains(symmetry));
+    // The symmetry support holds the base's y instead of the plane's x.
+    let at = template.find(symmetry).unwrap();
+    let (head, tail) = template.split_at(at);
+    let tail = tail
+        .replacen(symmetry, "group = \"base\"", 1)
+        .replacen("ux = 0.0", "uy = 0.0", 1);
+    let free = head.replacen(base, "uy = 0.0", 1) + &tail;
+    std::fs::write(&case, free).unwrap();
+    for command in ["check", "run"] {
+        let out = asperity(&[command.as_ref(), case.as_os_str()]);
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(3), "{command}: {stderr}");
+        for expected in [
+            "body 'foundation' is free to move in x",
+            "body 'block' is free to move in x",
+            "hold ux on a curve or point of 'foundation'",
+        ] {
+            assert!(stderr.contains(expected), "{command}: {stderr}");
+        }
+        assert!(
+            !stderr.contains("rotate") && !stderr.contains("Newton"),
+            "{command}: {stderr}"
+        );
+    }
+}

@@ -404,6 +404,9 @@ impl Case {
                 ),
             ));
         }
+        if s.max_solves == 0 {
+            return Err(self.invalid("solver.max_solves", 0, "must be positive"));
+        }
         let tolerances = [
             ("solver.force_tolerance", s.force_tolerance),
             ("solver.displacement_tolerance", s.displacement_tolerance),

@@ -38,6 +38,9 @@ pub struct SolverSpec {
     pub relative_norms: bool,
     /// How often a step that fails to converge is halved and retried.
     pub max_cutbacks: usize,
+    /// Most increment solves of a load-controlled run: output increments, sub-increments
+    /// ending on amplitude breakpoints or made by cut-backs, and retried attempts.
+    pub max_solves: usize,
     /// Global algorithm for contact: `"newton"` (consistent tangent, default), `"two_step"`
     /// (normal stress frozen in the friction tangent, symmetric) or `"elastic_contact"`
     /// (elastic contact matrix).
@@ -78,6 +81,7 @@ struct RawSolverSpec {
     force_tolerance: Option<f64>,
     displacement_tolerance: Option<f64>,
     max_cutbacks: usize,
+    max_solves: usize,
     contact_algorithm: ContactAlgorithmKind,
     linear_solver: LinearSolverKind,
     extrapolate: bool,
@@ -105,6 +109,7 @@ impl Default for RawSolverSpec {
             force_tolerance: None,
             displacement_tolerance: None,
             max_cutbacks: 8,
+            max_solves: DEFAULT_MAX_SOLVES,
             contact_algorithm: ContactAlgorithmKind::default(),
             linear_solver: LinearSolverKind::default(),
             extrapolate: false,
@@ -114,6 +119,11 @@ impl Default for RawSolverSpec {
         }
     }
 }
+
+/// `max_solves` when not given: as many as the output increments a case may ask for
+/// ([`super::MAX_STEPS`]), so that a case at that limit fails before solving when its
+/// amplitude breakpoints add sub-increments, and a run that cuts back heavily stops.
+pub const DEFAULT_MAX_SOLVES: usize = super::check::MAX_STEPS;
 
 /// The relative-norm tolerances' value when not given (arc-length control's criteria).
 const DEFAULT_NORM_TOLERANCE: f64 = 1e-8;
@@ -134,6 +144,7 @@ impl From<RawSolverSpec> for SolverSpec {
             displacement_tolerance: r.displacement_tolerance.unwrap_or(DEFAULT_NORM_TOLERANCE),
             relative_norms: r.force_tolerance.is_some() || r.displacement_tolerance.is_some(),
             max_cutbacks: r.max_cutbacks,
+            max_solves: r.max_solves,
             contact_algorithm: r.contact_algorithm,
             linear_solver: r.linear_solver,
             extrapolate: r.extrapolate,

@@ -121,6 +121,10 @@ impl InterfaceLaw for LinearCoulomb {
         (s, InterfaceTangent::new(0.0, -mu * kn * sign, 0.0, kn))
     }
 
+    fn carries_shear(&self) -> bool {
+        self.friction > 0.0 && self.tangential_stiffness > 0.0
+    }
+
     fn describe(&self) -> String {
         format!(
             "linear Coulomb, k_N = {} MPa/mm, k_T = {} MPa/mm, mu = {}",

@@ -180,6 +180,11 @@ pub trait InterfaceLaw: Send + Sync + std::fmt::Debug {
         }
     }
 
+    /// Whether a closed, sticking point carries tangential stress (friction and a
+    /// tangential stiffness): it then holds its two faces against each other along the
+    /// contact too, not only normal to it (the model's rigid-body check).
+    fn carries_shear(&self) -> bool;
+
     /// Short description for logs.
     fn describe(&self) -> String;
 }

@@ -353,6 +353,10 @@ impl InterfaceLaw for RoughJoint {
         (s, InterfaceTangent::new(dpt_dut, dpt_dun, 0.0, kn))
     }
 
+    fn carries_shear(&self) -> bool {
+        self.mu_m > 0.0
+    }
+
     fn describe(&self) -> String {
         format!(
             "rough joint (paper §2): c_N = {} mm/MPa^m, m = {}, R = {}, S = {}, mu_m = {}, beta = {}, n = {} 1/mm",

@@ -7,7 +7,7 @@ use crate::element::Analysis;
 use crate::element::quadrature::GAUSS3;
 use crate::element::set::ContinuumSet;
 use crate::element::shape::line3;
-use crate::error::{GroupKind, GroupProblem, MeshEntity};
+use crate::error::{GroupKind, GroupProblem, LoadPoint, MeshEntity};
 use crate::mesh::Mesh;
 use crate::mesh::topology::EdgeIndex;
 use crate::{Error, Result};
@@ -175,6 +175,55 @@ impl Schedule {
             Some(_) => self.value(0, time),
             None => self.timeline.analysis_time(time),
         }
+    }
+
+    /// The state at pseudo-time `time` in the user's terms, as a point of the step (and
+    /// cycle) of the increment that ends at `target` (so that a step's start is 0 % of it,
+    /// not 100 % of the one before): the `[[step]]`'s name, the fraction of it reached and
+    /// the multipliers of the own histories; the load factor of the `[steps]` form.
+    pub fn load_point(&self, time: f64, target: f64) -> LoadPoint {
+        let p = self.timeline.locate(target);
+        let plan = &self.timeline.steps()[p.step];
+        let n = plan.increments as f64;
+        let u = time - (target - p.u);
+        let named = self.factors.is_none();
+        LoadPoint {
+            step: named.then(|| (plan.name.clone(), p.step)),
+            increment: target.ceil().max(1.0) as usize,
+            cycle: (named && plan.is_cyclic()).then_some((p.cycle, plan.simulated())),
+            step_time: (u / n).clamp(0.0, 1.0),
+            load_factor: self.load_factor_at(time),
+            multipliers: self
+                .columns
+                .iter()
+                .map(|(column, k)| (column.clone(), self.value(*k, time)))
+                .collect(),
+        }
+    }
+
+    /// The increment solves each step needs before any cut-back: in every simulated cycle,
+    /// its output increments and one more for every amplitude breakpoint inside an increment
+    /// (each ends a sub-increment, [`Self::next_time`]).
+    pub fn planned_solves(&self) -> Vec<usize> {
+        let steps = self.timeline.steps().iter().enumerate();
+        steps
+            .map(|(i, plan)| {
+                let end = plan.increments as f64;
+                let mut inside: Vec<f64> = self
+                    .amplitudes
+                    .iter()
+                    .flat_map(|tables| tables[i].u.iter().copied())
+                    .filter(|&u| {
+                        u > KNOT_TOLERANCE
+                            && u < end - KNOT_TOLERANCE
+                            && (u - u.round()).abs() > KNOT_TOLERANCE
+                    })
+                    .collect();
+                inside.sort_by(f64::total_cmp);
+                inside.dedup_by(|a, b| (*a - *b).abs() <= KNOT_TOLERANCE);
+                (plan.increments + inside.len()).saturating_mul(plan.simulated())
+            })
+            .collect()
     }
 
     /// Value of amplitude `k` at pseudo-time `time`.

@@ -7,11 +7,13 @@
 
 mod constraints;
 mod loads;
+mod rigid;
 mod spec;
 pub mod timeline;
 
 pub use constraints::{AXIS_SUPPORT, Support};
 pub use loads::{History, Schedule, Table};
+pub use rigid::Hold;
 pub use spec::{
     ArcLength, Body, Contact, Control, LineLoad, Load, LoadKind, ModelSpec, Prescribed,
     load_factors,
@@ -97,7 +99,7 @@ impl Model {
             continuum_coloring,
             interface_coloring,
         } = numbering(&prescribed, &in_body, &continuum, &interface)?;
-        Ok(Self {
+        let model = Self {
             mesh,
             analysis,
             bodies,
@@ -113,7 +115,40 @@ impl Model {
             size: scale,
             dofs,
             pattern,
-        })
+        };
+        model.check_planned_solves()?;
+        // Before any solve: a free rigid-body motion makes every stiffness matrix singular.
+        let free = model.free_bodies();
+        if !free.is_empty() {
+            return Err(Error::RigidBodyMotion { bodies: free });
+        }
+        Ok(model)
+    }
+}
+
+impl Model {
+    /// Refuses a load-controlled run whose output increments and amplitude breakpoints alone
+    /// need more increment solves than `[solver] max_solves`, naming the step that passes it.
+    fn check_planned_solves(&self) -> Result<()> {
+        if self.control.arc_length.is_some() {
+            return Ok(());
+        }
+        let limit = self.control.max_solves;
+        let timeline = self.schedule.timeline();
+        let mut count = 0usize;
+        for (plan, solves) in timeline.steps().iter().zip(self.schedule.planned_solves()) {
+            count = count.saturating_add(solves);
+            if count > limit {
+                let start = plan.first as f64;
+                return Err(Error::TooManySolves {
+                    at: Box::new(self.schedule.load_point(start, start + 1.0)),
+                    count,
+                    limit,
+                    planned: true,
+                });
+            }
+        }
+        Ok(())
     }
 }
 

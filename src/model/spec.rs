@@ -49,6 +49,8 @@ pub struct Control {
     /// Collapse when the last converged secant stiffness Δλ/‖Δu‖ is below this fraction of
     /// the first increment's.
     pub collapse_stiffness_ratio: f64,
+    /// Most increment solves of a load-controlled run (`[solver] max_solves`).
+    pub max_solves: usize,
     /// Whether some body is elasto-plastic.
     pub plastic: bool,
     /// Arc-length control instead of the load factors of the steps.
@@ -75,6 +77,7 @@ impl Default for Control {
             max_displacement_increment: solver.max_displacement_increment,
             max_strain_increment: solver.max_strain_increment,
             collapse_stiffness_ratio: solver.collapse_stiffness_ratio,
+            max_solves: solver.max_solves,
             plastic: false,
             arc_length: None,
         }
@@ -261,6 +264,7 @@ impl ModelSpec {
             max_displacement_increment: solver.max_displacement_increment,
             max_strain_increment: solver.max_strain_increment,
             collapse_stiffness_ratio: solver.collapse_stiffness_ratio,
+            max_solves: solver.max_solves,
             plastic: case
                 .bodies
                 .iter()

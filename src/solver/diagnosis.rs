@@ -1,20 +1,21 @@
 //! Why a run failed, in the user's terms: where the out-of-balance force of the last attempt
-//! sits, whether a contact pair's friction cannot carry its load or a body lacks support
-//! ([`diagnose`]); whether a converged increment is implausible for small-strain theory
-//! ([`implausible_increment`]); and whether a failed step is a plastic collapse
-//! ([`step_failure`]).
+//! sits, and which mechanism the contact states of that attempt show — a contact whose
+//! friction cannot carry the load, or bodies that lost their support when a contact opened
+//! ([`diagnose`], with the model's rigid-body check [`Model::free_bodies_with`]); whether a
+//! converged increment is implausible for small-strain theory ([`implausible_increment`]);
+//! and whether a failed step is a limit load — such a mechanism, or a plastic collapse — or
+//! a failure of the solver ([`step_failure`]).
 
 use crate::Error;
-use crate::contact::ContactStatus;
-use crate::element::set::{ElementSet, INTERFACE_POINTS};
-use crate::error::{NoConvergence, ResidualAt};
-use crate::model::Model;
+use crate::element::set::ElementSet;
+use crate::error::{AttemptFailure, FreeBody, Implausible, Mechanism, NoConvergence, ResidualAt};
+use crate::model::{Hold, Model};
 use crate::solver::state::{Solution, StiffnessHistory};
 
 /// Completes `failure` with where it happened: the node with the largest out-of-balance
 /// force of the last attempt (and its body), how many interface points changed their
-/// contact status against the last converged state, and a physical reading where one is
-/// recognisable (a contact pair slipping everywhere: its friction cannot carry the load).
+/// contact status against the last converged state, and the mechanism its contact states
+/// show, if any ([`contact_mechanism`]).
 pub fn diagnose(
     model: &Model,
     solution: &Solution,
@@ -29,7 +30,7 @@ pub fn diagnose(
         .zip(&solution.interface_committed)
         .filter(|(t, c)| t.status != c.status)
         .count();
-    failure.hint = friction_exceeded(model, solution).or_else(|| unsupported_bodies(model));
+    failure.mechanism = contact_mechanism(model, solution);
     failure
 }
 
@@ -72,91 +73,59 @@ fn body_of_node(model: &Model, node: usize) -> Option<String> {
         .map(|e| model.bodies[cells[e].body as usize].clone())
 }
 
-/// "Friction capacity exceeded" when, in the last attempt, every closed point of a contact
-/// pair slips: the pair transmits at most μ·|p_N| everywhere and the tangential load asks
-/// for more (Buczkowski & Kleiber (1994), Eq. 11: F = 0 at every point).
-fn friction_exceeded(model: &Model, solution: &Solution) -> Option<String> {
-    let pairs: Vec<&str> = model
-        .interface
-        .pairs
-        .iter()
-        .filter(|p| {
-            let points = &solution.interface_trial
-                [p.elements.start * INTERFACE_POINTS..p.elements.end * INTERFACE_POINTS];
-            let closed = points.iter().filter(|s| s.status != ContactStatus::Open);
-            let mut any = false;
-            closed.clone().all(|s| {
-                any = true;
-                s.status == ContactStatus::Slip
-            }) && any
-        })
-        .map(|p| p.name.as_str())
-        .collect();
-    (!pairs.is_empty()).then(|| {
-        format!(
-            "friction capacity exceeded: every closed point of contact '{}' slips, so friction \
-             cannot carry the tangential load there (raise the friction or the normal load, or \
-             support the sliding body)",
-            pairs.join("', '")
-        )
+/// The mechanism the contact states of the last attempt show, from the rigid-body check
+/// with the contacts holding as they do in that attempt:
+/// - *loss of support* when bodies are free even with every closed point holding as
+///   defined (the contacts that held them opened);
+/// - *friction capacity exceeded* when bodies are free once slipping points hold only normal
+///   to the contact: friction transmits at most μ|p_N| there (Buczkowski & Kleiber (1994),
+///   Eq. 11: F = 0 at every point), and nothing else holds them along it.
+fn contact_mechanism(model: &Model, solution: &Solution) -> Option<Mechanism> {
+    let states = &solution.interface_trial;
+    let lost = model.free_bodies_with(|e| model.hold_in(states, e, true));
+    if !lost.is_empty() {
+        let open_pairs = touching(model, &lost, |e| {
+            model.hold_in(states, e, true) == Hold::None
+        });
+        return Some(Mechanism::LostSupport {
+            open_pairs,
+            bodies: lost,
+        });
+    }
+    let sliding = model.free_bodies_with(|e| model.hold_in(states, e, false));
+    if sliding.is_empty() {
+        return None;
+    }
+    let pairs = touching(model, &sliding, |e| {
+        model.hold_in(states, e, true) == Hold::Full
+            && model.hold_in(states, e, false) != Hold::Full
+    });
+    Some(Mechanism::FrictionCapacity {
+        pairs,
+        bodies: sliding,
     })
 }
 
-/// "A body without support" when a group of bodies joined by shared nodes or interface
-/// elements has no prescribed dof in x or in y: nothing stops its rigid translation.
-fn unsupported_bodies(model: &Model) -> Option<String> {
-    let nodes = model.mesh.nodes.len();
-    let mut parent: Vec<usize> = (0..nodes).collect();
-    fn root(parent: &mut [usize], mut n: usize) -> usize {
-        while parent[n] != n {
-            parent[n] = parent[parent[n]];
-            n = parent[n];
-        }
-        n
-    }
-    let mut join = |nodes: &[u32]| {
-        let first = root(&mut parent, nodes[0] as usize);
-        for &n in &nodes[1..] {
-            let r = root(&mut parent, n as usize);
-            parent[r] = first;
-        }
-    };
-    for e in 0..model.continuum.cells.len() {
-        join(model.continuum.nodes(e));
-    }
-    for e in 0..model.interface.elements.len() {
-        join(model.interface.nodes(e));
-    }
-    let mut held = vec![[false; 2]; nodes];
-    for &(dof, _, _) in &model.prescribed {
-        let r = root(&mut parent, dof / 2);
-        held[r][dof % 2] = true;
-    }
-    let mut free: Vec<(String, &str)> = Vec::new();
-    for cell in &model.continuum.cells {
-        let r = root(&mut parent, cell.nodes[0] as usize);
-        let body = &model.bodies[cell.body as usize];
-        let missing = match held[r] {
-            [false, false] => "x and y",
-            [false, true] => "x",
-            [true, false] => "y",
-            [true, true] => continue,
-        };
-        if !free.iter().any(|(b, _)| b == body) {
-            free.push((body.clone(), missing));
-        }
-    }
-    (!free.is_empty()).then(|| {
-        let list: Vec<String> = free
+/// The contact pairs with an interface element `which` selects that touches one of `bodies`.
+fn touching(model: &Model, bodies: &[FreeBody], which: impl Fn(usize) -> bool) -> Vec<String> {
+    let node_bodies = model.node_bodies();
+    let free: Vec<usize> = bodies
+        .iter()
+        .filter_map(|b| model.bodies.iter().position(|name| *name == b.body))
+        .collect();
+    let touches = |e: usize| {
+        let nodes = &model.interface.elements[e].nodes;
+        nodes
             .iter()
-            .map(|(b, m)| format!("'{b}' (free to move in {m})"))
-            .collect();
-        format!(
-            "a body without support: {} — no support holds it, directly or through another \
-             body or a contact interface, against rigid-body motion",
-            list.join(", ")
-        )
-    })
+            .any(|&n| node_bodies[n as usize].iter().any(|b| free.contains(b)))
+    };
+    model
+        .interface
+        .pairs
+        .iter()
+        .filter(|pair| pair.elements.clone().any(|e| which(e) && touches(e)))
+        .map(|pair| pair.name.clone())
+        .collect()
 }
 
 /// Why a converged increment from `converged_u` to `solution` is implausible for
@@ -168,7 +137,7 @@ pub fn implausible_increment(
     model: &Model,
     solution: &Solution,
     converged_u: &[f64],
-) -> Option<String> {
+) -> Option<Implausible> {
     let control = &model.control;
     let limit = control.max_displacement_increment * model.size;
     let (node, du) = solution
@@ -182,19 +151,17 @@ pub fn implausible_increment(
             |best, (n, d)| if d > best.1 { (n, d) } else { best },
         );
     if !du.is_finite() || du > limit {
-        return Some(format!(
-            "implausible increment: node {} moves by {du:.3e} mm in one increment, more than \
-             {} of the model size {:.3e} mm ([solver] max_displacement_increment); small-strain \
-             theory does not hold there (a collapse mechanism, or a locked mesh)",
-            model
+        return Some(Implausible::Displacement {
+            node: model
                 .mesh
                 .node_tags
                 .get(node)
                 .copied()
                 .unwrap_or(node as u64),
-            control.max_displacement_increment,
-            model.size
-        ));
+            increment: du,
+            fraction: control.max_displacement_increment,
+            size: model.size,
+        });
     }
     let de = solution
         .trial
@@ -202,15 +169,10 @@ pub fn implausible_increment(
         .zip(&solution.committed)
         .map(|(t, c)| equivalent_strain(&(t.strain - c.strain)))
         .fold(0.0, f64::max);
-    if !de.is_finite() || de > control.max_strain_increment {
-        return Some(format!(
-            "implausible increment: an equivalent strain increment of {de:.3e}, more than {} \
-             ([solver] max_strain_increment); small-strain theory does not hold there (a \
-             collapse mechanism, or a locked mesh)",
-            control.max_strain_increment
-        ));
-    }
-    None
+    (!de.is_finite() || de > control.max_strain_increment).then_some(Implausible::Strain {
+        increment: de,
+        limit: control.max_strain_increment,
+    })
 }
 
 /// √(⅔ ε:ε) of a strain in Voigt order (xx, yy, γ_xy, zz), γ the engineering shear strain.
@@ -219,44 +181,65 @@ fn equivalent_strain(e: &crate::material::Voigt) -> f64 {
     (2.0 / 3.0 * tensor).sqrt()
 }
 
-/// The error of a step that could not be completed: [`Error::Collapse`] when the load was
-/// rising and the structure's stiffness collapsed — the secant stiffness of the last
-/// converged increment fell below `[solver] collapse_stiffness_ratio` of the first one, or
-/// (with a plastic body) an attempt met a tangent that is not positive definite or an
-/// implausible increment — and [`Error::NoConvergence`] otherwise.
-pub fn step_failure(model: &Model, failure: NoConvergence, stiffness: &StiffnessHistory) -> Error {
+/// The error of a step that could not be completed: [`Error::Collapse`] when its load
+/// exceeds what the model can carry — the contact states of the last attempt show a
+/// mechanism (friction capacity exhausted, a lost support: [`contact_mechanism`]), or, with
+/// a plastic body and a rising load, the structure's stiffness collapsed (the secant
+/// stiffness of the last converged increment fell below `[solver]
+/// collapse_stiffness_ratio` of the first one, or an attempt met a tangent that could not be
+/// factored or an implausible increment) — and [`Error::NoConvergence`] otherwise (an
+/// elastic model whose stiffness fell without such a mechanism says so in its note).
+pub fn step_failure(
+    model: &Model,
+    mut failure: NoConvergence,
+    stiffness: &StiffnessHistory,
+) -> Error {
     let converged = failure.converged_load_factor;
     let failed = failure
         .attempts
         .last()
         .map_or(failure.load_factor, |a| a.load_factor);
     let rising = failed.abs() > converged.abs();
-    let ratio = stiffness.ratio();
-    let reasons = |pattern: &str| {
+    let fell = stiffness
+        .ratio()
+        .filter(|&r| r < model.control.collapse_stiffness_ratio)
+        .map(|r| format!("the secant stiffness fell to {r:.2e} of the first increment's"));
+    let met = |wanted: fn(&AttemptFailure) -> bool| {
         failure
             .attempts
             .iter()
-            .any(|a| a.reason.as_deref().is_some_and(|r| r.contains(pattern)))
+            .any(|a| a.failure.as_ref().is_some_and(wanted))
     };
-    let indicator = if let Some(r) = ratio.filter(|&r| r < model.control.collapse_stiffness_ratio) {
-        Some(format!(
-            "the secant stiffness fell to {r:.2e} of the first increment's"
-        ))
-    } else if model.control.plastic && reasons("not positive definite") {
-        Some("the tangent of the plastic model lost positive definiteness".to_string())
-    } else if model.control.plastic && reasons("implausible increment") {
-        Some("the plastic model only converged to implausibly large increments".to_string())
-    } else {
-        None
-    };
-    match indicator {
-        Some(indicator) if rising => Error::Collapse {
-            step: failure.step,
+    let plastic_indicator = fell.clone().or_else(|| {
+        if met(|f| matches!(f, AttemptFailure::Tangent(_))) {
+            Some("the tangent of the plastic model could not be factored".to_string())
+        } else if met(|f| matches!(f, AttemptFailure::Implausible(_))) {
+            Some("the plastic model only converged to implausibly large increments".to_string())
+        } else {
+            None
+        }
+    });
+    let mechanism = failure.mechanism.clone().or_else(|| {
+        plastic_indicator
+            .filter(|_| model.control.plastic && rising)
+            .map(|indicator| Mechanism::PlasticCollapse { indicator })
+    });
+    match mechanism {
+        Some(mechanism) => Error::Collapse {
+            mechanism,
             converged_load_factor: converged,
             failed_load_factor: failed,
-            indicator,
             details: Box::new(failure),
         },
-        _ => Error::NoConvergence(Box::new(failure)),
+        None => {
+            failure.note = fell.map(|f| {
+                if model.control.plastic {
+                    f
+                } else {
+                    format!("{f}, but the bodies are elastic: no plastic collapse")
+                }
+            });
+            Error::NoConvergence(Box::new(failure))
+        }
     }
 }

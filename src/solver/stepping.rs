@@ -15,7 +15,7 @@
 
 use crate::assembly::{AssemblyInput, GlobalSystem};
 use crate::contact::{ContactStatus, InterfaceState};
-use crate::error::{Attempt, NoConvergence};
+use crate::error::{Attempt, AttemptFailure, NoConvergence};
 use crate::model::Model;
 use crate::solver::diagnosis::{diagnose, implausible_increment, step_failure};
 use crate::solver::newton::Problem;
@@ -91,6 +91,26 @@ pub fn run_steps_from(
         }
         let mut attempts: Vec<Attempt> = Vec::new();
         let log = loop {
+            // The cap counts every solve: sub-increments and retried attempts alike.
+            let solves = stats.increments + stats.cutbacks;
+            if solves >= model.control.max_solves {
+                if state.time > step_start {
+                    report_partial(
+                        model,
+                        &mut solution,
+                        &converged_u,
+                        &state,
+                        settings,
+                        observer,
+                    )?;
+                }
+                return Err(Error::TooManySolves {
+                    at: Box::new(schedule.load_point(state.time, target)),
+                    count: solves,
+                    limit: model.control.max_solves,
+                    planned: false,
+                });
+            }
             let trial_time = schedule.next_time(state.time, state.size, target);
             model.apply_prescribed(trial_time, &mut solution.u);
             model.external_force(trial_time, &mut f_ext);
@@ -133,15 +153,21 @@ pub fn run_steps_from(
                 }
                 outcome => {
                     let singular = matches!(&outcome, Err(Error::Linear(_)));
+                    let failure = match (implausible, &outcome) {
+                        (Some(i), _) => Some(AttemptFailure::Implausible(i)),
+                        (None, Err(Error::Linear(m))) => Some(AttemptFailure::Tangent(m.clone())),
+                        (None, Err(e)) => Some(AttemptFailure::Other(e.to_string())),
+                        (None, Ok(_)) => None,
+                    };
                     attempts.push(Attempt {
                         time: trial_time,
                         load_factor: schedule.load_factor_at(trial_time),
+                        at: schedule.load_point(trial_time, target),
                         iterations: outcome.as_ref().map_or(0, |log| log.iterations),
                         residuals: outcome
                             .as_ref()
                             .map_or_else(|_| Vec::new(), |log| log.residuals.clone()),
-                        reason: implausible
-                            .or_else(|| outcome.as_ref().err().map(ToString::to_string)),
+                        failure,
                     });
                     if let Ok(log) = &outcome {
                         stats.add(log);
@@ -157,6 +183,8 @@ pub fn run_steps_from(
                                 load_factor: schedule.load_factor(step),
                                 converged_time: state.time,
                                 converged_load_factor: schedule.load_factor_at(state.time),
+                                reached: schedule.load_point(state.time, target),
+                                target: schedule.load_point(target, target),
                                 cutbacks: state.cutbacks,
                                 attempts,
                                 ..NoConvergence::default()
