@@ -98,16 +98,18 @@ impl Append {
         Ok(())
     }
 
-    /// Writes the bytes at their offset of `path` with one call. A file of another length
-    /// than the offset (changed by another program, or a link) is an error naming `path`.
+    /// Writes the bytes at their offset of `path` with one call; at offset 0 the file is
+    /// created anew (a run starts its tables). A file of another length than the offset
+    /// (changed by another program) or a link is an error naming `path`.
     pub fn write(&self, path: &Path) -> Result<()> {
         check_output_path(path)?;
         let write = || -> io::Result<()> {
             refuse_link(path)?;
+            let start = self.offset == 0;
             let mut file = OpenOptions::new()
                 .write(true)
-                .create(self.offset == 0)
-                .truncate(false)
+                .create(start)
+                .truncate(start)
                 .open(path)?;
             let length = file.metadata()?.len();
             if length != self.offset {
@@ -255,5 +257,8 @@ mod tests {
             })
             .unwrap();
         assert_eq!(first.bytes, b"x\n1\n");
+        // The first append starts the file anew (a folder reused by a study's level).
+        first.write(&path).unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"x\n1\n");
     }
 }

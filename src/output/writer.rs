@@ -64,20 +64,22 @@ const MAX_APPENDED: usize = 16 << 20;
 /// of VTU data and ~10 MB of record for a 60k-unknown model) overlaps the next increment
 /// instead of adding to the run's time. When it is still writing an earlier commit, the new
 /// files wait, merged with those of the commits that came after that one: a file queued
-/// again (the record, `history.csv`, the growing tables, the indexes) keeps only its latest
-/// content, so a thread that falls behind (thousands of short increments, each rewriting
-/// tables that grow with the run) skips the versions that a later commit replaces instead of
-/// making the run wait for each. The merged files keep their order (each file where its
-/// latest commit put it, after the files of earlier commits), so the record and the indexes
-/// still come after the step files they refer to. Within a commit the files are written in
-/// order and the first error stops it, so a step's record and index entries are never on
-/// disk without its files; that error (an [`Error::Io`] naming the file) is returned by a
-/// later `commit` or by [`RecordWriter::finish`], which writes what waits and stops the run.
+/// again (the record, the series) keeps only its latest content, and the rows appended to a
+/// growing table ([`Content::Append`]) are joined into one append, so a thread that falls
+/// behind (thousands of short increments) skips the versions that a later commit replaces
+/// instead of making the run wait for each. The merged files keep their order (each file
+/// where its latest commit put it, after the files of earlier commits), so the record and the
+/// indexes still come after the step files and rows they refer to. Within a commit the files
+/// are written in order and the first error stops it, so a step's record and index entries
+/// are never on disk without its files; that error (an [`Error::Io`] naming the file) is
+/// returned by a later `commit` or by [`RecordWriter::finish`], which writes what waits and
+/// stops the run; nothing is written after it.
 ///
 /// A run killed while commits are in flight or waiting has only complete files (each is
-/// written atomically), the index lists only complete steps, and a resumed run repeats the
-/// increments after the record on disk bit for bit, rewriting their files and index rows
-/// identically.
+/// written atomically; a growing table may end in a partial row, past the length its record
+/// counts), the index lists only complete steps, and a resumed run cuts the tables back to
+/// the record and repeats the increments after it bit for bit, rewriting their files and
+/// rows identically.
 #[derive(Debug, Default)]
 pub struct RecordWriter {
     /// The files of the next commit, in order.
