@@ -9,7 +9,7 @@ use std::process::Command;
 
 use asperity::contact::{ContactStatus, InterfaceState, PointHistory};
 use asperity::material::{PointState, Voigt};
-use asperity::output::pvd::PvdEntry;
+use asperity::output::append::FileMark;
 use asperity::output::restart::{OutputState, read_record};
 use asperity::output::writer::RecordWriter;
 use asperity::solver::energy::{Energy, EnergyLedger};
@@ -131,24 +131,17 @@ fn a_record_gives_back_every_bit() {
         ..RunStatistics::default()
     };
     let output = OutputState {
-        tables: vec![vec![vec![0.0, -0.0], vec![1.0 / 3.0, 2e-310]]],
-        series: vec![PvdEntry {
-            time: 1.0,
-            part: 1,
-            name: "interface".into(),
-            file: "interface_0001.vtu".into(),
-        }],
+        files: vec![(
+            "history.csv".into(),
+            FileMark {
+                length: u64::MAX - 1,
+                crc: 0xdead_beef,
+            },
+        )],
     };
     let mut writer = RecordWriter::default();
     writer
-        .write(
-            &path,
-            "case text",
-            &state(),
-            &stats,
-            &original,
-            &output.view(),
-        )
+        .write(&path, "case text", &state(), &stats, &original, &output)
         .unwrap();
     writer.finish().unwrap();
     let template = Solution {
@@ -214,11 +207,7 @@ fn a_record_gives_back_every_bit() {
         resume.solution.interface_trial,
         resume.solution.interface_committed
     );
-    assert_eq!(
-        bits(&record.output.tables[0][1]),
-        bits(&output.tables[0][1])
-    );
-    assert_eq!(record.output.series, output.series);
+    assert_eq!(record.output, output);
 
     // Another case, another model size, and a damaged file are refused with the reason.
     let refusal = |err: asperity::Error| match err {
@@ -297,6 +286,12 @@ fn resume_continues_only_the_same_case() {
 /// A frictional pair pressed in one step, then sheared back and forth in a cyclic step whose
 /// five cycles are simulated as three (2 + 2 + 1 by cycle jumping).
 fn multi_step() -> CaseBuilder {
+    fretting(5, 2)
+}
+
+/// A frictional pair with Archard wear pressed in one step (2 frames), then sheared back and
+/// forth in a cyclic step of `cycles` cycles, 4 frames each, simulated in jumps of `per_jump`.
+fn fretting(cycles: i64, per_jump: i64) -> CaseBuilder {
     let step = |name: &str, keys: &[(&str, i64)], supports: Table| {
         let mut step = table(&[("name", name.into()), ("supports", supports.into())]);
         for (k, v) in keys {
@@ -335,7 +330,11 @@ fn multi_step() -> CaseBuilder {
             "step",
             step(
                 "fret",
-                &[("cycles", 5), ("cycles_per_jump", 2), ("increments", 4)],
+                &[
+                    ("cycles", cycles),
+                    ("cycles_per_jump", per_jump),
+                    ("increments", 4),
+                ],
                 table(&[("shear", shear.into())]),
             ),
         )
@@ -396,7 +395,7 @@ fn a_multi_step_cyclic_run_resumed_from_any_frame_is_bit_identical() {
         let output = OutputState::default();
         let (state, stats, solution) = (&resume.state, &resume.stats, &resume.solution);
         writer
-            .write(&path, &text, state, stats, solution, &output.view())
+            .write(&path, &text, state, stats, solution, &output)
             .unwrap();
         writer.finish().unwrap();
         let record = read_record(&path, &text, &Solution::new(&model)).unwrap();
@@ -442,7 +441,7 @@ fn an_arc_length_run_resumed_from_any_increment_is_bit_identical() {
         let output = OutputState::default();
         let (state, stats, solution) = (&resume.state, &resume.stats, &resume.solution);
         writer
-            .write(&path, &text, state, stats, solution, &output.view())
+            .write(&path, &text, state, stats, solution, &output)
             .unwrap();
         writer.finish().unwrap();
         let record = read_record(&path, &text, &Solution::new(&model)).unwrap();
@@ -455,4 +454,91 @@ fn an_arc_length_run_resumed_from_any_increment_is_bit_identical() {
             k + 1
         );
     }
+}
+
+/// Runs `case` into `out` (with `extra` arguments); returns the exit code and stderr.
+fn run_case(case: &Path, out: &Path, extra: &[&str]) -> (Option<i32>, String) {
+    let mut args = vec![
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    asperity(&args)
+}
+
+/// The restart record keeps what continues the tables that grow with the frames (their
+/// lengths and checksums), not their rows: a run of four times the cycles has a record of the
+/// same size. (Each frame adds at least a history row of ~30 numbers, a hysteresis row and
+/// two point-loop rows, ~400 bytes; the counters in the record may take a byte more each.)
+#[test]
+fn the_restart_record_does_not_grow_with_the_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut sizes = Vec::new();
+    for cycles in [3, 12] {
+        let case = fretting(cycles, 1)
+            .set_last(
+                "contact",
+                "hysteresis_points",
+                vec![list(&[0.5, 1.0]), list(&[1.5, 1.0])],
+            )
+            .write(&dir.path().join(format!("case_{cycles}.toml")));
+        let out = dir.path().join(format!("out_{cycles}"));
+        let (code, text) = run_case(&case, &out, &[]);
+        assert_eq!(code, Some(0), "{text}");
+        let history = std::fs::read_to_string(out.join("history.csv")).unwrap();
+        assert_eq!(history.lines().count(), 1 + 1 + 2 + 4 * cycles as usize);
+        sizes.push(std::fs::metadata(out.join("restart.bin")).unwrap().len());
+    }
+    assert!(sizes[1] <= sizes[0] + 64, "record sizes {sizes:?}");
+}
+
+/// `--resume` continues each growing table where the record left it: rows after the record
+/// (here the partial line of a run killed while appending) are cut off, and a table that
+/// changed before that point is refused, naming it, with the folder left as it was.
+#[test]
+fn resume_cuts_tables_back_to_the_record_and_refuses_changed_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = fretting(3, 1).write(&dir.path().join("case.toml"));
+    let out = dir.path().join("out");
+    let (code, text) = run_case(&case, &out, &[]);
+    assert_eq!(code, Some(0), "{text}");
+    let tables = [
+        "history.csv",
+        "hysteresis_joint.csv",
+        "cycles.csv",
+        "wear_joint.csv",
+    ];
+    let read = |name: &str| std::fs::read(out.join(name)).unwrap();
+    let finished: Vec<Vec<u8>> = tables.iter().map(|t| read(t)).collect();
+    for table in tables {
+        let mut bytes = read(table);
+        bytes.extend_from_slice(b"17,0.2");
+        std::fs::write(out.join(table), bytes).unwrap();
+    }
+    let (code, text) = run_case(&case, &out, &["--resume"]);
+    assert_eq!(code, Some(0), "{text}");
+    for (table, bytes) in tables.iter().zip(&finished) {
+        assert!(read(table) == *bytes, "{table} after --resume");
+    }
+
+    // A digit changed in the middle of the hysteresis table.
+    let mut changed = finished[1].clone();
+    let middle = changed.len() / 2;
+    let digit = middle
+        + changed[middle..]
+            .iter()
+            .position(u8::is_ascii_digit)
+            .unwrap();
+    changed[digit] = if changed[digit] == b'1' { b'2' } else { b'1' };
+    std::fs::write(out.join(tables[1]), &changed).unwrap();
+    let (code, text) = run_case(&case, &out, &["--resume"]);
+    assert_eq!(code, Some(3), "{text}");
+    assert!(
+        text.contains("cannot resume") && text.contains("hysteresis_joint.csv"),
+        "{text}"
+    );
+    assert!(read(tables[1]) == changed);
+    assert!(read(tables[0]) == finished[0]);
 }

@@ -627,24 +627,25 @@ fn hysteresis_cycle_and_wear_tables_hold_the_pair_integrals() {
     tables
         .record(&d.model, &interface, &frame_of(&d, frame(true), &zero), 2.0)
         .unwrap();
-    let files = tables.files(&d.model);
-    let names: Vec<String> = files
-        .iter()
-        .map(|(t, _)| RunFile::Fretting(*t).name())
+    let files: Vec<(String, String)> = tables
+        .files(&d.model)
+        .into_iter()
+        .map(|(t, csv)| {
+            let text = String::from_utf8(csv.file().pending().to_vec()).unwrap();
+            (RunFile::Fretting(t).name(), text)
+        })
         .collect();
+    let names: Vec<&str> = files.iter().map(|(name, _)| name.as_str()).collect();
     assert_eq!(
         names,
         ["hysteresis_joint.csv", "cycles.csv", "wear_joint.csv"]
     );
-    let number = |cell: &asperity::output::csv::Cell| match cell {
-        asperity::output::csv::Cell::Number(v) => *v,
-        other => panic!("{other:?}"),
-    };
+    let number = |cell: &str| cell.parse::<f64>().unwrap();
     // At u_T = δ after slipping forward: p_T = μp over the whole contact.
-    let hysteresis = &files[0].1;
-    assert_eq!(hysteresis.columns, HYSTERESIS);
-    assert_eq!(hysteresis.rows.len(), 2);
-    let row: Vec<f64> = hysteresis.rows[1].iter().map(number).collect();
+    let (columns, hysteresis) = csv_cells(&files[0].1);
+    assert_eq!(columns, HYSTERESIS);
+    assert_eq!(hysteresis.len(), 2);
+    let row: Vec<f64> = hysteresis[1].iter().map(|c| number(c)).collect();
     assert_eq!(row[..5], [2.0, 2.0, 1.0, 1000.0, 1.0]);
     assert!(close(row[5], MU * P * AREA, ROUND_OFF));
     assert!(close(row[6], P * AREA, ROUND_OFF));
@@ -652,14 +653,11 @@ fn hysteresis_cycle_and_wear_tables_hold_the_pair_integrals() {
     // One cycle row: the closed-form dissipation and the worn volume of a uniform depth.
     let slip = DELTA - MU * P / KT;
     let depth = 2.0 * k * P * 5.0 * slip;
-    let cycles = &files[1].1;
-    assert_eq!(cycles.columns, CYCLES);
-    assert_eq!(cycles.rows.len(), 1);
-    assert_eq!(
-        cycles.rows[0][3],
-        asperity::output::csv::Cell::Text("joint".into())
-    );
-    let values = [4, 5, 6, 7, 8].map(|i| number(&cycles.rows[0][i]));
+    let (columns, cycles) = csv_cells(&files[1].1);
+    assert_eq!(columns, CYCLES);
+    assert_eq!(cycles.len(), 1);
+    assert_eq!(cycles[0][3], "joint");
+    let values = [4, 5, 6, 7, 8].map(|i| number(cycles[0][i]));
     assert!(close(values[0], 4.0 * MU * P * AREA * slip, ROUND_OFF));
     // No jump, no re-equilibrium after it.
     assert_eq!(values[1], 0.0);
@@ -667,19 +665,39 @@ fn hysteresis_cycle_and_wear_tables_hold_the_pair_integrals() {
     assert!(close(values[3], depth, ROUND_OFF));
     assert_eq!(values[4], 0.0, "no jump, no share of its limit");
     // The profile along side A: 9 nodes from s = 0 to the contact length.
-    let profile = &files[2].1;
-    assert_eq!(profile.columns, WEAR);
-    assert_eq!(profile.rows.len(), 9);
-    let last: Vec<f64> = profile.rows[8].iter().map(number).collect();
+    let (columns, profile) = csv_cells(&files[2].1);
+    assert_eq!(columns, WEAR);
+    assert_eq!(profile.len(), 9);
+    let last: Vec<f64> = profile[8].iter().map(|c| number(c)).collect();
     assert!(close(last[2], AREA, ROUND_OFF));
     assert!(close(last[7], depth, ROUND_OFF));
-    // The restart record's rows give the same tables back; rows of another model do not.
-    let mut restored = FrettingTables::new(&d.model);
-    assert_eq!(restored.restore(tables.rows()), Some(()));
-    assert_eq!(restored, tables);
-    let mut rows = tables.rows();
-    rows.pop();
-    assert_eq!(restored.restore(rows), None);
+    // The rows are handed to the writer once: the tables keep none of them.
+    for (_, csv) in tables.files(&d.model) {
+        let appended = csv.file().take().unwrap();
+        assert_eq!(appended.offset, 0);
+        assert!(csv.file().take().is_none());
+    }
+    tables
+        .record(
+            &d.model,
+            &interface,
+            &frame_of(&d, frame(false), &zero),
+            3.0,
+        )
+        .unwrap();
+    let pending: Vec<usize> = tables
+        .files(&d.model)
+        .into_iter()
+        .map(|(_, csv)| csv.file().pending().iter().filter(|&&b| b == b'\n').count())
+        .collect();
+    assert_eq!(pending, [1, 0, 0], "only the new hysteresis row");
+}
+
+/// The header and the cells of the CSV text `text` (no quoted cells).
+fn csv_cells(text: &str) -> (Vec<&str>, Vec<Vec<&str>>) {
+    let mut lines = text.lines().map(|l| l.split(',').collect::<Vec<_>>());
+    let header = lines.next().unwrap();
+    (header, lines.collect())
 }
 
 /// The rows of the all-numeric CSV file `path`, whose header must be `columns`.
@@ -806,7 +824,8 @@ fn a_hysteresis_point_off_the_contact_is_refused_naming_its_key() {
 #[test]
 fn without_wear_a_pair_has_its_loop_and_cycles_but_no_wear_profile() {
     let d = Driver::new(linear_coulomb(KN, KT, MU), None, CLOSURE);
-    let files = FrettingTables::new(&d.model).files(&d.model);
+    let mut tables = FrettingTables::new(&d.model);
+    let files = tables.files(&d.model);
     let names: Vec<String> = files
         .iter()
         .map(|(t, _)| RunFile::Fretting(*t).name())

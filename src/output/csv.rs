@@ -9,6 +9,7 @@
 
 use std::path::Path;
 
+use super::append::{AppendedFile, FileMark};
 use super::atomic::{invalid_data, write_bytes};
 use crate::Result;
 
@@ -137,34 +138,42 @@ pub fn write_csv<C: CsvCell>(path: &Path, table: &CsvTable<C>) -> Result<()> {
     write_bytes(path, &text)
 }
 
-/// A numeric table that grows by rows and is written after every one (`history.csv`): each
-/// row is checked and formatted once, when it is added, so that writing the table again
-/// costs a copy of its text instead of formatting every row again (which made writing a
-/// run of thousands of frames quadratic in their number). The text is what [`write_csv`]
-/// writes for the same table.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// A table that grows by rows and is written by appending them (`history.csv`, the fretting
+/// tables): each row is checked and formatted once, when it is added, and handed to the
+/// writer once ([`AppendedFile`]), so that a run of thousands of frames writes each row once
+/// instead of the whole table after every frame. The text is what [`write_csv`] writes for
+/// the same table.
+#[derive(Clone, Debug, Default)]
 pub struct GrowingCsv {
-    text: Vec<u8>,
+    file: AppendedFile,
     columns: usize,
 }
 
 impl GrowingCsv {
-    /// The table of `columns` without rows.
+    /// The table of `columns` without rows: its header is the first text appended.
     pub fn new(columns: &[String]) -> Self {
         let header = CsvTable::<f64> {
             columns: columns.to_vec(),
             rows: Vec::new(),
         };
+        let mut file = AppendedFile::default();
+        // Writing a header into memory cannot fail.
+        file.push(&csv_text(&header).unwrap_or_default());
         Self {
-            // Writing a header into memory cannot fail.
-            text: csv_text(&header).unwrap_or_default(),
+            file,
             columns: columns.len(),
         }
     }
 
+    /// Continues the table after the text that `mark` describes (a resumed run's), dropping
+    /// what was not handed over.
+    pub fn continue_from(&mut self, mark: FileMark) {
+        self.file = AppendedFile::continued(mark);
+    }
+
     /// Appends `row`, refusing one of the wrong length or with a value that is not finite
     /// (the error names `path`, the file the table is written to).
-    pub fn push(&mut self, path: &Path, row: &[f64]) -> Result<()> {
+    pub fn push<C: CsvCell>(&mut self, path: &Path, row: &[C]) -> Result<()> {
         if row.len() != self.columns {
             let message = format!(
                 "a row has {} values but the table has {} columns",
@@ -173,27 +182,52 @@ impl GrowingCsv {
             );
             return Err(invalid_data(path, message));
         }
-        if let Some((c, v)) = row.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        let bad = row
+            .iter()
+            .enumerate()
+            .find_map(|(c, v)| v.number().filter(|v| !v.is_finite()).map(|v| (c, v)));
+        if let Some((c, v)) = bad {
             return Err(invalid_data(
                 path,
                 format!("column {c}: value {v} is not finite"),
             ));
         }
         let mut line = String::with_capacity(24 * row.len());
-        for (c, &v) in row.iter().enumerate() {
+        let mut cell = String::new();
+        for (c, v) in row.iter().enumerate() {
             if c > 0 {
                 line.push(',');
             }
-            push_f64(&mut line, v);
+            cell.clear();
+            v.push_to(&mut cell);
+            push_field(&mut line, &cell, row.len() == 1);
         }
         line.push('\n');
-        self.text.extend_from_slice(line.as_bytes());
+        self.file.push(line.as_bytes());
         Ok(())
     }
 
-    /// The CSV text so far.
-    pub fn bytes(&self) -> &[u8] {
-        &self.text
+    /// The file the rows go to.
+    pub fn file(&mut self) -> &mut AppendedFile {
+        &mut self.file
+    }
+
+    /// The length and checksum of the text so far.
+    pub fn mark(&self) -> FileMark {
+        self.file.mark()
+    }
+}
+
+/// Appends a field as the csv crate writes it (RFC 4180: quoted, with its quotes doubled,
+/// when it holds a comma, quote or line break; an empty field quoted when it is `alone` on
+/// its line).
+fn push_field(line: &mut String, field: &str, alone: bool) {
+    if field.contains([',', '"', '\n', '\r']) || (field.is_empty() && alone) {
+        line.push('"');
+        line.push_str(&field.replace('"', "\"\""));
+        line.push('"');
+    } else {
+        line.push_str(field);
     }
 }
 
@@ -250,11 +284,47 @@ mod tests {
             growing.push(Path::new("t.csv"), row).unwrap();
         }
         let table = CsvTable { columns, rows };
-        assert_eq!(growing.bytes(), csv_text(&table).unwrap().as_slice());
+        let whole = csv_text(&table).unwrap();
+        assert_eq!(growing.file().pending(), whole.as_slice());
         let nan = growing.push(Path::new("t.csv"), &[1.0, f64::NAN, 0.0]);
         assert!(nan.unwrap_err().to_string().contains("t.csv"));
         assert!(growing.push(Path::new("t.csv"), &[1.0]).is_err());
-        assert_eq!(growing.bytes(), csv_text(&table).unwrap().as_slice());
+        // Rows are handed over once; the mark counts them all.
+        let first = growing.file().take().unwrap();
+        assert_eq!(first.bytes, whole);
+        growing.push(Path::new("t.csv"), &[2.0, 0.5, 0.25]).unwrap();
+        let next = growing.file().take().unwrap();
+        assert_eq!(
+            (next.offset, next.bytes.as_slice()),
+            (whole.len() as u64, &b"2,0.5,0.25\n"[..])
+        );
+        assert_eq!(
+            growing.mark().length,
+            (whole.len() + next.bytes.len()) as u64
+        );
+    }
+
+    #[test]
+    fn text_cells_are_quoted_as_the_csv_crate_quotes_them() {
+        let columns: Vec<String> = ["name", "value"].map(String::from).to_vec();
+        let rows = vec![
+            vec![Cell::Text("a, \"b\"".into()), Cell::Number(0.5)],
+            vec![Cell::Text("line\nbreak".into()), Cell::Empty],
+            vec![Cell::Empty, Cell::Text("plain".into())],
+        ];
+        let mut growing = GrowingCsv::new(&columns);
+        for row in &rows {
+            growing.push(Path::new("t.csv"), row).unwrap();
+        }
+        let whole = csv_text(&CsvTable { columns, rows }).unwrap();
+        assert_eq!(growing.file().pending(), whole.as_slice());
+        let mut alone = GrowingCsv::new(&["x".to_string()]);
+        alone.push(Path::new("t.csv"), &[Cell::Empty]).unwrap();
+        let whole = csv_text(&CsvTable {
+            columns: vec!["x".to_string()],
+            rows: vec![vec![Cell::Empty]],
+        });
+        assert_eq!(alone.file().pending(), whole.unwrap().as_slice());
     }
 
     #[test]

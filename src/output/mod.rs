@@ -7,6 +7,7 @@
 //! non-finite numbers (a NaN in a result file is an error, not data); only `summary.json`
 //! writes one, as `null`, since it also describes failed runs.
 
+pub mod append;
 pub(crate) mod atomic;
 pub mod csv;
 pub mod paths;

@@ -14,7 +14,7 @@ use super::csv::format_f64;
 use crate::Result;
 
 /// One file of a `.pvd` collection.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct PvdEntry {
     /// Time (or load factor) of this file; ParaView's time slider shows it.
     pub time: f64,

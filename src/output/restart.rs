@@ -4,17 +4,20 @@
 //! It holds the stepping loop's state ([`LoopState`]: step, pseudo-time, next increment
 //! size, counters, force floor, stiffness history), the run's counters, the displacements,
 //! every integration point's committed state ([`PointState`], [`InterfaceState`] with its
-//! fretting history), the energy ledger, and the output's own state (the rows of
-//! `history.csv`, the entries of `results.pvd`, the step records of `summary.json`), so that a
-//! resumed run rewrites those files exactly.
+//! fretting history), the energy ledger, and the output's own state: the length and checksum
+//! of each file the run grows by appending ([`OutputState`]; `history.csv`, from which the
+//! step records of `summary.json` are read back, the fretting tables and the energy marks), so
+//! that a resumed run continues those files exactly, and the record stays the size of the
+//! model however many frames the run has.
 //!
 //! The state types derive serde's traits and the record is their `postcard` encoding, which
 //! stores every `f64` as its eight IEEE-754 bytes, never as text, so a resumed run starts from
 //! bit-identical values. A fixed magic (with the format version) opens the record, followed by
 //! the program version and the case file's text: a record made by another case or program is
 //! refused before the rest is read, since continuing it would mix two models. It is written
-//! atomically after the files of its increment ([`super::writer::RecordWriter`]), so the
-//! record on disk always belongs to a state whose files are complete.
+//! atomically after the files of its increment and the rows appended at it
+//! ([`super::writer::RecordWriter`]), so the record on disk always belongs to a state whose
+//! files are complete.
 
 use std::borrow::Cow;
 use std::io;
@@ -22,43 +25,60 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use super::pvd::PvdEntry;
+use super::append::FileMark;
 use crate::contact::InterfaceState;
 use crate::material::PointState;
 use crate::solver::energy::EnergyLedger;
 use crate::solver::state::{LoopState, Progress, Resume, RunStatistics, Solution};
 use crate::{Error, Result};
 
-/// First bytes of a record; the trailing digit is the format version (3: `postcard`).
-const MAGIC: &[u8; 16] = b"asperity-rst-v3\n";
+/// First bytes of a record; the trailing digit is the format version (3: `postcard`; 4: the
+/// growing files' lengths and checksums instead of their rows).
+const MAGIC: &[u8; 16] = b"asperity-rst-v4\n";
 /// Bytes of [`MAGIC`] before the format version.
 const MAGIC_NAME: usize = 14;
 
-/// What a record holds besides the solver's state: the output's tables (rows of numbers,
-/// e.g. `history.csv`) and the PVD series.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// What a record holds besides the solver's state: the length and checksum of each file
+/// the run grows by appending (`history.csv`, the fretting tables), by file name, at the
+/// record's increment. A resumed run continues each file from there
+/// ([`super::append::check`], [`super::append::truncate`]); the rows themselves stay in the
+/// files, so that a record is the size of the model however many frames the run has.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct OutputState {
-    pub tables: Vec<Vec<Vec<f64>>>,
-    pub series: Vec<PvdEntry>,
+    pub files: Vec<(String, FileMark)>,
 }
 
-/// The output's state as a record is written from it, borrowed from the output's own tables
-/// (cloning every row for every record made the records of a long run cost quadratic time in
-/// allocations).
-#[derive(Clone, Debug, Default)]
-pub struct OutputView<'a> {
-    pub tables: Vec<&'a [Vec<f64>]>,
-    pub series: &'a [PvdEntry],
+/// First bytes of the file of energy marks (`restart_energy.bin`): the energy balance at
+/// every cycle end so far, which `summary.json` lists and a resumed run reads back, kept out
+/// of the record because it grows with the cycles.
+pub const ENERGY_MARKS: &[u8] = b"asperity-energy-marks-v1\n";
+
+/// The bytes of an energy mark's numbers (`crate::output::summary::EnergyMark::to_row`) in
+/// the file of energy marks `path`, as `postcard` stores them (bit for bit).
+pub fn encode_energy_mark(path: &Path, row: &[f64]) -> Result<Vec<u8>> {
+    postcard::to_allocvec(row)
+        .map_err(|e| Error::io(path, io::Error::new(io::ErrorKind::InvalidData, e)))
 }
 
-impl OutputState {
-    /// The state as a record is written from it.
-    pub fn view(&self) -> OutputView<'_> {
-        OutputView {
-            tables: self.tables.iter().map(Vec::as_slice).collect(),
-            series: &self.series,
-        }
+/// The rows of the energy marks' file `path` ([`ENERGY_MARKS`], then
+/// [`encode_energy_mark`]s); a file of another content is an [`Error::Restart`].
+pub fn read_energy_marks(path: &Path) -> Result<Vec<Vec<f64>>> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let refuse = |reason: &str| Error::Restart {
+        path: path.to_path_buf(),
+        reason: reason.into(),
+    };
+    let mut rest = bytes
+        .strip_prefix(ENERGY_MARKS)
+        .ok_or_else(|| refuse("not an asperity file of energy marks"))?;
+    let mut rows = Vec::new();
+    while !rest.is_empty() {
+        let (row, after) = postcard::take_from_bytes::<Vec<f64>>(rest)
+            .map_err(|_| refuse("its energy marks are damaged"))?;
+        rows.push(row);
+        rest = after;
     }
+    Ok(rows)
 }
 
 /// A record read back: the run to continue and the output's state.
@@ -89,8 +109,7 @@ struct Body<'a> {
     committed: Cow<'a, [PointState]>,
     interface_committed: Cow<'a, [InterfaceState]>,
     energy: Cow<'a, EnergyLedger>,
-    tables: Vec<Cow<'a, [Vec<f64>]>>,
-    series: Cow<'a, [PvdEntry]>,
+    output: Cow<'a, OutputState>,
 }
 
 /// Encodes the record of the converged increment `progress` into `buffer` (cleared first);
@@ -99,7 +118,7 @@ pub(super) fn encode_record(
     buffer: &mut Vec<u8>,
     case: &str,
     progress: &Progress,
-    output: &OutputView,
+    output: &OutputState,
 ) -> io::Result<()> {
     let Progress {
         state,
@@ -117,8 +136,7 @@ pub(super) fn encode_record(
         committed: Cow::Borrowed(&solution.committed),
         interface_committed: Cow::Borrowed(&solution.interface_committed),
         energy: Cow::Borrowed(&solution.energy),
-        tables: output.tables.iter().map(|t| Cow::Borrowed(*t)).collect(),
-        series: Cow::Borrowed(output.series),
+        output: Cow::Borrowed(output),
     };
     // Encoded into memory first (a record is mostly integration-point states: ~10 MB for a
     // 60k-unknown model), then written with one call; the buffer is reused from record to
@@ -219,10 +237,7 @@ impl Body<'_> {
                 stats: self.stats.into_owned(),
                 solution,
             },
-            output: OutputState {
-                tables: self.tables.into_iter().map(Cow::into_owned).collect(),
-                series: self.series.into_owned(),
-            },
+            output: self.output.into_owned(),
         }
     }
 }
@@ -252,7 +267,7 @@ mod tests {
             solution: &solution,
         };
         let mut buffer = Vec::new();
-        encode_record(&mut buffer, case, &progress, &OutputView::default()).unwrap();
+        encode_record(&mut buffer, case, &progress, &OutputState::default()).unwrap();
         buffer
     }
 

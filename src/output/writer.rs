@@ -6,10 +6,11 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 
 use super::Grid;
+use super::append::Append;
 use super::atomic::write_bytes;
 use super::csv::{Cell, CsvTable, write_csv};
 use super::pvd::{PvdEntry, write_pvd};
-use super::restart::{OutputView, encode_record};
+use super::restart::{OutputState, encode_record};
 use super::vtu::write_vtu_with;
 use crate::solver::state::{LoopState, Progress, RunStatistics, Solution};
 use crate::{Error, Result};
@@ -22,8 +23,10 @@ pub enum Content {
     /// A table with text or empty cells.
     Table(CsvTable<Cell>),
     Pvd(Vec<PvdEntry>),
-    /// A file's text, already formatted (a [`super::csv::GrowingCsv`]).
+    /// A file's text, already formatted.
     Text(Vec<u8>),
+    /// Rows to append to a growing file ([`super::append::AppendedFile`]).
+    Append(Append),
     /// A restart record, already encoded (by [`RecordWriter::queue_record`]).
     Record(Vec<u8>),
 }
@@ -37,6 +40,7 @@ impl Content {
             Content::Table(table) => write_csv(path, table),
             Content::Pvd(entries) => write_pvd(path, entries),
             Content::Record(bytes) | Content::Text(bytes) => write_bytes(path, bytes),
+            Content::Append(append) => append.write(path),
         }
     }
 }
@@ -45,6 +49,9 @@ impl Content {
 /// files (each step writes its VTU files and a table per contact pair) besides the record and
 /// the tables that every commit rewrites.
 const MAX_WAITING_FILES: usize = 32;
+
+/// Bytes of rows that may wait to be appended before a commit waits for the writer thread.
+const MAX_APPENDED: usize = 16 << 20;
 
 /// Writes a run's committed files in the background: the files of a converged step (VTU,
 /// CSV), the restart record of a converged increment (`case` is the case file's text, which
@@ -57,20 +64,22 @@ const MAX_WAITING_FILES: usize = 32;
 /// of VTU data and ~10 MB of record for a 60k-unknown model) overlaps the next increment
 /// instead of adding to the run's time. When it is still writing an earlier commit, the new
 /// files wait, merged with those of the commits that came after that one: a file queued
-/// again (the record, `history.csv`, the growing tables, the indexes) keeps only its latest
-/// content, so a thread that falls behind (thousands of short increments, each rewriting
-/// tables that grow with the run) skips the versions that a later commit replaces instead of
-/// making the run wait for each. The merged files keep their order (each file where its
-/// latest commit put it, after the files of earlier commits), so the record and the indexes
-/// still come after the step files they refer to. Within a commit the files are written in
-/// order and the first error stops it, so a step's record and index entries are never on
-/// disk without its files; that error (an [`Error::Io`] naming the file) is returned by a
-/// later `commit` or by [`RecordWriter::finish`], which writes what waits and stops the run.
+/// again (the record, the series) keeps only its latest content, and the rows appended to a
+/// growing table ([`Content::Append`]) are joined into one append, so a thread that falls
+/// behind (thousands of short increments) skips the versions that a later commit replaces
+/// instead of making the run wait for each. The merged files keep their order (each file
+/// where its latest commit put it, after the files of earlier commits), so the record and the
+/// indexes still come after the step files and rows they refer to. Within a commit the files
+/// are written in order and the first error stops it, so a step's record and index entries
+/// are never on disk without its files; that error (an [`Error::Io`] naming the file) is
+/// returned by a later `commit` or by [`RecordWriter::finish`], which writes what waits and
+/// stops the run; nothing is written after it.
 ///
 /// A run killed while commits are in flight or waiting has only complete files (each is
-/// written atomically), the index lists only complete steps, and a resumed run repeats the
-/// increments after the record on disk bit for bit, rewriting their files and index rows
-/// identically.
+/// written atomically; a growing table may end in a partial row, past the length its record
+/// counts), the index lists only complete steps, and a resumed run cuts the tables back to
+/// the record and repeats the increments after it bit for bit, rewriting their files and
+/// rows identically.
 #[derive(Debug, Default)]
 pub struct RecordWriter {
     /// The files of the next commit, in order.
@@ -85,6 +94,8 @@ pub struct RecordWriter {
     /// A record buffer to encode into: reusing it spares the page faults of ~10 MB of
     /// fresh memory per record.
     spare: Vec<u8>,
+    /// Whether a commit failed: nothing is written after it (its error was reported).
+    failed: bool,
 }
 
 /// The writer thread: commits go to it through one channel, their outcomes (the record's
@@ -131,6 +142,11 @@ impl RecordWriter {
         self.queued.push((path, content));
     }
 
+    /// Drops the files queued since the last commit.
+    pub fn discard_queued(&mut self) {
+        self.queued.clear();
+    }
+
     /// Encodes the record of the converged increment `progress` and adds it to the next
     /// commit.
     pub fn queue_record(
@@ -138,7 +154,7 @@ impl RecordWriter {
         path: &Path,
         case: &str,
         progress: &Progress,
-        output: &OutputView,
+        output: &OutputState,
     ) -> Result<()> {
         let mut buffer = std::mem::take(&mut self.spare);
         encode_record(&mut buffer, case, progress, output).map_err(|e| Error::io(path, e))?;
@@ -150,13 +166,18 @@ impl RecordWriter {
     /// them into the files waiting for it. Returns the error of a finished commit.
     pub fn commit(&mut self) -> Result<()> {
         let files = std::mem::take(&mut self.queued);
+        if self.failed {
+            // The error was reported; later files may refer to the ones that failed.
+            return Ok(());
+        }
         self.merge(files);
         if self.in_flight && !self.poll()? {
-            if self.waiting.len() <= MAX_WAITING_FILES {
+            if self.waiting.len() <= MAX_WAITING_FILES && self.waiting_appends() <= MAX_APPENDED {
                 return Ok(());
             }
-            // Files that no later commit replaces (each step's VTU and contact tables) pile
-            // up while the thread is behind: wait for it rather than hold them all in memory.
+            // Files that no later commit replaces (each step's VTU and contact tables) and
+            // rows appended to the growing tables pile up while the thread is behind: wait
+            // for it rather than hold them all in memory.
             self.wait()?;
         }
         self.send_waiting();
@@ -164,15 +185,43 @@ impl RecordWriter {
     }
 
     /// Adds `files` to the waiting ones: a path already waiting is replaced (its superseded
-    /// record buffer kept for reuse) and takes its new place in the order.
+    /// record buffer kept for reuse), or for an append extended by the new bytes, and takes
+    /// its new place in the order.
     fn merge(&mut self, files: Vec<(PathBuf, Content)>) {
-        for (path, content) in files {
+        for (path, mut content) in files {
             let earlier = self.waiting.iter().position(|(p, _)| *p == path);
-            if let Some((_, Content::Record(bytes))) = earlier.map(|i| self.waiting.remove(i)) {
-                self.keep_spare(bytes);
+            match (earlier.map(|i| self.waiting.remove(i)), content) {
+                (Some((_, Content::Record(bytes))), new) => {
+                    self.keep_spare(bytes);
+                    content = new;
+                }
+                (Some((_, Content::Append(mut first))), Content::Append(next)) => {
+                    content = match first.extend(next) {
+                        Ok(()) => Content::Append(first),
+                        // Not the continuation: written as it is, at its offset the writer
+                        // checks (and refuses).
+                        Err(next) => {
+                            self.waiting.push((path.clone(), Content::Append(first)));
+                            Content::Append(next)
+                        }
+                    };
+                }
+                (_, new) => content = new,
             }
             self.waiting.push((path, content));
         }
+    }
+
+    /// Bytes waiting to be appended to growing files.
+    fn waiting_appends(&self) -> usize {
+        let appends = self
+            .waiting
+            .iter()
+            .filter_map(|(_, content)| match content {
+                Content::Append(append) => Some(append.bytes.len()),
+                _ => None,
+            });
+        appends.sum()
     }
 
     /// Hands the waiting files, if any, to the writer thread (started at the first commit).
@@ -207,7 +256,7 @@ impl RecordWriter {
         state: &LoopState,
         stats: &RunStatistics,
         solution: &Solution,
-        output: &OutputView,
+        output: &OutputState,
     ) -> Result<()> {
         let progress = Progress {
             state: state.clone(),
@@ -261,6 +310,7 @@ impl RecordWriter {
         match outcome {
             Some(Err(e)) => {
                 self.waiting.clear();
+                self.failed = true;
                 return Err(e);
             }
             Some(Ok(spare)) => self.keep_spare(spare),

@@ -1,20 +1,18 @@
 //! The per-contact fretting tables of a run: the hysteresis loop of each pair (one row per
 //! output frame), the results of every simulated load cycle (one row per cycle and pair), and
 //! the wear-depth profile of each pair that wears at every cycle end, and the local loops of the
-//! points a case traces (`hysteresis_points`). They are kept as rows of numbers (the restart
-//! record stores them like `history.csv`'s rows) and turned into CSV tables for
-//! `hysteresis_<pair>.csv`, `point_loops_<pair>.csv`, `cycles.csv` and
-//! `wear_<pair>.csv`.
+//! points a case traces (`hysteresis_points`), written as `hysteresis_<pair>.csv`,
+//! `point_loops_<pair>.csv`, `cycles.csv` and `wear_<pair>.csv`. Each table is formatted row
+//! by row as the frames come and handed to the writer to append ([`GrowingCsv`]): no row is
+//! kept once handed over, so that memory does not grow with the frames.
 
 use crate::contact::{ContactStatus, InterfaceState};
 use crate::element::interface6::{chord_length, interface_point};
-use crate::element::set::{ContactPair, INTERFACE_POINTS};
+use crate::element::set::INTERFACE_POINTS;
 use crate::model::Model;
-use std::path::Path;
 
 use crate::Result;
-use crate::output::csv::{Cell, CsvTable, GrowingCsv};
-use crate::output::writer::Content;
+use crate::output::csv::{Cell, GrowingCsv};
 use crate::post::interface::InterfaceOutput;
 use crate::solver::state::StepResult;
 
@@ -37,25 +35,10 @@ fn table_label(table: &str, pair: &str) -> std::path::PathBuf {
     format!("{table} table of contact '{pair}'").into()
 }
 
-/// A table of numbers as cells.
-fn cell_table(columns: &[&str], rows: &[Vec<f64>]) -> CsvTable<Cell> {
-    CsvTable {
-        columns: columns.iter().map(|c| c.to_string()).collect(),
-        rows: rows
-            .iter()
-            .map(|r| r.iter().map(|&v| Cell::Number(v)).collect())
-            .collect(),
-    }
-}
-
-/// An empty hysteresis table's text.
-fn hysteresis_csv() -> GrowingCsv {
-    GrowingCsv::new(&HYSTERESIS.map(String::from))
-}
-
-/// An empty table of traced points' text.
-fn point_loops_csv() -> GrowingCsv {
-    GrowingCsv::new(&POINT_LOOPS.map(String::from))
+/// An empty table of `columns`.
+fn growing(columns: &[&str]) -> GrowingCsv {
+    let columns: Vec<String> = columns.iter().map(|c| c.to_string()).collect();
+    GrowingCsv::new(&columns)
 }
 
 /// Columns of `hysteresis_<pair>.csv`: the frame (pseudo-time of the output), where it lies
@@ -171,12 +154,6 @@ pub const WEAR: [&str; 8] = [
     "wear_depth",
 ];
 
-/// Index of `point` in [`POINT_LOOPS`].
-const POINT: usize = 5;
-
-/// Index of `contact` in [`CYCLES`] (kept as the pair's index in the rows).
-const CONTACT: usize = 3;
-
 /// Integrals over one pair's points.
 #[derive(Clone, Copy, Debug, Default)]
 struct PairSums {
@@ -219,50 +196,52 @@ fn pair_sums(model: &Model, states: &[InterfaceState], jump: f64) -> Vec<PairSum
     out
 }
 
-/// The fretting tables of a run, as rows of numbers.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// The fretting tables of a run: the rows not yet handed to the writer.
+#[derive(Clone, Debug)]
 pub struct FrettingTables {
-    /// Rows of [`HYSTERESIS`] per pair.
-    hysteresis: Vec<Vec<Vec<f64>>>,
-    /// The same rows as CSV text, grown row by row (the table is written after every frame).
-    hysteresis_text: Vec<GrowingCsv>,
-    /// Rows of [`CYCLES`] (the contact as its pair index).
-    cycles: Vec<Vec<f64>>,
-    /// Rows of [`WEAR`] per pair (empty for pairs that do not wear).
-    wear: Vec<Vec<Vec<f64>>>,
-    /// The traced points of each pair, their rows of [`POINT_LOOPS`] and those rows as
-    /// CSV text.
+    /// [`HYSTERESIS`] per pair.
+    hysteresis: Vec<GrowingCsv>,
+    /// [`CYCLES`], all pairs.
+    cycles: GrowingCsv,
+    /// [`WEAR`] per pair (`None` for pairs that do not wear).
+    wear: Vec<Option<GrowingCsv>>,
+    /// The traced points of each pair and their table of [`POINT_LOOPS`] (`None` for a pair
+    /// without traced points).
     traced: Vec<Vec<TracedPoint>>,
-    points: Vec<Vec<Vec<f64>>>,
-    points_text: Vec<GrowingCsv>,
+    points: Vec<Option<GrowingCsv>>,
 }
 
 impl FrettingTables {
     /// Empty tables for the pairs of `model`.
     pub fn new(model: &Model) -> Self {
-        let pairs = model.interface.pairs.len();
+        let pairs = &model.interface.pairs;
         Self {
-            hysteresis: vec![Vec::new(); pairs],
-            hysteresis_text: vec![hysteresis_csv(); pairs],
-            cycles: Vec::new(),
-            wear: vec![Vec::new(); pairs],
-            traced: vec![Vec::new(); pairs],
-            points: vec![Vec::new(); pairs],
-            points_text: vec![point_loops_csv(); pairs],
+            hysteresis: pairs.iter().map(|_| growing(&HYSTERESIS)).collect(),
+            cycles: growing(&CYCLES),
+            wear: pairs
+                .iter()
+                .map(|p| p.wear().map(|_| growing(&WEAR)))
+                .collect(),
+            traced: vec![Vec::new(); pairs.len()],
+            points: vec![None; pairs.len()],
         }
     }
 
     /// The tables with the local loops of `traced` points, per pair (in the model's order).
     pub fn with_points(mut self, traced: Vec<Vec<TracedPoint>>) -> Self {
         debug_assert_eq!(traced.len(), self.traced.len());
+        self.points = traced
+            .iter()
+            .map(|t| (!t.is_empty()).then(|| growing(&POINT_LOOPS)))
+            .collect();
         self.traced = traced;
         self
     }
 
     /// Adds the rows of output frame `step` at pseudo-time `time`: a hysteresis row per
     /// pair, and at the end of a cycle (`step.frame.cycle_end`) a cycle row per pair and the
-    /// wear profile of each pair that wears. Fails, naming the hysteresis file, on a value
-    /// that is not finite.
+    /// wear profile of each pair that wears. Fails, naming the table, on a value that is not
+    /// finite.
     pub fn record(
         &mut self,
         model: &Model,
@@ -274,8 +253,8 @@ impl FrettingTables {
         let jump = model.schedule.timeline().ends_cycle(step.step).unwrap_or(1);
         let sums = pair_sums(model, &step.solution.interface_committed, jump as f64);
         let position = [frame.analysis_step as f64, frame.cycle as f64, frame.cycles];
-        let tables = self.hysteresis.iter_mut().zip(&mut self.hysteresis_text);
-        for (((rows, text), s), pair) in tables.zip(&sums).zip(&model.interface.pairs) {
+        let pairs = &model.interface.pairs;
+        for ((table, s), pair) in self.hysteresis.iter_mut().zip(&sums).zip(pairs) {
             let slip = if s.closed_area > 0.0 {
                 s.slip_area / s.closed_area
             } else {
@@ -284,35 +263,34 @@ impl FrettingTables {
             let mut row = vec![time];
             row.extend(position);
             row.extend([frame.step_time, s.tangential_force, s.normal_force, slip]);
-            text.push(&table_label("hysteresis", &pair.name), &row)?;
-            rows.push(row);
+            table.push(&table_label("hysteresis", &pair.name), &row)?;
         }
         self.record_points(model, step, time)?;
         if !frame.cycle_end {
             return Ok(());
         }
-        for (p, s) in sums.iter().enumerate() {
-            let mut row = position.to_vec();
-            row.extend([
-                p as f64,
-                s.cycle_dissipation,
-                s.settling_dissipation,
-                s.worn_volume,
-                s.max_depth,
-                step.solution.jump_use.get(p).copied().unwrap_or(0.0),
-            ]);
-            self.cycles.push(row);
+        for (p, (s, pair)) in sums.iter().zip(pairs).enumerate() {
+            let mut row: Vec<Cell> = position.map(Cell::Number).to_vec();
+            row.push(Cell::Text(pair.name.clone()));
+            row.extend(
+                [
+                    s.cycle_dissipation,
+                    s.settling_dissipation,
+                    s.worn_volume,
+                    s.max_depth,
+                    step.solution.jump_use.get(p).copied().unwrap_or(0.0),
+                ]
+                .map(Cell::Number),
+            );
+            self.cycles.push(&table_label("cycles", &pair.name), &row)?;
         }
-        for (p, pair) in model.interface.pairs.iter().enumerate() {
-            if pair.wear().is_none() {
-                continue;
-            }
-            let profile = interface.wear_profile(model, step.solution, p);
-            self.wear[p].extend(profile.into_iter().map(|v| {
+        for (p, (table, pair)) in self.wear.iter_mut().zip(pairs).enumerate() {
+            let Some(table) = table else { continue };
+            for v in interface.wear_profile(model, step.solution, p) {
                 let mut row = vec![frame.analysis_step as f64, frame.cycles];
                 row.extend(v);
-                row
-            }));
+                table.push(&table_label("wear", &pair.name), &row)?;
+            }
         }
         Ok(())
     }
@@ -321,13 +299,12 @@ impl FrettingTables {
     /// `time`).
     fn record_points(&mut self, model: &Model, step: &StepResult, time: f64) -> Result<()> {
         let frame = step.frame;
-        let tables = self.points.iter_mut().zip(&mut self.points_text);
-        for ((rows, text), (traced, pair)) in
-            tables.zip(self.traced.iter().zip(&model.interface.pairs))
-        {
+        let pairs = self.traced.iter().zip(&model.interface.pairs);
+        for (table, (traced, pair)) in self.points.iter_mut().zip(pairs) {
+            let Some(table) = table else { continue };
             for (i, point) in traced.iter().enumerate() {
                 let s = &step.solution.interface_committed[point.state];
-                let row = vec![
+                let row = [
                     time,
                     frame.analysis_step as f64,
                     frame.cycle as f64,
@@ -341,160 +318,37 @@ impl FrettingTables {
                     s.relative[0],
                     s.plastic_slip,
                 ];
-                text.push(&table_label("point loops", &pair.name), &row)?;
-                rows.push(row);
+                table.push(&table_label("point loops", &pair.name), &row)?;
             }
         }
         Ok(())
     }
 
-    /// The tables of a restart record, in order: the hysteresis tables, the cycle table, the
-    /// wear tables, the traced points' tables.
-    pub fn tables(&self) -> impl Iterator<Item = &[Vec<f64>]> {
-        let hysteresis = self.hysteresis.iter().map(Vec::as_slice);
-        let wear = self.wear.iter().map(Vec::as_slice);
-        let points = self.points.iter().map(Vec::as_slice);
-        hysteresis
-            .chain(std::iter::once(self.cycles.as_slice()))
-            .chain(wear)
-            .chain(points)
-    }
-
-    /// [`Self::tables`] as owned rows (what a record gives back).
-    pub fn rows(&self) -> Vec<Vec<Vec<f64>>> {
-        self.tables().map(<[Vec<f64>]>::to_vec).collect()
-    }
-
-    /// Takes over the rows of a restart record ([`Self::rows`]); `None` (nothing changed)
-    /// when they do not fit the model's pairs and the tables' columns.
-    pub fn restore(&mut self, mut rows: Vec<Vec<Vec<f64>>>) -> Option<()> {
-        let pairs = self.hysteresis.len();
-        if rows.len() != 3 * pairs + 1 {
-            return None;
-        }
-        let points = rows.split_off(2 * pairs + 1);
-        let wear = rows.split_off(pairs + 1);
-        let cycles = rows.pop()?;
-        let fits = |table: &[Vec<f64>], width: usize| table.iter().all(|r| r.len() == width);
-        // Each frame adds one row per traced point, numbered 1..n.
-        let traced_fit =
-            points
-                .iter()
-                .zip(&rows)
-                .zip(&self.traced)
-                .all(|((table, loop_rows), traced)| {
-                    fits(table, POINT_LOOPS.len())
-                        && table.len() == traced.len() * loop_rows.len()
-                        && table
-                            .iter()
-                            .enumerate()
-                            .all(|(i, r)| r[POINT] == (i % traced.len().max(1) + 1) as f64)
-                });
-        let ok = rows.iter().all(|t| fits(t, HYSTERESIS.len()))
-            && fits(&cycles, CYCLES.len())
-            && cycles.iter().all(|r| (r[CONTACT] as usize) < pairs)
-            && wear.iter().all(|t| fits(t, WEAR.len()))
-            && traced_fit;
-        if !ok {
-            return None;
-        }
-        let hysteresis_text = grown(&rows, hysteresis_csv)?;
-        let points_text = grown(&points, point_loops_csv)?;
-        self.hysteresis_text = hysteresis_text;
-        self.points_text = points_text;
-        self.hysteresis = rows;
-        self.cycles = cycles;
-        self.wear = wear;
-        self.points = points;
-        Some(())
-    }
-
-    /// The tables' files: (file name, table) of every pair of `model`; a wear table only for
-    /// a pair that wears.
-    pub fn files<'m>(&self, model: &'m Model) -> Vec<(FrettingTable<'m>, CsvTable<Cell>)> {
+    /// The tables' files of the pairs of `model` (the model the tables were made for), in
+    /// order: the hysteresis loop of every pair, the local loops of each pair with traced
+    /// points, `cycles.csv` (when the model has pairs) and the wear profile of each pair that
+    /// wears; each with its rows not yet handed to the writer.
+    pub fn files<'m>(&mut self, model: &'m Model) -> Vec<(FrettingTable<'m>, &mut GrowingCsv)> {
         let pairs = &model.interface.pairs;
-        let hysteresis = pairs.iter().zip(&self.hysteresis);
-        let mut out: Vec<(FrettingTable, CsvTable<Cell>)> = hysteresis
-            .map(|(p, rows)| {
-                let table = cell_table(&HYSTERESIS, rows);
-                (FrettingTable::Hysteresis(&p.name), table)
-            })
+        let hysteresis = pairs.iter().zip(&mut self.hysteresis);
+        let mut out: Vec<(FrettingTable, &mut GrowingCsv)> = hysteresis
+            .map(|(p, table)| (FrettingTable::Hysteresis(&p.name), table))
             .collect();
-        let points = self.traced_pairs(model).map(|(p, rows, _)| {
-            let table = cell_table(&POINT_LOOPS, rows);
-            (FrettingTable::PointLoops(&p.name), table)
-        });
-        out.extend(points.collect::<Vec<_>>());
-        out.extend(self.cycle_files(model));
-        out
-    }
-
-    /// The pairs with traced points, with their rows and text.
-    fn traced_pairs<'a, 'm>(
-        &'a self,
-        model: &'m Model,
-    ) -> impl Iterator<Item = (&'m ContactPair, &'a Vec<Vec<f64>>, &'a GrowingCsv)> {
-        let tables = self.points.iter().zip(&self.points_text);
-        let pairs = model.interface.pairs.iter().zip(&self.traced);
-        pairs
-            .zip(tables)
-            .filter(|((_, traced), _)| !traced.is_empty())
-            .map(|((pair, _), (rows, text))| (pair, rows, text))
-    }
-
-    /// [`Self::files`] as the writer takes them: the hysteresis tables as the text grown
-    /// frame by frame, the per-cycle tables as tables.
-    pub fn contents<'m>(&self, model: &'m Model) -> Vec<(FrettingTable<'m>, Content)> {
-        let pairs = &model.interface.pairs;
-        let hysteresis = pairs.iter().zip(&self.hysteresis_text);
-        let mut out: Vec<(FrettingTable, Content)> = hysteresis
-            .map(|(p, text)| {
-                let content = Content::Text(text.bytes().to_vec());
-                (FrettingTable::Hysteresis(&p.name), content)
-            })
-            .collect();
-        out.extend(self.traced_pairs(model).map(|(p, _, text)| {
-            let content = Content::Text(text.bytes().to_vec());
-            (FrettingTable::PointLoops(&p.name), content)
+        let points = pairs.iter().zip(&mut self.points);
+        out.extend(points.filter_map(|(p, table)| {
+            table
+                .as_mut()
+                .map(|table| (FrettingTable::PointLoops(&p.name), table))
         }));
-        let cycle_files = self.cycle_files(model).into_iter();
-        out.extend(cycle_files.map(|(name, table)| (name, Content::Table(table))));
-        out
-    }
-
-    /// The per-cycle tables: `cycles.csv` (when the model has pairs) and the wear profile
-    /// of each pair that wears.
-    fn cycle_files<'m>(&self, model: &'m Model) -> Vec<(FrettingTable<'m>, CsvTable<Cell>)> {
-        let table = cell_table;
-        let pairs = &model.interface.pairs;
-        let mut out = Vec::new();
         if !pairs.is_empty() {
-            let mut cycles = table(&CYCLES, &self.cycles);
-            for (row, numbers) in cycles.rows.iter_mut().zip(&self.cycles) {
-                row[CONTACT] = Cell::Text(pairs[numbers[CONTACT] as usize].name.clone());
-            }
-            out.push((FrettingTable::Cycles, cycles));
+            out.push((FrettingTable::Cycles, &mut self.cycles));
         }
-        for (p, rows) in pairs.iter().zip(&self.wear) {
-            if p.wear().is_some() {
-                out.push((FrettingTable::Wear(&p.name), table(&WEAR, rows)));
-            }
-        }
+        let wear = pairs.iter().zip(&mut self.wear);
+        out.extend(wear.filter_map(|(p, table)| {
+            table
+                .as_mut()
+                .map(|table| (FrettingTable::Wear(&p.name), table))
+        }));
         out
     }
-}
-
-/// The CSV texts of `tables`, grown row by row from `empty()`; `None` on a value that is not
-/// finite.
-fn grown(tables: &[Vec<Vec<f64>>], empty: fn() -> GrowingCsv) -> Option<Vec<GrowingCsv>> {
-    tables
-        .iter()
-        .map(|table| {
-            let mut text = empty();
-            for row in table {
-                text.push(Path::new("restart record"), row).ok()?;
-            }
-            Some(text)
-        })
-        .collect()
 }

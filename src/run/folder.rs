@@ -42,6 +42,9 @@ pub enum RunFile<'a> {
     Mesh,
     /// `restart.bin`, the restart record.
     Restart,
+    /// `restart_energy.bin`, the energy balance at every cycle end so far, which the restart
+    /// record continues (for `summary.json`).
+    RestartEnergy,
     /// `log.txt`.
     Log,
     /// `bodies_NNNN.vtu` of an output frame.
@@ -56,13 +59,14 @@ pub enum RunFile<'a> {
 }
 
 /// The files a run writes once, with their names.
-const SINGLE_FILES: [(RunFile<'static>, &str); 8] = [
+const SINGLE_FILES: [(RunFile<'static>, &str); 9] = [
     (RunFile::Info, "run.json"),
     (RunFile::Summary, "summary.json"),
     (RunFile::Series, "results.pvd"),
     (RunFile::History, "history.csv"),
     (RunFile::Mesh, "mesh.msh"),
     (RunFile::Restart, "restart.bin"),
+    (RunFile::RestartEnergy, "restart_energy.bin"),
     (RunFile::Log, "log.txt"),
     (RunFile::Fretting(FrettingTable::Cycles), "cycles.csv"),
 ];
@@ -520,6 +524,7 @@ mod tests {
             RunFile::History,
             RunFile::Mesh,
             RunFile::Restart,
+            RunFile::RestartEnergy,
             RunFile::Log,
             RunFile::Bodies(3),
             RunFile::Interface(3),

@@ -2,18 +2,24 @@
 //! counters, the reactions, the contact resultants, the requested quantities, where the frame
 //! lies in the load history and the energy balance.
 
+use std::io::BufRead;
+use std::path::Path;
+
 use crate::config::Case;
 use crate::model::{Model, Schedule};
 use crate::output::summary::{ContactResultant, Force, Named, StepSummary};
 use crate::solver::state::StepResult;
+use crate::{Error, Result};
 
 /// The columns of `history.csv` before the reactions: where each value of a row is, so that
-/// the summary's step records can be read back from the rows a restart record keeps.
+/// a resumed run can read the summary's step records back from the file.
 pub(super) struct HistoryLayout {
     /// Per-load factors: the amplitude of each support and load that has its own history.
     load_factors: Vec<usize>,
     supports: usize,
     pairs: usize,
+    /// Values of a row.
+    columns: usize,
 }
 
 /// Leading columns: step, time, load_factor, then the per-load factors, then these.
@@ -60,8 +66,14 @@ impl HistoryLayout {
             load_factors,
             supports: model.supports.len(),
             pairs: model.interface.pairs.len(),
+            columns: columns.len(),
         };
         (layout, columns)
+    }
+
+    /// Values of a row.
+    pub(super) fn columns(&self) -> usize {
+        self.columns
     }
 
     /// The row of a state at pseudo-time `time`.
@@ -142,4 +154,26 @@ impl HistoryLayout {
             ),
         }
     }
+}
+
+/// Calls `row` with every row of the `history.csv` at `path` (whose rows have `columns`
+/// values), in order, without holding the file in memory. The numbers are read back bit for
+/// bit (the file has them in their shortest round-trip form). A line that is not such a row
+/// is an [`Error::Restart`] naming the file: only a resumed run reads the file back.
+pub(super) fn read_rows(path: &Path, columns: usize, mut row: impl FnMut(&[f64])) -> Result<()> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut values = Vec::with_capacity(columns);
+    for (i, line) in std::io::BufReader::new(file).lines().enumerate().skip(1) {
+        let line = line.map_err(|e| Error::io(path, e))?;
+        values.clear();
+        values.extend(line.split(',').map(|c| c.parse().unwrap_or(f64::NAN)));
+        if values.len() != columns || values.iter().any(|v| v.is_nan()) {
+            return Err(Error::Restart {
+                path: path.to_path_buf(),
+                reason: format!("line {} is not a row of {columns} numbers", i + 1),
+            });
+        }
+        row(&values);
+    }
+    Ok(())
 }

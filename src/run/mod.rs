@@ -25,15 +25,20 @@
 //!   of every support, the resultant forces of every contact pair and the case's
 //!   `[[history]]` quantities;
 //! - `restart.bin` ([`crate::output::restart`]): the state of the last converged increment,
-//!   from which `--resume` continues;
+//!   from which `--resume` continues, with the length and checksum of every growing table;
+//!   `restart_energy.bin`, the energy marks of the cycle ends it grows by (kept out of the
+//!   record so that the record's size does not grow with the run);
 //! - `hysteresis_<pair>.csv`, `point_loops_<pair>.csv`, `cycles.csv`, `wear_<pair>.csv`: the
 //!   fretting tables ([`crate::post::fretting`]);
 //! - `summary.json` ([`Summary`]): the model size, every converged step, totals and timings,
 //!   and whether the run converged or failed (with the error), for scripts.
 //!
-//! A step's files are committed together: its VTU and CSV files first, then the restart
-//! record, then `history.csv`, and last `results.pvd`, each replaced atomically; a run killed
-//! at any moment leaves complete files, and the indexes list only steps whose files exist.
+//! A step's files are committed together: its VTU and CSV files first (each replaced
+//! atomically), then the new rows appended to the growing tables (`history.csv`, the fretting
+//! tables), then the restart record, and last `results.pvd` (rewritten while short, then each
+//! time it grows by an eighth, and at the end); a run killed at any moment leaves complete
+//! files but perhaps a partial last row, which `--resume` cuts back to the record's lengths,
+//! and the series lists only steps whose files exist.
 //! When a step fails after some of its sub-increments converged, the last of them is written
 //! as that step (its fractional pseudo-time in `history.csv` and `results.pvd` tells it apart).
 

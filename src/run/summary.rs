@@ -2,11 +2,11 @@
 
 use super::RunSummary;
 use super::folder::{OutputFolder, RunFile};
+use crate::Result;
 use crate::element::Analysis;
 use crate::model::{Model, Schedule};
-use crate::output::atomic::write_text;
+use crate::output::atomic::write_atomically;
 use crate::output::summary::{ModelSize, Status, Summary};
-use crate::{Error, Result};
 
 /// Records the analysis and size of the built `model` in `summary`.
 pub(super) fn describe_model(summary: &mut Summary, model: &Model, model_seconds: f64) {
@@ -96,9 +96,11 @@ pub(super) fn write_summary(
         summary,
         analysis_steps,
     };
-    let json = serde_json::to_string_pretty(&file)
-        .map_err(|e| Error::io(&path, std::io::Error::other(e)))?;
-    write_text(&path, &(json + "\n"))
+    // Streamed into the file: a run of many frames lists them all (~600 bytes each).
+    write_atomically(&path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &file).map_err(std::io::Error::other)?;
+        w.write_all(b"\n")
+    })
 }
 
 /// Writes the summary of a failed run; a failure to write it is logged, since the run's own

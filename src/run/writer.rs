@@ -6,13 +6,16 @@ use std::time::Instant;
 
 use super::Session;
 use super::folder::{OutputFolder, RunFile};
-use super::history::HistoryLayout;
+use super::history::{HistoryLayout, read_rows};
 use super::progress::{RunBar, progress_bar};
 use crate::config::{Case, CycleFrames};
 use crate::model::Model;
-use crate::output::csv::{CsvTable, GrowingCsv};
+use crate::output::append::{self, AppendedFile};
+use crate::output::csv::GrowingCsv;
 use crate::output::pvd::PvdEntry;
-use crate::output::restart::{OutputView, Record};
+use crate::output::restart::{
+    ENERGY_MARKS, OutputState, Record, encode_energy_mark, read_energy_marks,
+};
 use crate::output::summary::{EnergyMark, Summary};
 use crate::output::writer::{Content, RecordWriter};
 use crate::post::fretting::{FrettingTables, TracedPoint, trace_point};
@@ -40,21 +43,49 @@ pub(super) struct StepWriter<'m, 's, F> {
     /// The case's text when restart records are kept.
     case_text: Option<&'m str>,
     layout: HistoryLayout,
-    series: Vec<PvdEntry>,
-    history: CsvTable,
-    /// `history.csv`'s text, grown with `history` (see [`GrowingCsv`]).
-    history_text: GrowingCsv,
-    fretting: FrettingTables,
+    /// The files that grow by rows.
+    tables: GrowingTables,
+    /// The last row of `history.csv` (the summary's record of the last step).
+    last_row: Vec<f64>,
     pub(super) summary: &'s mut Summary,
     pub(super) last_reactions: Vec<[f64; 2]>,
     pub(super) bar: RunBar,
-    /// Writes the files in the background, in the order they are queued.
-    records: RecordWriter,
+    /// Writes the files in the background, in the order they are queued, and keeps the
+    /// series up to date.
+    out: Committer,
     /// Seconds spent on the records of sub-increments since the last step, counted with
     /// that step's output time.
     increment_seconds: f64,
     on_step: F,
 }
+
+/// The files of a run that grow by rows, appended to as the frames come
+/// ([`crate::output::append`]): `history.csv`, the fretting tables and, when the run keeps
+/// restart records, the energy marks the record continues.
+struct GrowingTables {
+    history: GrowingCsv,
+    fretting: FrettingTables,
+    energy: Option<AppendedFile>,
+}
+
+impl GrowingTables {
+    /// The files with their appended bytes, in a fixed order (the order of the restart
+    /// record's marks).
+    fn files<'m>(&mut self, model: &'m Model) -> Vec<(RunFile<'m>, &mut AppendedFile)> {
+        let mut files = vec![(RunFile::History, self.history.file())];
+        let fretting = self.fretting.files(model).into_iter();
+        files.extend(fretting.map(|(table, csv)| (RunFile::Fretting(table), csv.file())));
+        if let Some(energy) = &mut self.energy {
+            files.push((RunFile::RestartEnergy, energy));
+        }
+        files
+    }
+}
+
+/// Entries of `results.pvd` that are always rewritten at once (about 100 kB); beyond them
+/// the series is rewritten when it has grown by an eighth, so that writing it costs time
+/// linear in its length over a run (see [`StepWriter::queue_series`]).
+const SERIES_AT_ONCE: usize = 1000;
 
 /// The interface points whose local loops the contacts of `case` trace (`hysteresis_points`),
 /// per pair of `model`: the integration point nearest to each given point, which must lie
@@ -98,6 +129,12 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         on_step: F,
     ) -> Self {
         let (layout, columns) = HistoryLayout::new(case, model);
+        let case_text = session.restart.map(|r| r.case_text.as_str());
+        let energy = case_text.map(|_| {
+            let mut marks = AppendedFile::default();
+            marks.push(ENERGY_MARKS);
+            marks
+        });
         Self {
             case,
             model,
@@ -112,16 +149,18 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
                 .collect(),
             vtu: case.output.vtu,
             all_frames: case.output.cycle_frames == CycleFrames::All,
-            case_text: session.restart.map(|r| r.case_text.as_str()),
+            case_text,
             layout,
-            series: Vec::new(),
-            history_text: GrowingCsv::new(&columns),
-            history: CsvTable::new(columns),
-            fretting: FrettingTables::new(model).with_points(traced),
+            tables: GrowingTables {
+                history: GrowingCsv::new(&columns),
+                fretting: FrettingTables::new(model).with_points(traced),
+                energy,
+            },
+            last_row: Vec::new(),
             summary,
             last_reactions: Vec::new(),
             bar: progress_bar(session.progress, model.schedule.steps()),
-            records: RecordWriter::default(),
+            out: Committer::default(),
             increment_seconds: 0.0,
             on_step,
         }
@@ -145,57 +184,50 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         };
         let row = self.row(&start, 0.0)?;
         self.push_history(row)?;
-        self.write_indexes()
+        self.write_indexes(false)
     }
 
-    /// Takes over the output state of a restart `record`: the history rows, series and
-    /// step records of its steps; removes the files of later steps and rewrites the
-    /// indexes. Returns the run to continue.
+    /// Takes over the output state of a restart `record`: continues each growing file where
+    /// the record left it (checked against its checksum, cut back to its length), reads the
+    /// summary's step records and energy marks back from them, removes the files of later
+    /// steps and rewrites the series. Returns the run to continue.
     pub(super) fn restore(&mut self, record: Record) -> Result<Resume> {
         let Record { resume, output } = record;
-        let mut tables = output.tables.into_iter();
-        let record_path = self.folder.dir().join(RunFile::Restart.name());
-        let missing = |what: &str| Error::Restart {
-            path: record_path.clone(),
-            reason: format!("the record has no {what} table"),
-        };
-        let history = tables.next().ok_or_else(|| missing("history"))?;
-        let energy = tables.next().ok_or_else(|| missing("energy"))?;
-        self.fretting
-            .restore(tables.collect())
-            .ok_or_else(|| Error::Restart {
-                path: record_path.clone(),
-                reason: "its fretting tables do not match the case's contact pairs".into(),
-            })?;
-        let marks: Option<Vec<EnergyMark>> =
-            energy.iter().map(|row| EnergyMark::from_row(row)).collect();
-        self.summary.energy.marks = marks.ok_or_else(|| Error::Restart {
-            path: record_path.clone(),
-            reason: "its energy rows have the wrong length".into(),
+        self.continue_files(&output)?;
+        let history = self.folder.path(RunFile::History)?;
+        let columns = self.layout.columns();
+        let (model, layout, summary) = (self.model, &self.layout, &mut *self.summary);
+        let mut last = Vec::new();
+        read_rows(&history, columns, |row| {
+            if row[0] > 0.0 {
+                summary.push_step(layout.step_summary(model, row));
+            }
+            last = row.to_vec();
         })?;
-        if history
-            .iter()
-            .any(|row| row.len() != self.history.columns.len())
-        {
-            return Err(Error::Restart {
-                path: record_path,
-                reason: "its history rows do not match the case's columns".into(),
-            });
+        self.last_row = last;
+        if self.tables.energy.is_some() {
+            let path = self.folder.path(RunFile::RestartEnergy)?;
+            let marks: Option<Vec<EnergyMark>> = read_energy_marks(&path)?
+                .iter()
+                .map(|row| EnergyMark::from_row(row))
+                .collect();
+            self.summary.energy.marks = marks.ok_or_else(|| Error::Restart {
+                path,
+                reason: "its energy marks have the wrong length".into(),
+            })?;
         }
-        self.history_text = GrowingCsv::new(&self.history.columns);
-        let history_path = self.folder.path(RunFile::History)?;
-        for row in &history {
-            self.history_text.push(&history_path, row)?;
-        }
-        self.history.rows = history;
-        self.series = output.series;
-        for row in self.history.rows.iter().filter(|r| r[0] > 0.0) {
-            let step = self.layout.step_summary(self.model, row);
-            self.summary.push_step(step);
+        let timeline = self.model.schedule.timeline();
+        for step in 1..resume.state.step {
+            if self.vtu && (self.all_frames || timeline.is_end_frame(step)) {
+                let entries = frame_entries(self.model, step, step as f64);
+                self.out
+                    .series
+                    .extend(entries.into_iter().map(|(_, entry)| entry));
+            }
         }
         self.folder
             .remove_steps_from(resume.state.step, &self.pairs)?;
-        self.write_indexes()?;
+        self.write_indexes(true)?;
         self.bar.0.inc(resume.state.step as u64 - 1);
         tracing::info!(
             step = resume.state.step,
@@ -205,6 +237,41 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         Ok(resume)
     }
 
+    /// Continues each growing file at its mark in `output`: all are checked before any is
+    /// cut back, so that a refused record leaves the folder as it was.
+    fn continue_files(&mut self, output: &OutputState) -> Result<()> {
+        let record = self.folder.dir().join(RunFile::Restart.name());
+        let mut files = Vec::new();
+        for (file, appended) in self.tables.files(self.model) {
+            files.push((file.name(), self.folder.path(file)?, appended));
+        }
+        let names = |names: Vec<&str>| names.join(", ");
+        let ours = names(files.iter().map(|(name, ..)| name.as_str()).collect());
+        let recorded = names(output.files.iter().map(|(name, _)| name.as_str()).collect());
+        if ours != recorded {
+            return Err(Error::Restart {
+                path: record,
+                reason: format!(
+                    "it continues the tables {recorded}; the case writes {ours}: run without \
+                     --resume"
+                ),
+            });
+        }
+        for ((_, path, _), (_, mark)) in files.iter().zip(&output.files) {
+            if let Some(reason) = append::check(path, *mark)? {
+                return Err(Error::Restart {
+                    path: path.clone(),
+                    reason: format!("{reason}; run without --resume"),
+                });
+            }
+        }
+        for ((_, path, appended), (_, mark)) in files.into_iter().zip(&output.files) {
+            append::truncate(&path, *mark)?;
+            *appended = AppendedFile::continued(*mark);
+        }
+        Ok(())
+    }
+
     /// Writes the files of a converged step (or of the last converged sub-increment of a
     /// failed step, `progress` `None`), then the restart record, then the indexes.
     pub(super) fn step(&mut self, step: &StepResult, progress: Option<&Progress>) -> Result<f64> {
@@ -212,22 +279,22 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         let fields = self.all_frames || self.model.schedule.timeline().is_end_frame(step.step);
         let row = self.write_step_files(step, step.step as f64, fields)?;
         self.push_history(row)?;
-        // Before the restart record, which keeps the marks for a resumed run's summary.
+        // Before the restart record, which counts the marks for a resumed run's summary.
         let total = step.solution.energy.total;
         if let Some(mark) = EnergyMark::at(&step.frame, step.step, total) {
+            if let Some(energy) = &mut self.tables.energy {
+                let path = self.folder.path(RunFile::RestartEnergy)?;
+                energy.push(&encode_energy_mark(&path, &mark.to_row())?);
+            }
             self.summary.energy.push(mark);
         }
+        self.queue_appends()?;
         if let Some(p) = progress {
             self.queue_record(p)?;
         }
-        self.write_indexes()?;
-        let last = self
-            .history
-            .rows
-            .last()
-            .map(Vec::as_slice)
-            .unwrap_or_default();
-        let summary = self.layout.step_summary(self.model, last);
+        self.queue_series(false)?;
+        self.out.commit()?;
+        let summary = self.layout.step_summary(self.model, &self.last_row);
         self.last_reactions = summary
             .reactions
             .0
@@ -290,20 +357,15 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
                 step_grids(self.model, &self.points, &self.interface, step, info);
             post += t.elapsed().as_secs_f64();
             let t = Instant::now();
-            let parts = [
-                ("bodies", RunFile::Bodies(step.step), Some(bodies)),
-                ("interface", RunFile::Interface(step.step), interface),
-            ];
-            for (part, (name, file, grid)) in parts.into_iter().enumerate() {
-                let Some(grid) = grid else { continue };
-                self.records
+            let grids = [Some(bodies), interface].into_iter().flatten();
+            for ((file, entry), grid) in frame_entries(self.model, step.step, time)
+                .into_iter()
+                .zip(grids)
+            {
+                self.out
+                    .records
                     .queue(self.folder.path(file)?, Content::Vtu(grid));
-                entries.push(PvdEntry {
-                    time,
-                    part: part as u32,
-                    name: name.into(),
-                    file: file.name().into(),
-                });
+                entries.push(entry);
             }
             vtu += t.elapsed().as_secs_f64();
         }
@@ -314,13 +376,15 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         };
         for (pair, table) in self.model.interface.pairs.iter().zip(tables) {
             let file = RunFile::Contact(&pair.name, step.step);
-            self.records
+            self.out
+                .records
                 .queue(self.folder.path(file)?, Content::Csv(table));
         }
-        self.fretting
+        self.tables
+            .fretting
             .record(self.model, &self.interface, step, time)?;
         let row = self.row(step, time)?;
-        self.series.extend(entries);
+        self.out.series.extend(entries);
         tracing::debug!(
             step = step.step,
             post,
@@ -345,19 +409,17 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         Ok(self.layout.row(&model.schedule, step, time, values))
     }
 
-    /// Queues the restart record of a converged increment (when the run keeps them).
+    /// Queues the restart record of a converged increment (when the run keeps them), after
+    /// the rows appended so far, whose files' lengths and checksums it keeps.
     fn queue_record(&mut self, progress: &Progress) -> Result<()> {
         let Some(case_text) = self.case_text else {
             return Ok(());
         };
-        let energy = self.energy_rows();
-        let mut tables = vec![self.history.rows.as_slice(), energy.as_slice()];
-        tables.extend(self.fretting.tables());
-        let output = OutputView {
-            tables,
-            series: &self.series,
+        let files = self.tables.files(self.model).into_iter();
+        let output = OutputState {
+            files: files.map(|(file, f)| (file.name(), f.mark())).collect(),
         };
-        self.records.queue_record(
+        self.out.records.queue_record(
             &self.folder.path(RunFile::Restart)?,
             case_text,
             progress,
@@ -365,54 +427,59 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         )
     }
 
-    /// The energy marks of the summary as rows (the restart record's second table).
-    fn energy_rows(&self) -> Vec<Vec<f64>> {
-        let marks = &self.summary.energy.marks;
-        marks.iter().map(EnergyMark::to_row).collect()
-    }
-
     /// Writes the restart record of a converged sub-increment (in the background).
     fn write_record(&mut self, progress: &Progress) -> Result<()> {
         let start = Instant::now();
         self.queue_record(progress)?;
-        self.records.commit()?;
+        self.out.commit()?;
         self.increment_seconds += start.elapsed().as_secs_f64();
         Ok(())
     }
 
-    /// Adds a row to `history.csv`'s table and text.
+    /// Adds a row to `history.csv`.
     fn push_history(&mut self, row: Vec<f64>) -> Result<()> {
-        self.history_text
+        self.tables
+            .history
             .push(&self.folder.path(RunFile::History)?, &row)?;
-        self.history.rows.push(row);
+        self.last_row = row;
         Ok(())
     }
 
-    /// Queues `history.csv`, then `results.pvd`, after the step's files and record, and
-    /// commits them: the series is the last file written for a step, so it lists only steps
-    /// whose other files are complete.
-    fn write_indexes(&mut self) -> Result<()> {
-        for (table, content) in self.fretting.contents(self.model) {
-            let path = self.folder.path(RunFile::Fretting(table))?;
-            self.records.queue(path, content);
+    /// Queues the rows added to the growing files since the last commit, to be appended.
+    fn queue_appends(&mut self) -> Result<()> {
+        for (file, appended) in self.tables.files(self.model) {
+            if let Some(append) = appended.take() {
+                self.out
+                    .records
+                    .queue(self.folder.path(file)?, Content::Append(append));
+            }
         }
-        self.records.queue(
-            self.folder.path(RunFile::History)?,
-            Content::Text(self.history_text.bytes().to_vec()),
-        );
-        if self.vtu && !self.series.is_empty() {
-            self.records.queue(
-                self.folder.path(RunFile::Series)?,
-                Content::Pvd(self.series.clone()),
-            );
-        }
-        self.records.commit()
+        Ok(())
     }
 
-    /// Waits for the files being written; returns the seconds waited.
+    /// Queues `results.pvd` when it lacks entries and is due ([`Committer::queue_series`]).
+    fn queue_series(&mut self, now: bool) -> Result<()> {
+        if self.vtu && !self.out.series.is_empty() && self.out.series_path.is_none() {
+            self.out.series_path = Some(self.folder.path(RunFile::Series)?);
+        }
+        self.out.queue_series(now);
+        Ok(())
+    }
+
+    /// Queues the rows added since the last commit and the series (`now`: also when it is
+    /// not due), and commits them.
+    fn write_indexes(&mut self, now: bool) -> Result<()> {
+        self.queue_appends()?;
+        self.queue_series(now)?;
+        self.out.commit()
+    }
+
+    /// Writes the series if it lacks entries, waits for the files being written; returns
+    /// the seconds waited.
     pub(super) fn finish(&mut self) -> Result<f64> {
         let start = Instant::now();
-        self.records.finish()?;
+        self.write_indexes(true)?;
+        self.out.records.finish()?;
         Ok(start.elapsed().as_secs_f64() + std::mem::take(&mut self.increment_seconds))
     }
 }
@@ -431,6 +498,88 @@ impl<F: FnMut(&Model, &StepResult) -> Result<()>> Observer for StepWriter<'_, '_
     fn partial_step(&mut self, step: &StepResult, time: f64) -> Result<()> {
         let row = self.write_step_files(step, time, true)?;
         self.push_history(row)?;
-        self.write_indexes()
+        self.write_indexes(true)
     }
+}
+
+/// The background writer of a run's files and the entries of its series (`results.pvd`).
+#[derive(Debug, Default)]
+struct Committer {
+    records: RecordWriter,
+    series: Vec<PvdEntry>,
+    /// The entries the series written last lists.
+    series_written: usize,
+    /// The entries whose files were committed.
+    series_committed: usize,
+    /// `results.pvd` (`None`: the run writes no VTU files).
+    series_path: Option<std::path::PathBuf>,
+}
+
+impl Committer {
+    /// Commits the queued files ([`RecordWriter::commit`]).
+    fn commit(&mut self) -> Result<()> {
+        self.series_committed = self.series.len();
+        self.records.commit()
+    }
+
+    /// Queues `results.pvd` when it lists fewer entries than the series has and it is due
+    /// (`now`, or rewriting it costs little: while it is short, or once the entries it lacks
+    /// are an eighth of those it lists, which keeps the cost of all rewrites linear in the
+    /// series' length). It comes after the files of its entries, so it lists only steps whose
+    /// files are complete.
+    fn queue_series(&mut self, now: bool) {
+        self.queue_entries(self.series.len(), now);
+    }
+
+    /// Queues `results.pvd` with the first `all` entries of the series when it is due.
+    fn queue_entries(&mut self, all: usize, now: bool) {
+        let written = self.series_written;
+        let due = all > written && (now || all <= SERIES_AT_ONCE || 8 * (all - written) >= written);
+        if let Some(path) = &self.series_path
+            && due
+        {
+            let content = Content::Pvd(self.series[..all].to_vec());
+            self.records.queue(path.clone(), content);
+            self.series_written = all;
+        }
+    }
+}
+
+impl Drop for Committer {
+    /// A run that stops early (an error, an interruption) still gets a series that lists
+    /// every step whose files were committed (the background writer writes nothing after a
+    /// failed commit, and finishes what was committed when it is dropped).
+    fn drop(&mut self) {
+        // Files queued but not committed belong to a step whose commit never came.
+        self.records.discard_queued();
+        self.queue_entries(self.series_committed, true);
+        if let Err(e) = self.records.commit() {
+            tracing::warn!("{e}");
+        }
+    }
+}
+
+/// The VTU files of output frame `step` and their entries in the series at pseudo-time
+/// `time`: the bodies, and the interface when the model has one.
+fn frame_entries(model: &Model, step: usize, time: f64) -> Vec<(RunFile<'static>, PvdEntry)> {
+    let parts = [
+        ("bodies", RunFile::Bodies(step), true),
+        (
+            "interface",
+            RunFile::Interface(step),
+            !model.interface.elements.is_empty(),
+        ),
+    ];
+    let written = parts.into_iter().enumerate().filter(|(_, (.., has))| *has);
+    written
+        .map(|(part, (name, file, _))| {
+            let entry = PvdEntry {
+                time,
+                part: part as u32,
+                name: name.into(),
+                file: file.name().into(),
+            };
+            (file, entry)
+        })
+        .collect()
 }
