@@ -404,6 +404,8 @@ pub enum MeshProblem {
     MixedDimension,
     /// An element tag appears twice.
     DuplicateElement,
+    /// The file, or the mesh a `.geo` script would make, is beyond the size limit.
+    TooLarge,
 }
 
 /// Where in a mesh file an [`Error::Mesh`] (or [`Error::NotOnBody`]) is: a node or an
