@@ -531,6 +531,8 @@ pub enum TopologyProblem {
     SharedEntity,
     /// The curve of a Split pair is not between the two bodies.
     NotBetweenBodies,
+    /// The curve of a Split pair was already split by another pair.
+    AlreadySplit,
     /// Splitting would exceed the node numbering.
     TooManyNodes,
     /// The pair has no interface elements.

@@ -256,6 +256,30 @@ fn cases(test: &str) -> Vec<(&'static str, PathBuf, [f64; 2], [&'static str; 2])
             [5.0, 0.0],
             ["inner", "outer"],
         ),
+        (
+            "corner_split",
+            write_case(
+                test,
+                "corner_split",
+                "corner.geo",
+                CORNER_GEO,
+                &corner(true),
+            ),
+            [0.0, 0.0],
+            ["floor_pair", "wall_pair"],
+        ),
+        (
+            "halves_split",
+            write_case(
+                test,
+                "halves_split",
+                "halves.geo",
+                HALVES_GEO,
+                &halves(true),
+            ),
+            [5.0, 0.0],
+            ["inner", "outer"],
+        ),
     ]
 }
 
