@@ -501,6 +501,8 @@ pub enum MeshProblem {
     MixedDimension,
     /// An element tag appears twice.
     DuplicateElement,
+    /// The file, or the mesh a `.geo` script would make, is beyond the size limit.
+    TooLarge,
 }
 
 /// Where in a mesh file an [`Error::Mesh`] (or [`Error::NotOnBody`]) is: a node or an
@@ -626,6 +628,8 @@ pub enum TopologyProblem {
     SharedEntity,
     /// The curve of a Split pair is not between the two bodies.
     NotBetweenBodies,
+    /// The curve of a Split pair was already split by another pair.
+    AlreadySplit,
     /// Splitting would exceed the node numbering.
     TooManyNodes,
     /// The pair has no interface elements.

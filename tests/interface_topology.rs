@@ -366,10 +366,10 @@ fn split_duplicates_the_curve_and_moves_body_b() {
         .unwrap();
     assert!((point as usize) < n0);
 
-    // The curve is no longer shared: splitting again fails and changes nothing.
+    // The curve is already split: splitting again fails and changes nothing.
     let after = mesh.clone();
     let e = topology_error(&mut mesh, &split("cut", "lower", "upper"), "cut", &bodies);
-    assert_eq!(e.0, TopologyProblem::NotBetweenBodies);
+    assert_eq!(e.0, TopologyProblem::AlreadySplit);
     assert_eq!(mesh.nodes, after.nodes);
     assert_eq!(mesh.cells, after.cells);
     assert_eq!(mesh.lines, after.lines);

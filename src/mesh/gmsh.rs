@@ -12,10 +12,31 @@ use crate::{Error, Result};
 /// minutes; a gmsh that runs longer hangs (it does, e.g., on a NaN parameter) and is killed.
 pub const GMSH_TIMEOUT: Duration = Duration::from_secs(600);
 
+/// Most elements a `.geo` script is meshed into (estimated before meshing, see
+/// [`estimate_elements`]). gmsh needs about 1 kB per element (a size factor of 10⁻⁶ on a
+/// small model ran it up to 6 GB before this limit), and the solver far more: a run of
+/// 1.1 million quad8 elements outgrew 23 GB.
+pub const MAX_MESH_ELEMENTS: u64 = 1_000_000;
+
+/// Ratio of the mesh size factors of successive probes in [`estimate_elements`]: each finer
+/// probe has about 16 times the elements of the previous one (in 2D the count goes as the
+/// inverse square of the element size).
+const PROBE_STEP: f64 = 4.0;
+
+/// The coarsest probe's size factor is at least this (4096 times fewer elements than the
+/// script's own mesh at factor 1), so that the first probe is cheap whatever the script.
+const COARSEST_PROBE: f64 = 64.0;
+
+/// A probe with at least this many elements is refined enough that its count scales as the
+/// inverse square of the size factor; coarser probes are dominated by the geometry (every
+/// curve needs an element) and would overestimate.
+const RELIABLE_PROBE: u64 = 4000;
+
 /// Meshes `geo` in 2D into an MSH 4.1 file `out` with quadratic serendipity elements
 /// (`-order 2`, `Mesh.SecondOrderIncomplete = 1`, so recombined quads become 8-node quads),
 /// mesh size factor `size` (`-clscale`) and `-setnumber` values for the script's
-/// `DefineConstant` parameters.
+/// `DefineConstant` parameters. The number of elements is estimated first
+/// ([`estimate_elements`]); a mesh above [`MAX_MESH_ELEMENTS`] is refused before it is made.
 pub fn mesh_geo(
     geo: &Path,
     size: f64,
@@ -30,20 +51,121 @@ pub fn mesh_geo(
             "the .geo script does not exist",
         ));
     }
+    let estimate = estimate_elements(geo, size, parameters)?;
+    if let Some(Estimate {
+        elements,
+        probe,
+        probe_elements,
+    }) = estimate
+        && elements > MAX_MESH_ELEMENTS
+    {
+        return Err(Error::mesh(
+            geo,
+            MeshProblem::TooLarge,
+            None,
+            format!(
+                "mesh.size = {size} would make about {elements:.1e} elements (extrapolated from \
+                 the script meshed at size factor {probe}: {probe_elements} elements), more \
+                 than the limit of {MAX_MESH_ELEMENTS}; increase mesh.size (to about {:.2e}) \
+                 or coarsen the script",
+                probe * (probe_elements as f64 / MAX_MESH_ELEMENTS as f64).sqrt(),
+            ),
+        ));
+    }
     if let Some(dir) = out.parent() {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
+    tracing::info!("meshing {} (size factor {size})", geo.display());
+    let mut cmd = gmsh(geo, size, parameters, out);
+    cmd.args(["-order", "2"])
+        .args(["-setnumber", "Mesh.SecondOrderIncomplete", "1"]);
+    run(cmd, geo, out)?;
+    Ok(out.to_path_buf())
+}
+
+/// The element count of a mesh of `geo` at size factor `size`, extrapolated from a coarser
+/// probe mesh ([`Estimate`]), or `None` when the probes could not bound it below the limit
+/// before reaching `size` itself (the caller then meshes at `size`).
+///
+/// Why probes: gmsh reports no element count before meshing, and the count cannot be read
+/// off the script (transfinite counts, size fields, `Ceil` of the size factor and absolute
+/// size limits all enter). So the script is meshed, first order, at size factors
+/// `size` × 4^k from the first one above [`COARSEST_PROBE`] down to `size` × 4, each probe
+/// at most about 16 times the previous one. In 2D a count grows at most as 1/factor², so
+/// the count at `size` is at most the probe's × 16^k: below the limit, the mesh is
+/// accepted. It is refused only when a probe of at least [`RELIABLE_PROBE`] elements,
+/// extrapolated with the growth actually observed from the previous probe (a script with
+/// fixed transfinite counts does not grow at all), still exceeds the limit. The probes cost
+/// a small fraction of the mesh they predict: a 10⁻⁶ factor on a small model is refused
+/// after a few probes of at most a few thousand elements.
+pub fn estimate_elements(
+    geo: &Path,
+    size: f64,
+    parameters: &[(String, f64)],
+) -> Result<Option<Estimate>> {
+    let steps = (COARSEST_PROBE / size).log(PROBE_STEP).ceil().max(0.0) as i32;
+    let dir = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
+    let out = dir.path().join("probe.msh");
+    let mut previous: Option<u64> = None;
+    let most_growth = PROBE_STEP * PROBE_STEP;
+    for k in (1..=steps).rev() {
+        let probe = size * PROBE_STEP.powi(k);
+        run(gmsh(geo, probe, parameters, &out), geo, &out)?;
+        let count = element_count(&out)?;
+        let extrapolate = |growth: f64| (count as f64 * growth.powi(k)).min(u64::MAX as f64) as u64;
+        let estimate = |elements| Estimate {
+            elements,
+            probe,
+            probe_elements: count,
+        };
+        let bound = extrapolate(most_growth);
+        if bound <= MAX_MESH_ELEMENTS {
+            return Ok(Some(estimate(bound)));
+        }
+        if let Some(before) = previous
+            && count >= RELIABLE_PROBE
+        {
+            let growth = (count as f64 / before.max(1) as f64).clamp(1.0, most_growth);
+            let elements = extrapolate(growth);
+            if elements > MAX_MESH_ELEMENTS {
+                return Ok(Some(estimate(elements)));
+            }
+        }
+        previous = Some(count);
+    }
+    Ok(None)
+}
+
+/// An element count extrapolated from a probe mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Estimate {
+    /// Estimated number of elements at the requested size factor (an upper bound when it is
+    /// below [`MAX_MESH_ELEMENTS`]).
+    pub elements: u64,
+    /// Size factor of the probe it was extrapolated from.
+    pub probe: f64,
+    /// Number of elements of the probe.
+    pub probe_elements: u64,
+}
+
+/// The gmsh command meshing `geo` in 2D at size factor `size` into `out` (MSH 4.1, ASCII).
+fn gmsh(geo: &Path, size: f64, parameters: &[(String, f64)], out: &Path) -> Command {
     let mut cmd = Command::new("gmsh");
     cmd.arg(geo)
-        .args(["-2", "-order", "2", "-format", "msh41", "-v", "2"])
-        .args(["-setnumber", "Mesh.SecondOrderIncomplete", "1"])
+        .args(["-2", "-format", "msh41", "-v", "2"])
         .arg("-clscale")
         .arg(size.to_string());
     for (name, value) in parameters {
         cmd.arg("-setnumber").arg(name).arg(value.to_string());
     }
     cmd.arg("-o").arg(out);
-    tracing::info!("meshing {} (size factor {size})", geo.display());
+    cmd
+}
+
+/// Runs gmsh (`cmd`, meshing `geo` into `out`); its failure is an error with gmsh's own
+/// `Error` lines, or, when it printed none (killed, crashed), how it ended and its last
+/// lines of output.
+fn run(mut cmd: Command, geo: &Path, out: &Path) -> Result<()> {
     let child = cmd
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -62,17 +184,75 @@ pub fn mesh_geo(
             GMSH_TIMEOUT.as_secs()
         )),
     })?;
-    if !status.success() || log.contains("Error") || !out.is_file() {
-        return Err(Error::External(format!(
-            "gmsh failed on {}:\n{}",
-            geo.display(),
-            log.lines()
-                .filter(|l| l.contains("Error") || l.contains("Warning"))
-                .collect::<Vec<_>>()
-                .join("\n")
-        )));
+    let mut errors: Vec<&str> = Vec::new();
+    for line in log.lines().map(str::trim_end) {
+        if line.trim_start().starts_with("Error") && !errors.contains(&line) {
+            errors.push(line);
+        }
     }
-    Ok(out.to_path_buf())
+    if status.success() && errors.is_empty() && out.is_file() {
+        return Ok(());
+    }
+    let reason = if !errors.is_empty() {
+        errors.join("\n")
+    } else {
+        let lines: Vec<&str> = log.lines().filter(|l| !l.trim().is_empty()).collect();
+        let tail = lines[lines.len().saturating_sub(5)..].join("\n");
+        let ended = if status.success() {
+            "gmsh wrote no mesh".to_string()
+        } else {
+            ended_by(status)
+        };
+        if tail.is_empty() {
+            format!("{ended}, and printed nothing")
+        } else {
+            format!("{ended}; its last output:\n{tail}")
+        }
+    };
+    Err(Error::External(format!(
+        "gmsh failed on {}:\n{reason}",
+        geo.display()
+    )))
+}
+
+/// How a failed gmsh ended: its exit code, or the signal that killed it (SIGKILL is what the
+/// kernel's out-of-memory killer sends).
+fn ended_by(status: ExitStatus) -> String {
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::ExitStatusExt;
+        if let Some(signal) = status.signal() {
+            let hint = if signal == 9 {
+                " (as the system does when memory runs out)"
+            } else {
+                ""
+            };
+            return format!("gmsh was killed by signal {signal}{hint}");
+        }
+    }
+    match status.code() {
+        Some(code) => format!("gmsh exited with status {code}"),
+        None => "gmsh ended abnormally".to_string(),
+    }
+}
+
+/// The number of elements of the MSH 4.1 ASCII file `path` (of every dimension), from its
+/// `$Elements` header `numEntityBlocks numElements minTag maxTag`.
+fn element_count(path: &Path) -> Result<u64> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let mut lines = text.lines().skip_while(|l| l.trim() != "$Elements").skip(1);
+    lines
+        .next()
+        .and_then(|header| header.split_whitespace().nth(1))
+        .and_then(|n| n.parse().ok())
+        .ok_or_else(|| {
+            Error::mesh(
+                path,
+                MeshProblem::MissingSection,
+                None,
+                "gmsh's probe mesh has no readable $Elements header",
+            )
+        })
 }
 
 /// Waits for `child` at most `timeout`, collecting its stderr and stdout (read on threads so

@@ -127,6 +127,10 @@ pub struct Mesh {
     pub groups: Vec<PhysicalGroup>,
     /// Number of cells whose node order the reader reversed to make them counter-clockwise.
     pub reoriented_cells: usize,
+    /// Nodes made by splitting a contact curve (see [`interface`]'s Split recipe) → the node
+    /// each copies, so that a later split of a curve sharing an end node with an earlier one
+    /// recognises body B's copy there.
+    pub split_copies: std::collections::HashMap<u32, u32>,
 }
 
 impl Mesh {

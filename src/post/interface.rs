@@ -10,6 +10,8 @@
 //! cycle's dissipation and slip amplitude, the fretting regime, the Ruiz parameters and the
 //! wear depths.
 
+use std::collections::HashMap;
+
 use nalgebra::Matrix3;
 
 use crate::contact::{ContactStatus, InterfaceState};
@@ -95,8 +97,10 @@ struct PairNodes {
 #[derive(Clone, Debug)]
 pub struct InterfaceOutput {
     pairs: Vec<PairNodes>,
-    /// Per mesh node: position in its pair's node list (side-B nodes only).
-    slot: std::collections::HashMap<u32, usize>,
+    /// Per pair, per side-B node of the pair: its position in the pair's node list. Per
+    /// pair, because pairs meeting at a corner, or one joint split into two groups, share
+    /// their end nodes.
+    slot: Vec<HashMap<u32, usize>>,
     /// Point-to-node map of each element's rule: node value = Σ_g E[(i, g)] value_g.
     extrapolation: [Matrix3<f64>; 2],
     /// The bodies' output points, whose recovered stresses give σ_T for `ruiz_f3`.
@@ -106,7 +110,7 @@ pub struct InterfaceOutput {
 impl InterfaceOutput {
     /// Orders the side-B nodes of every pair along its curve.
     pub fn new(model: &Model) -> Self {
-        let mut slot = std::collections::HashMap::new();
+        let mut slot: Vec<HashMap<u32, usize>> = Vec::with_capacity(model.interface.pairs.len());
         let mut pairs = Vec::new();
         for pair in &model.interface.pairs {
             let elements = &model.interface.elements[pair.elements.clone()];
@@ -131,9 +135,7 @@ impl InterfaceOutput {
                 }
                 arc.push(s);
             }
-            for (k, &n) in chain.iter().enumerate() {
-                slot.insert(n, k);
-            }
+            slot.push(chain.iter().enumerate().map(|(k, &n)| (n, k)).collect());
             let count = chain.len();
             pairs.push(PairNodes {
                 nodes: chain,
@@ -146,6 +148,7 @@ impl InterfaceOutput {
         let body_points = BodyPoints::new(model);
         for element in &model.interface.elements {
             let pair = &mut pairs[element.pair as usize];
+            let slot = &slot[element.pair as usize];
             for (k, xi) in [-1.0, 1.0, 0.0].into_iter().enumerate() {
                 let at = slot[&element.nodes[3 + k]];
                 pair.partner[at] = element.nodes[k];
@@ -198,7 +201,7 @@ impl InterfaceOutput {
             let ex = &self.extrapolation[element.rule as usize];
             let values: Vec<[f64; 10]> = points.iter().map(NodalContact::from_state).collect();
             for i in 0..3 {
-                let k = self.slot[&element.nodes[3 + i]];
+                let k = self.slot[p][&element.nodes[3 + i]];
                 let target = &mut out[p][k];
                 for (f, v) in target.values.iter_mut().enumerate() {
                     *v += (0..3).map(|g| ex[(i, g)] * values[g][f]).sum::<f64>();
@@ -240,7 +243,8 @@ impl InterfaceOutput {
 
     /// The grid point of side-B node `k` (0, 1, 2: b0, b1, mid) of `element`.
     fn grid_point(&self, offsets: &[usize], element: &InterfaceElement, k: usize) -> usize {
-        offsets[element.pair as usize] + self.slot[&element.nodes[3 + k]]
+        let pair = element.pair as usize;
+        offsets[pair] + self.slot[pair][&element.nodes[3 + k]]
     }
 
     /// Contact force vectors at the side-B nodes, in grid order, like Abaqus' CNORMF and
@@ -463,7 +467,7 @@ impl InterfaceOutput {
                 std::array::from_fn(|g| point_fretting(&states[at + g], regime[at + g]));
             let ex = &self.extrapolation[element.rule as usize];
             for i in 0..3 {
-                let k = self.slot[&element.nodes[3 + i]];
+                let k = self.slot[p][&element.nodes[3 + i]];
                 let target = &mut out[p][k];
                 for (f, v) in target.iter_mut().enumerate() {
                     if f != REGIME {

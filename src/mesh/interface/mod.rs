@@ -735,12 +735,60 @@ mod tests {
         assert!(mesh.lines[1].nodes.iter().any(|&n| n as usize >= before));
         assert!(mesh.lines[2].nodes.iter().all(|&n| (n as usize) < before));
         assert!(mesh.lines[0].nodes.iter().all(|&n| (n as usize) < before));
-        // Splitting again: the curve is no longer shared, and the mesh is left unchanged.
+        // Splitting again: the curve is already split, and the mesh is left unchanged.
         let copy = mesh.clone();
         let e = error(&mut mesh, &pairing, &["lower", "upper"]);
-        assert_eq!(e.0, TopologyProblem::NotBetweenBodies);
+        assert_eq!(e.0, TopologyProblem::AlreadySplit);
         assert_eq!(mesh.nodes, copy.nodes);
         assert_eq!(mesh.cells, copy.cells);
+    }
+
+    /// One joint y = 1 in two curves that share the node (1, 1), each split by its own pair:
+    /// both pairs join A's node there to the same copy of B, made once, and B's cells use
+    /// copies only.
+    #[test]
+    fn split_two_curves_sharing_an_end_node() {
+        let mut b = Builder::default();
+        b.quad(0, 1, 0.0, 1.0, 0.0, 1.0);
+        b.quad(0, 1, 1.0, 2.0, 0.0, 1.0);
+        b.quad(0, 2, 0.0, 1.0, 1.0, 2.0);
+        b.quad(0, 2, 1.0, 2.0, 1.0, 2.0);
+        b.line(0, 11, [0.0, 1.0], [1.0, 1.0]);
+        b.line(0, 12, [1.0, 1.0], [2.0, 1.0]);
+        b.group(2, 1, "lower", &[1]);
+        b.group(2, 2, "upper", &[2]);
+        b.group(1, 11, "left", &[11]);
+        b.group(1, 12, "right", &[12]);
+        let mut mesh = b.mesh;
+        let before = mesh.nodes.len();
+        let mut sides = Vec::new();
+        for curve in ["left", "right"] {
+            let pairing = Pairing::Split {
+                curve: curve.into(),
+                body_a: "lower".into(),
+                body_b: "upper".into(),
+            };
+            let t = insert_interface(&mut mesh, &pairing, curve, &["lower", "upper"]).unwrap();
+            assert_eq!(t.len(), 1);
+            sides.push(t.elements[0]);
+        }
+        // Three copies for the first curve, two more (mid and far end) for the second.
+        assert_eq!(mesh.nodes.len(), before + 5);
+        let at = |e: [u32; 6], x: [f64; 2]| {
+            let k = (3..6).find(|&k| mesh.nodes[e[k] as usize] == x).unwrap();
+            (e[k - 3], e[k])
+        };
+        let (left, right) = (at(sides[0], [1.0, 1.0]), at(sides[1], [1.0, 1.0]));
+        assert_eq!(left, right, "one node pair at the shared node");
+        assert!((left.0 as usize) < before && left.1 as usize >= before);
+        for cell in &mesh.cells[2..] {
+            for &n in cell.nodes() {
+                assert!(
+                    mesh.nodes[n as usize][1] > 1.0 || n as usize >= before,
+                    "an upper cell keeps an original node on the joint"
+                );
+            }
+        }
     }
 
     /// ~10⁵ nodes per face (50 000 quads on each side): pairing must stay linear in time.

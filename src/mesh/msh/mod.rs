@@ -57,8 +57,27 @@ const SECOND_ORDER_HINT: &str = "mesh with `gmsh -2 -order 2` and `-setnumber Me
 /// other MSH versions, first-order or unsupported elements, unknown node references,
 /// non-planar or degenerate geometry. The function does not panic on bad input.
 pub fn read_msh(path: &Path) -> Result<Mesh> {
-    let bytes = match std::fs::read(path) {
-        Ok(bytes) => bytes,
+    let bytes = read_bounded(path, MAX_MESH_FILE_BYTES)?;
+    parse_msh(path, &bytes)
+}
+
+/// Largest mesh file read (1 GiB): twice an ASCII MSH file of
+/// [`MAX_MESH_ELEMENTS`](crate::mesh::gmsh::MAX_MESH_ELEMENTS) quad8 elements, which is about
+/// 0.5 GB. The whole file is held in memory while it is parsed.
+pub const MAX_MESH_FILE_BYTES: u64 = 1 << 30;
+
+/// Bytes read first, to recognise a file that is not MSH at all (such as `/dev/zero`)
+/// before reading more.
+const HEADER_BYTES: u64 = 4096;
+
+/// The content of the mesh file `path`, refused beyond `limit` bytes: a regular file by its
+/// length before reading, anything else (a FIFO, a device) while reading, which never reads
+/// more than the limit; a file that does not start like MSH is refused after its first
+/// [`HEADER_BYTES`].
+fn read_bounded(path: &Path, limit: u64) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let file = match std::fs::File::open(path) {
+        Ok(file) => file,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             return Err(Error::mesh(
                 path,
@@ -69,7 +88,47 @@ pub fn read_msh(path: &Path) -> Result<Mesh> {
         }
         Err(e) => return Err(Error::io(path, e)),
     };
-    parse_msh(path, &bytes)
+    let too_large = |lead: String| {
+        Error::mesh(
+            path,
+            MeshProblem::TooLarge,
+            None,
+            format!(
+                "{lead} the {limit} bytes asperity reads (a mesh that size is far beyond what \
+                 the solver can hold in memory); coarsen the mesh"
+            ),
+        )
+    };
+    let metadata = file.metadata().map_err(|e| Error::io(path, e))?;
+    if metadata.is_file() && metadata.len() > limit {
+        return Err(too_large(format!(
+            "the mesh file has {} bytes, more than",
+            metadata.len()
+        )));
+    }
+    let mut bytes = Vec::new();
+    let mut reader = file.take(HEADER_BYTES.min(limit + 1));
+    reader
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    let starts_with_text = bytes.iter().any(|b| !b.is_ascii_whitespace());
+    if starts_with_text
+        && let Err(fault) = read_header(&bytes)
+        && fault.problem == MeshProblem::Header
+    {
+        return Err(fault.at(path));
+    }
+    let rest = limit + 1 - bytes.len() as u64;
+    let mut reader = reader.into_inner().take(rest);
+    reader
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    if bytes.len() as u64 > limit {
+        return Err(too_large(
+            "the mesh file (not a regular file) goes on beyond".into(),
+        ));
+    }
+    Ok(bytes)
 }
 
 /// Parses the content of an MSH file; `path` is only used in error messages and stored in the
@@ -919,5 +978,48 @@ mod tests {
             report.contains("physical group \"edge\" (dim 1, tag 2) has no lines"),
             "{report}"
         );
+    }
+
+    /// A stream (here a FIFO fed without end) is read no further than the limit, then
+    /// refused; within the limit it is read like a file.
+    #[test]
+    fn streams_are_read_up_to_the_limit() {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("mesh.msh");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        assert!(made.unwrap().success(), "mkfifo");
+        let feed = |fifo: std::path::PathBuf, text: Vec<u8>, repeat: usize| {
+            std::thread::spawn(move || {
+                use std::io::Write;
+                let mut pipe = std::fs::OpenOptions::new().write(true).open(fifo).unwrap();
+                // The reader stops at its limit and closes the pipe: a broken pipe ends the
+                // feed.
+                for _ in 0..repeat {
+                    if pipe.write_all(&text).is_err() {
+                        break;
+                    }
+                }
+            })
+        };
+        let limit = 10_000;
+        let mesh = msh(&quad_nodes(), &[(2, 16, vec![(1, (101..=108).collect())])]);
+        let mut endless = mesh.clone().into_bytes();
+        endless.extend(b"$Comments\n");
+        let writer = feed(fifo.clone(), endless, usize::MAX);
+        let error = read_bounded(&fifo, limit).unwrap_err();
+        writer.join().unwrap();
+        let Error::Mesh {
+            problem, message, ..
+        } = &error
+        else {
+            panic!("{error}")
+        };
+        assert_eq!(*problem, MeshProblem::TooLarge, "{error}");
+        assert!(message.contains("10000 bytes"), "{error}");
+
+        let writer = feed(fifo.clone(), mesh.clone().into_bytes(), 1);
+        let bytes = read_bounded(&fifo, limit).unwrap();
+        writer.join().unwrap();
+        assert_eq!(bytes, mesh.into_bytes());
     }
 }
