@@ -317,6 +317,10 @@ fn fit_or_sweep(command: Command) -> asperity::Result<bool> {
                 "results: {} (fit.json, curves.csv, law.toml); plots: {plots}",
                 out.display()
             );
+            // Warnings are diagnostics: standard error, so that the results can be piped.
+            for w in &result.warnings {
+                eprintln!("warning: {w}");
+            }
             Ok(result.identifiable)
         }
         Command::Sweep { action } => sweep_command(action),
