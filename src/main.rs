@@ -83,9 +83,10 @@ enum Command {
         #[arg(long)]
         no_plot: bool,
     },
-    /// Fit interface-law parameters to measured joint curves (Levenberg–Marquardt): values,
-    /// standard errors, 95 % intervals, correlations, plots, fit.json and a `law = {...}` line.
-    /// Exit status 1 when a parameter is not identifiable from the data.
+    /// Fit interface-law parameters to measured joint curves (Levenberg–Marquardt from several
+    /// starts): values, verdicts and profile 95 % intervals, standard errors, correlations,
+    /// plots, fit.json and a `law = {...}` line. Exit status 1 when a free parameter is not
+    /// identified (the data bound it on one side only, or not at all).
     Fit {
         /// The fit file (TOML).
         file: PathBuf,
@@ -335,6 +336,10 @@ fn fit_or_sweep(command: Command) -> asperity::Result<bool> {
                 "results: {} (fit.json, curves.csv, law.toml); plots: {plots}",
                 out.display()
             );
+            // Warnings are diagnostics: standard error, so that the results can be piped.
+            for w in &result.warnings {
+                eprintln!("warning: {w}");
+            }
             Ok(result.identifiable)
         }
         Command::Sweep { action } => sweep_command(action),

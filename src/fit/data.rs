@@ -6,8 +6,11 @@
 //! 0.0,0.0,0.0
 //! ```
 //!
-//! Values are converted to asperity's units (mm, N, MPa) on reading. Rows are the test's
-//! history in order; a `time` column, where there is one, must increase strictly.
+//! read with the `csv` crate (quoted fields; blank lines and lines starting with `#` are
+//! skipped; a UTF-8 byte-order mark is skipped too). Values are converted to asperity's units (mm, N,
+//! MPa) on reading. Rows are the test's history in order; a `time` column, where there is one,
+//! must increase strictly. Column names must be unique, every value a finite number, also
+//! after its unit is converted.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -80,68 +83,103 @@ fn bad(
 }
 
 impl Table {
-    /// Reads `path`.
+    /// Reads `path`: UTF-8 text, with or without a byte-order mark.
     pub fn read(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
+            return Err(bad(
+                path,
+                "encoding",
+                "",
+                "UTF-16 text (it starts with a UTF-16 byte-order mark): save the file as UTF-8",
+            ));
+        }
+        let text = String::from_utf8(bytes).map_err(|e| {
+            let offset = e.utf8_error().valid_up_to();
+            bad(
+                path,
+                "encoding",
+                "",
+                format!(
+                    "not UTF-8 text (an invalid byte at offset {offset}): save the file as UTF-8"
+                ),
+            )
+        })?;
         Self::parse(&text, path)
     }
 
-    /// Parses CSV text (`path` for messages).
+    /// Parses CSV text (`path` for messages); a leading UTF-8 byte-order mark is skipped.
     pub fn parse(text: &str, path: &Path) -> Result<Self> {
-        let mut units = BTreeMap::new();
+        let text = text.strip_prefix('\u{FEFF}').unwrap_or(text);
+        let units = units(text, path)?;
+        // Comment lines become blank lines, which the reader skips: the csv crate's own
+        // comment option would drop them from its line count and byte offsets.
+        let text: String = text
+            .split_inclusive('\n')
+            .map(|l| {
+                if l.trim_start().starts_with('#') {
+                    if l.ends_with('\n') { "\n" } else { "" }
+                } else {
+                    l
+                }
+            })
+            .collect();
+        let mut reader = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .flexible(true)
+            .trim(csv::Trim::All)
+            .from_reader(text.as_bytes());
+        // The file line of a record at byte offset `byte`: the reader's offset is where it
+        // resumed reading, before the blank lines it skipped.
+        let line_starts: Vec<usize> = std::iter::once(0)
+            .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+            .collect();
+        let line_of = |byte: u64| {
+            let rest = text.get(byte as usize..).unwrap_or_default();
+            let start = byte as usize + rest.len() - rest.trim_start().len();
+            line_starts.partition_point(|&s| s <= start)
+        };
         let mut columns: Option<Vec<String>> = None;
         let (mut rows, mut lines) = (Vec::new(), Vec::new());
-        for (i, line) in text.lines().enumerate() {
-            let line = line.trim();
-            if let Some(comment) = line.strip_prefix('#') {
-                if let Some(list) = comment.trim().strip_prefix("units:") {
-                    for item in list.split(',').filter(|s| !s.trim().is_empty()) {
-                        let (name, unit) = item.split_once('=').ok_or_else(|| {
-                            bad(path, "units", item.trim(), "expected `column = unit`")
-                        })?;
-                        units.insert(name.trim().to_string(), unit.trim().to_string());
-                    }
-                }
+        for record in reader.records() {
+            let record = record.map_err(|e| {
+                let line = e.position().map_or(0, |p| line_of(p.byte()));
+                bad(path, format!("line {line}"), "", e.to_string())
+            })?;
+            let line = record.position().map_or(0, |p| line_of(p.byte()));
+            if record.iter().all(str::is_empty) {
                 continue;
             }
-            if line.is_empty() {
-                continue;
-            }
-            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
             let Some(names) = &columns else {
-                columns = Some(fields.iter().map(|s| s.to_string()).collect());
+                columns = Some(header(&record, line, path)?);
                 continue;
             };
-            if fields.len() != names.len() {
+            if record.len() != names.len() {
                 return Err(bad(
                     path,
-                    format!("line {}", i + 1),
-                    line,
-                    format!("has {} values, the header {}", fields.len(), names.len()),
+                    format!("line {line}"),
+                    record.iter().collect::<Vec<_>>().join(","),
+                    format!("has {} values, the header {}", record.len(), names.len()),
                 ));
             }
-            let mut row = Vec::with_capacity(fields.len());
-            for (name, field) in names.iter().zip(&fields) {
-                let v: f64 = field.parse().map_err(|_| {
-                    bad(
-                        path,
-                        format!("column '{name}', line {}", i + 1),
-                        *field,
-                        "not a number",
-                    )
-                })?;
+            let mut row = Vec::with_capacity(record.len());
+            for (name, field) in names.iter().zip(record.iter()) {
+                let key = || format!("column '{name}', line {line}");
+                let v: f64 = field
+                    .parse()
+                    .map_err(|_| bad(path, key(), field, "not a number"))?;
                 if !v.is_finite() {
                     return Err(bad(
                         path,
-                        format!("column '{name}', line {}", i + 1),
-                        *field,
-                        "must be a finite number (NaN or infinity in the data)",
+                        key(),
+                        field,
+                        "must be a finite number (NaN, infinity, or beyond the ±1.8e308 of a double)",
                     ));
                 }
                 row.push(v);
             }
             rows.push(row);
-            lines.push(i + 1);
+            lines.push(line);
         }
         let columns =
             columns.ok_or_else(|| bad(path, "header", "", "the file has no header line"))?;
@@ -159,6 +197,11 @@ impl Table {
             table.check_increasing("time")?;
         }
         Ok(table)
+    }
+
+    /// File line number (1-based) of each row.
+    pub fn lines(&self) -> &[usize] {
+        &self.lines
     }
 
     /// The number of data rows.
@@ -204,7 +247,23 @@ impl Table {
                 ),
             )
         })?;
-        Ok(self.rows.iter().map(|r| r[j] * factor).collect())
+        self.rows
+            .iter()
+            .zip(&self.lines)
+            .map(|(r, line)| {
+                let v = r[j] * factor;
+                if v.is_finite() {
+                    Ok(v)
+                } else {
+                    Err(bad(
+                        &self.path,
+                        format!("column '{name}', line {line}"),
+                        format!("{:e}", r[j]),
+                        format!("overflows when converted from {unit} to asperity's unit"),
+                    ))
+                }
+            })
+            .collect()
     }
 
     /// Checks that column `name` increases strictly down the file.
@@ -229,6 +288,53 @@ impl Table {
         }
         Ok(())
     }
+}
+
+/// The units declared in `# units: name = unit, ...` comment lines of `text`.
+fn units(text: &str, path: &Path) -> Result<BTreeMap<String, String>> {
+    let mut units = BTreeMap::new();
+    let declarations = text
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix('#'))
+        .filter_map(|c| c.trim().strip_prefix("units:"));
+    for list in declarations {
+        for item in list.split(',').filter(|s| !s.trim().is_empty()) {
+            let (name, unit) = item
+                .split_once('=')
+                .ok_or_else(|| bad(path, "units", item.trim(), "expected `column = unit`"))?;
+            units.insert(name.trim().to_string(), unit.trim().to_string());
+        }
+    }
+    Ok(units)
+}
+
+/// The column names of header `record` (on line `line`): each named, none twice.
+fn header(record: &csv::StringRecord, line: usize, path: &Path) -> Result<Vec<String>> {
+    let names: Vec<String> = record.iter().map(str::to_string).collect();
+    for (k, name) in names.iter().enumerate() {
+        if name.is_empty() {
+            return Err(bad(
+                path,
+                format!("header, line {line}"),
+                record.iter().collect::<Vec<_>>().join(","),
+                format!("column {} has no name", k + 1),
+            ));
+        }
+        if let Some(first) = names[..k].iter().position(|n| n == name) {
+            return Err(bad(
+                path,
+                format!("column '{name}'"),
+                "",
+                format!(
+                    "appears twice in the header (columns {} and {}, line {line}): which one is meant is \
+                     ambiguous; rename or remove one",
+                    first + 1,
+                    k + 1
+                ),
+            ));
+        }
+    }
+    Ok(names)
 }
 
 #[cfg(test)]
@@ -267,6 +373,7 @@ mod tests {
             "column 'time', line 5"
         );
         assert_eq!(key_of("a,b\n1,2,3\n"), "line 2");
+        assert_eq!(key_of("a,b,a\n1,2,3\n"), "column 'a'");
         let t = Table::parse("# units: a = mm\na\n1\n", Path::new("d.csv")).unwrap();
         let Err(Error::InvalidParameter { key, .. }) = t.column("b", Dimension::Length) else {
             panic!()
@@ -276,5 +383,22 @@ mod tests {
             panic!()
         };
         assert_eq!(key, "units.a");
+    }
+
+    /// A byte-order mark, blank lines, quoted fields and comments between the rows are read
+    /// as a spreadsheet writes them; a value that overflows on conversion names its line.
+    #[test]
+    fn bom_quotes_and_blank_lines_are_read_and_overflow_is_an_error() {
+        let text = "\u{FEFF}# units: a = m, b = MPa\n\n\"a\",b\n1e-3,\"2\"\n\n# a note\n2e-3 , 3\n";
+        let t = Table::parse(text, Path::new("d.csv")).unwrap();
+        assert_eq!(t.column("a", Dimension::Length).unwrap(), vec![1.0, 2.0]);
+        assert_eq!(t.column("b", Dimension::Stress).unwrap(), vec![2.0, 3.0]);
+        assert_eq!(t.lines(), &[4, 7]);
+        let t = Table::parse("# units: a = m\na\n1\n1e306\n", Path::new("d.csv")).unwrap();
+        let Err(Error::InvalidParameter { key, .. }) = t.column("a", Dimension::Length) else {
+            panic!()
+        };
+        assert_eq!(key, "column 'a', line 4");
+        assert_eq!(key_of("a\n1e400\n"), "column 'a', line 2");
     }
 }

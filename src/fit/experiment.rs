@@ -80,6 +80,10 @@ pub struct Experiment {
     pub sigma: Vec<f64>,
     /// Whether the file states measurement errors (else σ = 1 and the scale is estimated).
     pub stated: bool,
+    /// The data file, the compared column and the file line of each point (for messages).
+    pub data: PathBuf,
+    pub column: &'static str,
+    pub lines: Vec<usize>,
 }
 
 impl Experiment {
@@ -117,7 +121,7 @@ impl Experiment {
             }
         }
         let table = Table::read(&data)?;
-        let (kind, x, measured, name) = match spec {
+        let (kind, x, measured, name, column) = match spec {
             TestSpec::Normal { .. } => {
                 let closure = table.column("closure", Dimension::Length)?;
                 let measured = table.column("pressure", Dimension::Stress)?;
@@ -128,6 +132,7 @@ impl Experiment {
                     closure,
                     measured,
                     "normal",
+                    "pressure",
                 )
             }
             TestSpec::Tangential { pressure, .. } => {
@@ -140,7 +145,7 @@ impl Experiment {
                     pressure: *pressure,
                     displacement: displacement.clone(),
                 };
-                (kind, displacement, measured, "tangential")
+                (kind, displacement, measured, "tangential", "shear")
             }
             TestSpec::Model {
                 case,
@@ -152,7 +157,13 @@ impl Experiment {
                 let measured = table.column("value", Dimension::Number)?;
                 let specimen =
                     Specimen::new(&dir.join(case), *contact, quantity, &steps, &table.path)?;
-                (Kind::Model(Box::new(specimen)), steps, measured, "model")
+                (
+                    Kind::Model(Box::new(specimen)),
+                    steps,
+                    measured,
+                    "model",
+                    "value",
+                )
             }
         };
         let sigma: Vec<f64> = measured
@@ -184,6 +195,9 @@ impl Experiment {
                 vec![1.0; table.len()]
             },
             stated,
+            lines: table.lines().to_vec(),
+            data,
+            column,
         })
     }
 
@@ -204,6 +218,34 @@ impl Experiment {
             Kind::Model(specimen) => specimen.simulate(x, kind)?,
         })
     }
+}
+
+/// Checks that χ² of `experiments` (with `points` points in all) cannot overflow: each
+/// weighted measured value |y/σ| must stay below √(f64::MAX / 4·points), so that a residual
+/// (f − y)/σ with |f| ≤ |y| squared and summed remains finite. A value beyond names the file,
+/// the column and the line.
+pub fn check_sum_of_squares(experiments: &[Experiment], points: usize) -> Result<()> {
+    let limit = (f64::MAX / (4.0 * points as f64)).sqrt();
+    for e in experiments {
+        let row = e
+            .measured
+            .iter()
+            .zip(&e.sigma)
+            .position(|(y, s)| (y / s).abs() >= limit || (y / s).is_nan());
+        if let Some(k) = row {
+            return Err(Error::InvalidParameter {
+                path: e.data.clone(),
+                key: format!("column '{}', line {}", e.column, e.lines[k]),
+                value: e.measured[k].to_string(),
+                reason: format!(
+                    "too large for a fit: divided by its error {} it exceeds {limit:.3e}, and its square would \
+                     overflow the sum of squares; check the column's unit and the test's `error`",
+                    e.sigma[k]
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Pressures along a closure history (no shear).

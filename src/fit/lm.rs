@@ -1,13 +1,24 @@
 //! Levenberg–Marquardt for small dense least-squares problems (a handful of parameters, up
-//! to some thousand residuals) on nalgebra, and the statistics at the optimum.
+//! to some thousand residuals) on nalgebra, within bounds.
 //!
 //! The iteration is Marquardt's with the scaled damping D = diag(JᵀJ) and Nielsen's update of
 //! the damping factor (H. B. Nielsen, "Damping parameter in Marquardt's method", IMM-REP-1999-05):
 //! the step δ solves (JᵀJ + λD) δ = −Jᵀr; it is accepted when the gain ratio
-//! ρ = (F(θ) − F(θ+δ)) / (½ δᵀ(λDδ − Jᵀr)) is positive, F = ½‖r‖², and then
-//! λ ← λ · max(1/3, 1 − (2ρ − 1)³), else λ ← λν, ν ← 2ν. The Jacobian is by central
-//! differences: residual functions here are material-point simulations or finite-element runs,
-//! whose derivatives are not available in closed form.
+//! ρ = (F(θ) − F(θ+δ)) / (−gᵀδ − ½ δᵀJᵀJδ) is positive, F = ½‖r‖², g = Jᵀr, and then
+//! λ ← λ · max(1/3, 1 − (2ρ − 1)³), else λ ← λν, ν ← 2ν.
+//!
+//! **Bounds** (each component in a closed interval, [`Problem::range`]) are kept by an active
+//! set and projection, the projected Levenberg–Marquardt method of Kanzow, Yamashita and
+//! Fukushima (J. Comput. Appl. Math. 172, 2004): a component at a bound whose gradient points
+//! out of the range is held for the step, the others solve the damped system, and the trial
+//! point is projected onto the range (the gain ratio uses the projected step). The gradient
+//! that decides convergence is the projected one.
+//!
+//! The Jacobian is by finite differences: residual functions here are material-point
+//! simulations or finite-element runs, whose derivatives are not available in closed form.
+//! Central differences where both neighbours lie in the range; at a bound, the second-order
+//! one-sided formula into the range, (−3r(θ) + 4r(θ+h) − r(θ+2h))/2h, with the same number of
+//! evaluations and the same order of accuracy.
 
 use nalgebra::{DMatrix, DVector};
 use statrs::distribution::{ContinuousCDF, StudentsT};
@@ -19,7 +30,7 @@ pub struct Settings {
     pub max_iterations: usize,
     /// Stop when the step is below this relative to ‖θ‖ (plus this, absolute).
     pub step_tolerance: f64,
-    /// Stop when ‖Jᵀr‖∞ is below this.
+    /// Stop when the projected ‖Jᵀr‖∞ is below this times (1 + F).
     pub gradient_tolerance: f64,
 }
 
@@ -34,16 +45,18 @@ impl Default for Settings {
 }
 
 /// Why [`minimize`] stopped.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub enum Stop {
     /// The step became smaller than the tolerance.
     SmallStep,
-    /// The gradient vanished.
+    /// The (projected) gradient vanished.
     SmallGradient,
     /// The residuals are zero to round-off.
     ZeroResidual,
     /// The iteration limit.
     MaxIterations,
+    /// The residuals or their finite differences are not finite numbers (overflow).
+    NotFinite,
 }
 
 /// The optimum [`minimize`] reached.
@@ -57,6 +70,14 @@ pub struct Minimum {
     pub stop: Stop,
 }
 
+impl Minimum {
+    /// χ² = ‖r‖² (infinite when the residuals are not finite).
+    pub fn chi_square(&self) -> f64 {
+        let c = self.residuals.norm_squared();
+        if c.is_nan() { f64::INFINITY } else { c }
+    }
+}
+
 /// A least-squares problem: residuals r(θ) (already divided by their standard deviations)
 /// and Jacobians, in parallel where the residual is expensive.
 pub trait Problem {
@@ -67,43 +88,88 @@ pub trait Problem {
     fn residuals_many(&self, thetas: &[DVector<f64>]) -> Result<Vec<DVector<f64>>, Self::Error> {
         thetas.iter().map(|t| self.residuals(t)).collect()
     }
+    /// The closed range of component `i` (default: unbounded).
+    fn range(&self, _i: usize) -> (f64, f64) {
+        (f64::NEG_INFINITY, f64::INFINITY)
+    }
     /// Finite-difference step of each component at θ.
     fn steps(&self, theta: &DVector<f64>) -> DVector<f64> {
         theta.map(|t| 1e-6 * t.abs().max(1e-3))
     }
+    /// Whether error `e` at a trial point only means that the point cannot be evaluated (a
+    /// model that does not converge there): the step is then rejected like one that raises
+    /// the residuals. Other errors end the minimisation.
+    fn infeasible(&self, _e: &Self::Error) -> bool {
+        false
+    }
 }
 
-/// The central-difference Jacobian dr/dθ at `theta` (2 evaluations per column).
+/// How a Jacobian column is differenced.
+#[derive(Clone, Copy)]
+enum Difference {
+    /// r(θ+h), r(θ−h).
+    Central,
+    /// r(θ+h), r(θ+2h) with r(θ).
+    Forward,
+    /// r(θ−h), r(θ−2h) with r(θ).
+    Backward,
+}
+
+/// The finite-difference Jacobian dr/dθ at `theta`, where the residuals are `r0` (two
+/// evaluations per column, none outside the range: see the module documentation).
 pub fn jacobian<P: Problem>(
     problem: &P,
     theta: &DVector<f64>,
-    rows: usize,
+    r0: &DVector<f64>,
 ) -> Result<DMatrix<f64>, P::Error> {
     let h = problem.steps(theta);
+    let mut columns = Vec::with_capacity(theta.len());
     let mut points = Vec::with_capacity(2 * theta.len());
     for j in 0..theta.len() {
-        for sign in [1.0, -1.0] {
+        let (lo, hi) = problem.range(j);
+        // A step of at most a quarter of the range: one side then has room for 2h.
+        let h = h[j].min(0.25 * (hi - lo));
+        let at = |k: f64| {
             let mut t = theta.clone();
-            t[j] += sign * h[j];
-            points.push(t);
-        }
+            t[j] += k * h;
+            t
+        };
+        let (kind, a, b) = if theta[j] - h >= lo && theta[j] + h <= hi {
+            (Difference::Central, at(1.0), at(-1.0))
+        } else if theta[j] + 2.0 * h <= hi {
+            (Difference::Forward, at(1.0), at(2.0))
+        } else {
+            (Difference::Backward, at(-1.0), at(-2.0))
+        };
+        columns.push((kind, h));
+        points.push(a);
+        points.push(b);
     }
     let values = problem.residuals_many(&points)?;
-    let mut jac = DMatrix::zeros(rows, theta.len());
-    for j in 0..theta.len() {
-        let column = (&values[2 * j] - &values[2 * j + 1]) / (2.0 * h[j]);
+    let mut jac = DMatrix::zeros(r0.len(), theta.len());
+    for (j, (kind, h)) in columns.into_iter().enumerate() {
+        let (a, b) = (&values[2 * j], &values[2 * j + 1]);
+        let column = match kind {
+            Difference::Central => (a - b) / (2.0 * h),
+            Difference::Forward => (a * 4.0 - b - r0 * 3.0) / (2.0 * h),
+            Difference::Backward => (r0 * 3.0 - a * 4.0 + b) / (2.0 * h),
+        };
         jac.set_column(j, &column);
     }
     Ok(jac)
 }
 
-/// Minimises ½‖r(θ)‖² from `start`.
+/// Minimises ½‖r(θ)‖² from `start` (projected onto the range) within the problem's range.
+/// A start whose residuals are not finite ends at once with [`Stop::NotFinite`].
 pub fn minimize<P: Problem>(
     problem: &P,
     start: DVector<f64>,
     settings: &Settings,
 ) -> Result<Minimum, P::Error> {
-    let mut theta = start;
+    let n = start.len();
+    let (lo, hi): (Vec<f64>, Vec<f64>) = (0..n).map(|i| problem.range(i)).unzip();
+    let project = |t: DVector<f64>| DVector::from_fn(n, |i, _| t[i].clamp(lo[i], hi[i]));
+    let mut theta = project(start);
     let mut r = problem.residuals(&theta)?;
     let mut evaluations = 1;
     let cost = |r: &DVector<f64>| 0.5 * r.norm_squared();
@@ -113,25 +179,36 @@ pub fn minimize<P: Problem>(
     let mut fresh = true; // the Jacobian must be (re)computed at θ
     let (mut a, mut g) = (DMatrix::zeros(0, 0), DVector::zeros(0));
     for iteration in 0..settings.max_iterations {
-        if fresh {
-            let jac = jacobian(problem, &theta, r.len())?;
-            evaluations += 2 * theta.len();
-            a = jac.transpose() * &jac;
-            g = jac.transpose() * &r;
-            fresh = false;
-        }
-        let finish = |stop| Minimum {
+        let finish = |theta: &DVector<f64>, r: &DVector<f64>, evaluations, stop| Minimum {
             theta: theta.clone(),
             residuals: r.clone(),
             iterations: iteration,
             evaluations,
             stop,
         };
-        if f <= f64::MIN_POSITIVE {
-            return Ok(finish(Stop::ZeroResidual));
+        if !f.is_finite() {
+            return Ok(finish(&theta, &r, evaluations, Stop::NotFinite));
         }
-        if g.amax() <= settings.gradient_tolerance * (1.0 + f) {
-            return Ok(finish(Stop::SmallGradient));
+        if fresh {
+            let jac = jacobian(problem, &theta, &r)?;
+            evaluations += 2 * n;
+            if !jac.iter().all(|x| x.is_finite()) {
+                return Ok(finish(&theta, &r, evaluations, Stop::NotFinite));
+            }
+            a = jac.transpose() * &jac;
+            g = jac.transpose() * &r;
+            fresh = false;
+        }
+        if f <= f64::MIN_POSITIVE {
+            return Ok(finish(&theta, &r, evaluations, Stop::ZeroResidual));
+        }
+        // Held: at a bound, with the descent direction −g pointing out of the range.
+        let held: Vec<bool> = (0..n)
+            .map(|i| (theta[i] <= lo[i] && g[i] > 0.0) || (theta[i] >= hi[i] && g[i] < 0.0))
+            .collect();
+        let projected = DVector::from_fn(n, |i, _| if held[i] { 0.0 } else { g[i] });
+        if projected.amax() <= settings.gradient_tolerance * (1.0 + f) {
+            return Ok(finish(&theta, &r, evaluations, Stop::SmallGradient));
         }
         // Marquardt's scaling, floored so a parameter the residuals ignore still gets damped.
         let dmax = a.diagonal().max();
@@ -140,29 +217,46 @@ pub fn minimize<P: Problem>(
             .map(|x| x.max(1e-12 * dmax).max(f64::MIN_POSITIVE));
         let l = *lambda.get_or_insert(1e-3);
         let mut damped = a.clone();
-        for i in 0..d.len() {
+        for i in 0..n {
             damped[(i, i)] += l * d[i];
+            if held[i] {
+                // δ_i = 0: the row and column drop out of the system.
+                damped.row_mut(i).fill(0.0);
+                damped.column_mut(i).fill(0.0);
+                damped[(i, i)] = 1.0;
+            }
         }
         let Some(chol) = damped.cholesky() else {
             lambda = Some(l * nu);
             nu *= 2.0;
             continue;
         };
-        let delta = -chol.solve(&g);
-        if delta.norm() <= settings.step_tolerance * (theta.norm() + settings.step_tolerance) {
-            return Ok(finish(Stop::SmallStep));
+        let trial = project(&theta - chol.solve(&projected));
+        let step = &trial - &theta;
+        if step.norm() <= settings.step_tolerance * (theta.norm() + settings.step_tolerance) {
+            return Ok(finish(&theta, &r, evaluations, Stop::SmallStep));
         }
-        let trial = &theta + &delta;
-        let r_trial = problem.residuals(&trial)?;
+        // The decrease the Gauss–Newton model predicts for the projected step.
+        let predicted = -g.dot(&step) - 0.5 * step.dot(&(&a * &step));
+        let r_trial = match problem.residuals(&trial) {
+            Ok(r) => Some(r),
+            Err(e) if problem.infeasible(&e) => None,
+            Err(e) => return Err(e),
+        };
         evaluations += 1;
-        let f_trial = cost(&r_trial);
-        let predicted = 0.5 * delta.dot(&(d.component_mul(&delta) * l - &g));
-        let rho = (f - f_trial) / predicted;
-        if rho > 0.0 && f_trial.is_finite() {
+        let accepted = r_trial.filter(|r_trial| {
+            let f_trial = cost(r_trial);
+            let rho = (f - f_trial) / predicted;
+            let ok = predicted > 0.0 && rho > 0.0 && f_trial.is_finite();
+            if ok {
+                lambda = Some(l * (1.0 / 3.0f64).max(1.0 - (2.0 * rho - 1.0).powi(3)));
+            }
+            ok
+        });
+        if let Some(r_trial) = accepted {
             theta = trial;
+            f = cost(&r_trial);
             r = r_trial;
-            f = f_trial;
-            lambda = Some(l * (1.0 / 3.0f64).max(1.0 - (2.0 * rho - 1.0).powi(3)));
             nu = 2.0;
             fresh = true;
         } else {
@@ -175,7 +269,11 @@ pub fn minimize<P: Problem>(
         residuals: r,
         iterations: settings.max_iterations,
         evaluations,
-        stop: Stop::MaxIterations,
+        stop: if f.is_finite() {
+            Stop::MaxIterations
+        } else {
+            Stop::NotFinite
+        },
     })
 }
 
@@ -250,6 +348,40 @@ mod tests {
         let slope = 10.3 / 5.0;
         assert!((m.theta[1] - slope).abs() < 1e-9);
         assert!((m.theta[0] - (4.05 - 1.5 * slope)).abs() < 1e-9);
+    }
+
+    /// A minimum outside the range: the bounded optimum lies on the bound (x = 2 for
+    /// (x − 3)² with x ≤ 2), is reached without a residual ever evaluated outside the range,
+    /// and the Jacobian there is the one-sided one (exact for this quadratic).
+    #[test]
+    fn bounds_hold_the_iterates_and_the_differences() {
+        struct Capped(std::cell::Cell<bool>);
+        impl Problem for Capped {
+            type Error = ();
+            fn residuals(&self, t: &DVector<f64>) -> Result<DVector<f64>, ()> {
+                if t[0] > 2.0 || t[1] < 0.0 {
+                    self.0.set(true);
+                }
+                Ok(DVector::from_vec(vec![t[0] - 3.0, t[1] - 1.0, t[0] * t[1]]))
+            }
+            fn range(&self, i: usize) -> (f64, f64) {
+                [(f64::NEG_INFINITY, 2.0), (0.0, f64::INFINITY)][i]
+            }
+        }
+        let p = Capped(std::cell::Cell::new(false));
+        let m = minimize(&p, DVector::from_vec(vec![0.5, 3.0]), &Settings::default()).unwrap();
+        // With x = 2 held: minimise (y − 1)² + 4y² → y = 1/5.
+        assert!(
+            (m.theta[0] - 2.0).abs() < 1e-12 && (m.theta[1] - 0.2).abs() < 1e-9,
+            "{m:?}"
+        );
+        assert!(!p.0.get(), "a residual was evaluated outside the range");
+        let at = DVector::from_vec(vec![2.0, 0.0]);
+        let jac = jacobian(&p, &at, &p.residuals(&at).unwrap()).unwrap();
+        let exact = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, 0.0, 1.0, 0.0, 2.0]);
+        // Exact but for round-off: residuals of order 1 differenced over h = 1e-9 (y = 0).
+        assert!((jac - exact).amax() < 1e-6);
+        assert!(!p.0.get());
     }
 
     #[test]

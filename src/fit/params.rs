@@ -1,11 +1,13 @@
-//! The parameters of a fit: which law, which parameters are free (with bounds or a log
-//! transform) and which are fixed, and the map between the unconstrained vector θ that
-//! Levenberg–Marquardt moves and the law's parameters x.
+//! The parameters of a fit: which law, which parameters are free (with their range and scale)
+//! and which are fixed, and the map between the vector z that Levenberg–Marquardt moves and
+//! the law's parameters x.
 //!
-//! Transforms keep x inside its bounds whatever θ is: x = a + (b − a)(1 + tanh θ)/2 between
-//! two bounds, x = a + e^θ above a lower bound, x = b − e^θ below an upper one, x = e^θ with
-//! `log = true`, and x = θ without bounds (then a step that leaves the law's range is an
-//! error telling the user to give bounds).
+//! A free parameter is moved as z = x, or as z = ln x with `log = true` (for positive
+//! parameters spanning decades). Its range is the closed interval of the fit file's `min` and
+//! `max` within the bound of the law's own table ([`crate::contact::laws`]): x ≥ 0, x > 0 or
+//! 0 < x ≤ 1, an excluded 0 becoming the smallest positive number. The optimiser, its
+//! finite differences and the profiles keep z inside that range, so every law it builds is
+//! valid.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -14,7 +16,7 @@ use nalgebra::DVector;
 use serde::Deserialize;
 
 use crate::contact::InterfaceLaw;
-use crate::contact::laws::{self, LawDescriptor};
+use crate::contact::laws::{self, LawDescriptor, ParameterDescriptor};
 use crate::{Error, Result};
 
 /// One `[parameters]` entry of the fit file.
@@ -27,41 +29,18 @@ pub struct ParameterSpec {
     pub initial: Option<f64>,
     pub min: Option<f64>,
     pub max: Option<f64>,
-    /// Fit ln x instead of x (keeps x positive).
+    /// Fit ln x instead of x (x positive, spanning decades).
     #[serde(default)]
     pub log: bool,
 }
 
-/// How a free parameter's x follows from θ.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Transform {
+/// How the optimiser moves a free parameter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scale {
+    /// z = x.
     Linear,
+    /// z = ln x.
     Log,
-    Above(f64),
-    Below(f64),
-    Between(f64, f64),
-}
-
-impl Transform {
-    fn x(self, t: f64) -> f64 {
-        match self {
-            Transform::Linear => t,
-            Transform::Log => t.exp(),
-            Transform::Above(a) => a + t.exp(),
-            Transform::Below(b) => b - t.exp(),
-            Transform::Between(a, b) => a + 0.5 * (b - a) * (1.0 + t.tanh()),
-        }
-    }
-
-    fn theta(self, x: f64) -> f64 {
-        match self {
-            Transform::Linear => x,
-            Transform::Log => x.ln(),
-            Transform::Above(a) => (x - a).ln(),
-            Transform::Below(b) => (b - x).ln(),
-            Transform::Between(a, b) => (2.0 * (x - a) / (b - a) - 1.0).atanh(),
-        }
-    }
 }
 
 /// A free parameter.
@@ -70,9 +49,66 @@ pub struct Free {
     pub name: &'static str,
     /// Index into the law's parameter list.
     pub index: usize,
-    pub min: Option<f64>,
-    pub max: Option<f64>,
-    transform: Transform,
+    pub scale: Scale,
+    /// The closed range of x (the fit file's bounds within the law's; ±∞ where neither has one).
+    pub min: f64,
+    pub max: f64,
+    /// The fit file's starting value.
+    pub initial: f64,
+}
+
+impl Free {
+    /// z of value `x`.
+    pub fn z(&self, x: f64) -> f64 {
+        match self.scale {
+            Scale::Linear => x,
+            Scale::Log => x.ln(),
+        }
+    }
+
+    /// The value x at `z`.
+    pub fn x(&self, z: f64) -> f64 {
+        match self.scale {
+            Scale::Linear => z,
+            Scale::Log => z.exp(),
+        }
+    }
+
+    /// The closed range of z: that of x, and for a log parameter no further than e^z stays a
+    /// positive finite number.
+    pub fn z_range(&self) -> (f64, f64) {
+        match self.scale {
+            Scale::Linear => (self.min, self.max),
+            Scale::Log => (
+                self.min.max(f64::MIN_POSITIVE).ln(),
+                self.max.min(f64::MAX).ln(),
+            ),
+        }
+    }
+
+    /// Whether `x` lies within 1e-6 of the range (or of |x|, for an open side) of a bound.
+    pub fn at_bound(&self, x: f64) -> bool {
+        let width = if (self.max - self.min).is_finite() {
+            self.max - self.min
+        } else {
+            x.abs().max(f64::MIN_POSITIVE)
+        };
+        [self.min, self.max]
+            .iter()
+            .any(|b| b.is_finite() && (x - b).abs() <= 1e-6 * width)
+    }
+}
+
+/// The closed range of parameter `p` of a law: its bound, an excluded 0 replaced by the
+/// smallest positive number.
+fn law_range(p: &ParameterDescriptor) -> (f64, f64) {
+    let ((lower, exclusive), upper) = p.bound.limits();
+    let lower = if exclusive {
+        lower.next_up().max(f64::MIN_POSITIVE)
+    } else {
+        lower
+    };
+    (lower, upper.unwrap_or(f64::INFINITY))
 }
 
 /// The law, its parameter values, and which of them are free.
@@ -132,15 +168,9 @@ impl Parameters {
                 (Some(s), _) => match (s.value, s.initial) {
                     (Some(v), None) if s.min.is_none() && s.max.is_none() && !s.log => v,
                     (None, Some(x0)) => {
-                        let transform =
-                            transform(name, s, x0).map_err(|r| invalid(name, x0.to_string(), r))?;
-                        free.push(Free {
-                            name,
-                            index,
-                            min: s.min,
-                            max: s.max,
-                            transform,
-                        });
+                        let f = free_parameter(parameter, index, s, x0)
+                            .map_err(|r| invalid(name, x0.to_string(), r))?;
+                        free.push(f);
                         x0
                     }
                     _ => {
@@ -175,51 +205,40 @@ impl Parameters {
         Ok(p)
     }
 
-    /// θ of the starting values.
+    /// z of the starting values.
     pub fn start(&self) -> DVector<f64> {
         DVector::from_iterator(
             self.free.len(),
-            self.free
-                .iter()
-                .map(|f| f.transform.theta(self.values[f.index])),
+            self.free.iter().map(|f| f.z(self.values[f.index])),
         )
     }
 
-    /// Every parameter's value at θ.
-    pub fn values_at(&self, theta: &DVector<f64>) -> Vec<f64> {
+    /// Every parameter's value at z.
+    pub fn values_at(&self, z: &DVector<f64>) -> Vec<f64> {
         let mut x = self.values.clone();
-        for (f, t) in self.free.iter().zip(theta.iter()) {
-            x[f.index] = f.transform.x(*t);
+        for (f, t) in self.free.iter().zip(z.iter()) {
+            x[f.index] = f.x(*t);
         }
         x
     }
 
-    /// Every parameter's value with the free ones set to `free`.
-    pub fn with_free(&self, free: &[f64]) -> Vec<f64> {
-        let mut x = self.values.clone();
-        for (f, v) in self.free.iter().zip(free) {
-            x[f.index] = *v;
-        }
-        x
+    /// The free parameters' values at z.
+    pub fn free_values(&self, z: &DVector<f64>) -> Vec<f64> {
+        self.free
+            .iter()
+            .zip(z.iter())
+            .map(|(f, t)| f.x(*t))
+            .collect()
     }
 
     /// The law at parameter values `x`; a value out of the law's range is an error naming the
     /// parameter in the fit file.
     pub fn build(&self, x: &[f64]) -> Result<Box<dyn InterfaceLaw>> {
-        self.law.build(x).map_err(|e| {
-            let hint = match self.free.iter().find(|f| f.name == e.name) {
-                Some(f) if f.transform == Transform::Linear => {
-                    "; the fit moved this unbounded parameter out of the law's range: give it bounds \
-                     (`min`, `max`) or `log = true`"
-                }
-                _ => "",
-            };
-            Error::InvalidParameter {
-                path: self.path.clone(),
-                key: format!("parameters.{}", e.name),
-                value: laws::shown(e.value),
-                reason: format!("{}{hint}", e.reason),
-            }
+        self.law.build(x).map_err(|e| Error::InvalidParameter {
+            path: self.path.clone(),
+            key: format!("parameters.{}", e.name),
+            value: laws::shown(e.value),
+            reason: e.reason,
         })
     }
 
@@ -241,53 +260,113 @@ impl Parameters {
     }
 }
 
-/// The transform of free parameter `name` starting at `x0`, or why its spec is wrong.
-fn transform(name: &str, s: ParameterSpec, x0: f64) -> std::result::Result<Transform, String> {
+/// Free parameter `parameter` (number `index` of its law) starting at `x0`, or why its spec is
+/// wrong.
+fn free_parameter(
+    parameter: &ParameterDescriptor,
+    index: usize,
+    s: ParameterSpec,
+    x0: f64,
+) -> std::result::Result<Free, String> {
     if !x0.is_finite() {
         return Err("`initial` must be finite".into());
     }
-    let t = match (s.min, s.max, s.log) {
-        (_, _, true) if s.min.is_some() || s.max.is_some() => {
-            return Err(format!("{name}: give `log = true` or bounds, not both"));
+    for (key, v) in [("min", s.min), ("max", s.max)] {
+        if v.is_some_and(|v| !v.is_finite()) {
+            return Err(format!(
+                "`{key}` must be finite (leave it out for no bound)"
+            ));
         }
-        (None, None, true) if x0 > 0.0 => Transform::Log,
-        (None, None, true) => return Err("`log = true` needs a positive `initial`".into()),
-        (None, None, false) => Transform::Linear,
-        (Some(a), None, _) => Transform::Above(a),
-        (None, Some(b), _) => Transform::Below(b),
-        (Some(a), Some(b), _) if a < b => Transform::Between(a, b),
-        (Some(a), Some(b), _) => return Err(format!("`min` = {a} must be below `max` = {b}")),
-    };
-    let inside = match t {
-        Transform::Above(a) => x0 > a,
-        Transform::Below(b) => x0 < b,
-        Transform::Between(a, b) => x0 > a && x0 < b,
-        _ => true,
-    };
-    if !inside {
-        return Err("`initial` must lie strictly inside `min`..`max`".into());
     }
-    Ok(t)
+    if let (Some(a), Some(b)) = (s.min, s.max)
+        && a >= b
+    {
+        return Err(format!("`min` = {a} must be below `max` = {b}"));
+    }
+    let (law_min, law_max) = law_range(parameter);
+    let (min, max) = (
+        s.min.map_or(law_min, |a| a.max(law_min)),
+        s.max.map_or(law_max, |b| b.min(law_max)),
+    );
+    if min >= max {
+        return Err(format!(
+            "`min`..`max` leaves no room within the law's range {}..{}",
+            laws::shown(law_min),
+            laws::shown(law_max)
+        ));
+    }
+    if !(min <= x0 && x0 <= max) {
+        return Err(format!(
+            "`initial` must lie within {min}..{max} (`min`..`max` within the law's range)"
+        ));
+    }
+    let scale = if s.log {
+        if x0 <= 0.0 {
+            return Err("`log = true` needs a positive `initial`".into());
+        }
+        Scale::Log
+    } else {
+        Scale::Linear
+    };
+    Ok(Free {
+        name: parameter.key,
+        index,
+        scale,
+        min,
+        max,
+        initial: x0,
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    /// The range of a free parameter is the fit file's bounds within the law's table: beta of
+    /// the rough joint lies in (0, 1], so `min = 0` becomes the smallest positive number and a
+    /// `max` above 1 becomes 1; a log parameter never reaches 0 or infinity.
     #[test]
-    fn transforms_round_trip_and_respect_bounds() {
-        for (t, x) in [
-            (Transform::Linear, -0.3),
-            (Transform::Log, 2e-3),
-            (Transform::Above(0.1), 0.5),
-            (Transform::Below(1.0), 0.2),
-            (Transform::Between(0.0, 2.0), 0.3),
-        ] {
-            assert!((t.x(t.theta(x)) - x).abs() < 1e-14, "{t:?}");
-        }
-        let b = Transform::Between(0.0, 2.0);
-        assert!(b.x(-40.0) >= 0.0 && b.x(40.0) <= 2.0);
-        assert!(Transform::Above(0.1).x(-800.0) >= 0.1);
+    fn ranges_are_the_fit_files_bounds_within_the_laws() {
+        let law = &crate::contact::rough::LAW;
+        let beta = &law.parameters[law.index("beta").unwrap()];
+        let spec = ParameterSpec {
+            min: Some(0.0),
+            max: Some(3.0),
+            ..Default::default()
+        };
+        let f = free_parameter(beta, 7, spec, 0.5).unwrap();
+        assert_eq!((f.min, f.max), (f64::MIN_POSITIVE, 1.0));
+        assert!(
+            law.build(&[
+                2e-3,
+                0.5,
+                f64::NAN,
+                f64::NAN,
+                1e-3,
+                0.5,
+                0.3,
+                f.min,
+                0.0,
+                0.1
+            ])
+            .is_ok()
+        );
+        let c_n = &law.parameters[0];
+        let log = ParameterSpec {
+            log: true,
+            ..Default::default()
+        };
+        let f = free_parameter(c_n, 0, log, 2e-3).unwrap();
+        let (lo, hi) = f.z_range();
+        assert!(f.x(lo) > 0.0 && f.x(hi).is_finite());
+        assert!((f.x(f.z(2e-3)) - 2e-3).abs() < 1e-18);
+        // A start outside the law's range, and bounds that leave no room.
+        assert!(free_parameter(beta, 7, ParameterSpec::default(), 1.5).is_err());
+        let above = ParameterSpec {
+            min: Some(1.0),
+            ..Default::default()
+        };
+        assert!(free_parameter(beta, 7, above, 1.0).is_err());
     }
 
     #[test]

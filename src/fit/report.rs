@@ -5,18 +5,17 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::FitResult;
+use super::{Estimate, FitResult, Outcome};
 use crate::output::atomic::write_atomically;
 use crate::output::csv::{Cell, CsvTable, write_csv};
 use crate::python;
 use crate::{Error, Result};
 
-/// Writes the result's files into `out`; returns what happened to the plots.
+/// Writes the result's files into `out`; returns what happened to the plots. Everything is
+/// checked before the first file is written (a non-finite number is an error and leaves no
+/// file), `fit.json` is written last, and each file atomically: a folder with `fit.json` has
+/// the complete set.
 pub fn write(result: &FitResult, out: &Path, plot_too: bool) -> Result<String> {
-    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
-    let json = serde_json::to_string_pretty(result).map_err(|e| Error::External(e.to_string()))?;
-    write_atomically(&out.join("fit.json"), |w| w.write_all(json.as_bytes()))?;
-    write_atomically(&out.join("law.toml"), |w| writeln!(w, "{}", result.snippet))?;
     let mut table = CsvTable::new(
         ["test", "x", "measured", "fitted", "sigma", "residual"]
             .map(String::from)
@@ -34,7 +33,26 @@ pub fn write(result: &FitResult, out: &Path, plot_too: bool) -> Result<String> {
             ]);
         }
     }
+    let numbers = result
+        .parameters
+        .iter()
+        .map(|e| e.value)
+        .chain([result.chi_square, result.scale, result.threshold])
+        .chain(table.rows.iter().flatten().filter_map(|c| match c {
+            Cell::Number(v) => Some(*v),
+            _ => None,
+        }));
+    if let Some(v) = numbers.into_iter().find(|v| !v.is_finite()) {
+        return Err(Error::External(format!(
+            "the fit of {} produced a number that is not finite ({v}); no file written",
+            result.fit_file.display()
+        )));
+    }
+    let json = serde_json::to_string_pretty(result).map_err(|e| Error::External(e.to_string()))?;
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     write_csv(&out.join("curves.csv"), &table)?;
+    write_atomically(&out.join("law.toml"), |w| writeln!(w, "{}", result.snippet))?;
+    write_atomically(&out.join("fit.json"), |w| w.write_all(json.as_bytes()))?;
     Ok(if plot_too {
         plot(out)
     } else {
@@ -42,11 +60,22 @@ pub fn write(result: &FitResult, out: &Path, plot_too: bool) -> Result<String> {
     })
 }
 
+/// The 95 % profile interval of `e`, one-sided where the profile does not cross.
+fn interval(e: &Estimate) -> String {
+    match (e.profile_lower_95, e.profile_upper_95) {
+        (Some(a), Some(b)) => format!("[{a:.6e}, {b:.6e}]"),
+        (Some(a), None) => format!("≥ {a:.6e}"),
+        (None, Some(b)) => format!("≤ {b:.6e}"),
+        (None, None) => "-".into(),
+    }
+}
+
+/// The results (the warnings are printed apart: they go to standard error).
 impl std::fmt::Display for FitResult {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         writeln!(
             f,
-            "fit of {} ({}): {} points, {} free parameters, χ² = {:.6e} ({}), {} iterations ({})",
+            "fit of {} ({}): {} points, {} free parameters, χ² = {:.6e} ({}), {} iterations ({:?})",
             self.fit_file.display(),
             self.law,
             self.points,
@@ -63,28 +92,48 @@ impl std::fmt::Display for FitResult {
             self.iterations,
             self.stop
         )?;
+        let s = &self.starts;
+        let failed = s
+            .runs
+            .iter()
+            .filter(|r| r.outcome == Outcome::Failed)
+            .count();
         writeln!(
             f,
-            "  {:<18} {:>14} {:>12} {:>30}",
-            "parameter", "value", "std. error", "95 % interval"
+            "starts: {} (the fit file's and {} more); {} reached the best χ² (within {} s²), {} stopped higher, {} failed",
+            s.count,
+            s.count - 1,
+            s.same_minimum,
+            s.tolerance,
+            s.count - s.same_minimum - failed,
+            failed
+        )?;
+        writeln!(
+            f,
+            "  {:<18} {:>14} {:>12}   {:<30} verdict",
+            "parameter",
+            "value",
+            "std. error",
+            format!("95 % interval (profile)")
         )?;
         for e in &self.parameters {
             let mut line = format!("  {:<18} {:>14.6e}", e.name, e.value);
-            match (e.free, e.standard_error) {
-                (false, _) => line.push_str("        fixed"),
-                (true, None) => line.push_str("  not identifiable"),
-                (true, Some(s)) => {
-                    let _ = write!(
-                        line,
-                        " {:>12.3e}   [{:.6e}, {:.6e}]",
-                        s,
-                        e.lower_95.unwrap_or(f64::NAN),
-                        e.upper_95.unwrap_or(f64::NAN)
-                    );
+            match e.verdict {
+                None => line.push_str("        fixed"),
+                Some(v) => {
+                    let se = e
+                        .standard_error
+                        .map_or_else(|| "-".into(), |s| format!("{s:.3e}"));
+                    let _ = write!(line, " {se:>12}   {:<30} {v}", interval(e));
                 }
             }
             writeln!(f, "{line}")?;
         }
+        writeln!(
+            f,
+            "  (profile intervals: where χ²/s² rises by {:.3} above its minimum; s² = {:.6e})",
+            self.threshold, self.scale
+        )?;
         writeln!(f, "correlation ({}):", self.free.join(", "))?;
         for row in &self.correlation {
             let cells: Vec<String> = row
@@ -92,9 +141,6 @@ impl std::fmt::Display for FitResult {
                 .map(|c| c.map_or("     -".into(), |c| format!("{c:+.3}")))
                 .collect();
             writeln!(f, "  {}", cells.join(" "))?;
-        }
-        for w in &self.warnings {
-            writeln!(f, "WARNING: {w}")?;
         }
         write!(f, "{}", self.snippet)
     }
