@@ -175,3 +175,21 @@ fn a_file_beyond_the_limit_is_refused_before_reading() {
         "{error}"
     );
 }
+
+/// A script written for fine sizes that gmsh cannot mesh at the coarse factors of the probes
+/// (here the shipped plane punch, whose graded face divides by its element count less one,
+/// zero at a coarse factor): the failed probes are skipped and the case meshes.
+#[test]
+fn scripts_that_fail_at_coarse_probe_sizes_still_mesh() {
+    let geo = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("geo/plane_punch.geo");
+    let parameters = [("a".to_string(), 50.0), ("h".to_string(), 50.0)];
+    let estimate = estimate_elements(&geo, 3.0, &parameters).unwrap();
+    assert!(
+        estimate.is_none_or(|e| e.elements <= MAX_MESH_ELEMENTS),
+        "{estimate:?}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("mesh.msh");
+    mesh_geo(&geo, 3.0, &parameters, &out).unwrap();
+    assert!(out.is_file());
+}

@@ -75,6 +75,11 @@ pub fn mesh_geo(
     if let Some(dir) = out.parent() {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
+    // An earlier mesh at `out` must not pass for this one when gmsh writes none.
+    match std::fs::remove_file(out) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(Error::io(out, e)),
+        _ => {}
+    }
     tracing::info!("meshing {} (size factor {size})", geo.display());
     let mut cmd = gmsh(geo, size, parameters, out);
     cmd.args(["-order", "2"])
@@ -97,7 +102,8 @@ pub fn mesh_geo(
 /// extrapolated with the growth actually observed from the previous probe (a script with
 /// fixed transfinite counts does not grow at all), still exceeds the limit. The probes cost
 /// a small fraction of the mesh they predict: a 10⁻⁶ factor on a small model is refused
-/// after a few probes of at most a few thousand elements.
+/// after a few probes of at most a few thousand elements. A probe gmsh cannot make (a script
+/// written for fine sizes) is skipped.
 pub fn estimate_elements(
     geo: &Path,
     size: f64,
@@ -110,8 +116,13 @@ pub fn estimate_elements(
     let most_growth = PROBE_STEP * PROBE_STEP;
     for k in (1..=steps).rev() {
         let probe = size * PROBE_STEP.powi(k);
-        run(gmsh(geo, probe, parameters, &out), geo, &out)?;
-        let count = element_count(&out)?;
+        // A script may not mesh at a coarse factor (a count that rounds to zero, a division
+        // by it): such a probe tells nothing, and only the mesh at `size` itself must succeed.
+        let meshed = run(gmsh(geo, probe, parameters, &out), geo, &out);
+        let Ok(count) = meshed.and_then(|()| element_count(&out)) else {
+            previous = None;
+            continue;
+        };
         let extrapolate = |growth: f64| (count as f64 * growth.powi(k)).min(u64::MAX as f64) as u64;
         let estimate = |elements| Estimate {
             elements,
