@@ -92,16 +92,16 @@ impl RunFile<'_> {
     }
 }
 
-/// The output frame of a step file's name written for one of `pairs` (`bodies_NNNN.vtu`,
-/// `interface_NNNN.vtu`, `contact_<pair>_NNNN.csv`; at least four digits).
-fn step_of_file(name: &str, pairs: &[String]) -> Option<usize> {
+/// The output frame of a step file's name (`bodies_NNNN.vtu`, `interface_NNNN.vtu`,
+/// `contact_<pair>_NNNN.csv` for a pair that `is_pair` accepts; at least four digits).
+fn step_of_file(name: &str, is_pair: impl Fn(&str) -> bool) -> Option<usize> {
     let digits = ["bodies_", "interface_"]
         .iter()
         .find_map(|p| name.strip_prefix(p)?.strip_suffix(".vtu"))
         .or_else(|| {
             let rest = name.strip_prefix("contact_")?.strip_suffix(".csv")?;
             let (pair, digits) = rest.rsplit_once('_')?;
-            pairs.iter().any(|p| p == pair).then_some(digits)
+            is_pair(pair).then_some(digits)
         })?;
     if digits.len() >= 4 && digits.bytes().all(|b| b.is_ascii_digit()) {
         digits.parse().ok()
@@ -123,7 +123,7 @@ fn is_run_file(name: &str, pairs: &[String]) -> bool {
     };
     name == MANIFEST
         || SINGLE_FILES.iter().any(|(_, n)| *n == name)
-        || step_of_file(name, pairs).is_some()
+        || step_of_file(name, |pair| pairs.iter().any(|p| p == pair)).is_some()
         || pairs.iter().any(|p| per_pair(p).iter().any(|n| n == name))
 }
 
@@ -328,11 +328,11 @@ impl OutputFolder {
     }
 
     /// Removes the step files of output frames from `first` on (written after the restart
-    /// record a run resumes from).
-    pub fn remove_steps_from(&self, first: usize, pairs: &[String]) -> Result<()> {
+    /// record a run resumes from); every listed name is the run's own, whatever its pair.
+    pub fn remove_steps_from(&self, first: usize) -> Result<()> {
         let manifest = self.lock();
         for name in &manifest.listed {
-            if step_of_file(name, pairs).is_some_and(|s| s >= first) {
+            if step_of_file(name, |_| true).is_some_and(|s| s >= first) {
                 let path = self.dir.join(name);
                 match std::fs::remove_file(&path) {
                     Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
@@ -491,7 +491,10 @@ mod tests {
         ] {
             assert!(!is_run_file(name, &pairs), "{name}");
         }
-        assert_eq!(step_of_file("contact_a_b_0012.csv", &pairs), Some(12));
+        assert_eq!(
+            step_of_file("contact_a_b_0012.csv", |p| pairs.iter().any(|q| q == p)),
+            Some(12)
+        );
         assert_eq!(
             temporary_of(".bodies_0001.vtu.a1B2c3.tmp"),
             Some("bodies_0001.vtu")

@@ -35,8 +35,6 @@ pub(super) struct StepWriter<'m, 's, F> {
     points: BodyPoints,
     interface: InterfaceOutput,
     folder: &'m OutputFolder,
-    /// The contact pairs' names (part of file names).
-    pairs: Vec<String>,
     vtu: bool,
     /// Field output at every frame of a cyclic step (`[output] cycle_frames = "all"`).
     all_frames: bool,
@@ -141,12 +139,6 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             points: BodyPoints::new(model),
             interface: InterfaceOutput::new(model),
             folder: session.folder,
-            pairs: model
-                .interface
-                .pairs
-                .iter()
-                .map(|p| p.name.clone())
-                .collect(),
             vtu: case.output.vtu,
             all_frames: case.output.cycle_frames == CycleFrames::All,
             case_text,
@@ -225,8 +217,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
                     .extend(entries.into_iter().map(|(_, entry)| entry));
             }
         }
-        self.folder
-            .remove_steps_from(resume.state.step, &self.pairs)?;
+        self.folder.remove_steps_from(resume.state.step)?;
         self.write_indexes(true)?;
         self.bar.0.inc(resume.state.step as u64 - 1);
         tracing::info!(
