@@ -15,6 +15,9 @@
 #   make bench-scale             the ~1M-unknown frictional tapered press fit (part of make bench) -> BENCHMARKS.md
 #   make bench-calculix          asperity against CalculiX 2.20 on the same meshes, increments and answers -> BENCHMARKS.md
 #   make fuzz FUZZ_SECONDS=600   fuzz the MSH reader, the case parser and model building (cargo fuzz, nightly)
+#   make example NAME=slideway   one example of the gallery (examples/<NAME>/README.md; `make example` lists them)
+#   make reference               regenerate docs/guide/case-file.md from the case-file schema
+#   make install PREFIX=/usr/local   the binary, its man pages and bash/zsh/fish completions
 
 SHELL   := /bin/bash
 CARGO   ?= cargo
@@ -29,6 +32,7 @@ SIZE    ?= 1
 .PHONY: fit-example sweep-test gnu-parallel doc
 .PHONY: fuzz
 .PHONY: fretting
+.PHONY: reference install install-test
 
 all: build
 
@@ -218,3 +222,38 @@ fuzz: gmsh
 
 clean:
 	rm -rf target build out $(VENV)
+
+## --- documentation and installation ------------------------------------------
+# `make reference`: docs/guide/case-file.md is generated from the doc comments of the case-file
+# structs (the source of `asperity schema`); tests/case_file_reference.rs fails when the
+# committed page differs.
+reference: build
+	$(BIN) schema --markdown > docs/guide/case-file.md
+	@echo "wrote docs/guide/case-file.md"
+
+# `make install PREFIX=~/.local` (default /usr/local; DESTDIR for packaging): the binary, the man
+# pages (man asperity, man asperity-run, ...) and the bash, zsh and fish completions, each in the
+# folder its shell reads by default under PREFIX.
+PREFIX ?= /usr/local
+INSTALL_ROOT = $(DESTDIR)$(PREFIX)
+install: build
+	install -D -m 755 $(BIN) $(INSTALL_ROOT)/bin/asperity
+	$(INSTALL_ROOT)/bin/asperity man --out $(INSTALL_ROOT)/share/man/man1 >/dev/null
+	install -d $(INSTALL_ROOT)/share/bash-completion/completions $(INSTALL_ROOT)/share/zsh/site-functions \
+	  $(INSTALL_ROOT)/share/fish/vendor_completions.d
+	$(INSTALL_ROOT)/bin/asperity completions bash > $(INSTALL_ROOT)/share/bash-completion/completions/asperity
+	$(INSTALL_ROOT)/bin/asperity completions zsh > $(INSTALL_ROOT)/share/zsh/site-functions/_asperity
+	$(INSTALL_ROOT)/bin/asperity completions fish > $(INSTALL_ROOT)/share/fish/vendor_completions.d/asperity.fish
+	@echo "installed asperity into $(INSTALL_ROOT) (bin, share/man/man1, completions); plots of an installed binary: set ASPERITY_PIPELINES=$(CURDIR)/pipelines"
+
+# `make install-test` (part of `make test`): install into a scratch prefix and use what it installed.
+install-test: build
+	@rm -rf build/test/install
+	@$(MAKE) --no-print-directory install PREFIX=$(CURDIR)/build/test/install >/dev/null
+	@p=build/test/install; $$p/bin/asperity --version >/dev/null && \
+	  grep -q '^\.TH asperity-run 1' $$p/share/man/man1/asperity-run.1 && \
+	  bash -c "source $$p/share/bash-completion/completions/asperity && complete -p asperity" >/dev/null && \
+	  grep -q '^#compdef asperity' $$p/share/zsh/site-functions/_asperity && \
+	  grep -q '^complete -c asperity' $$p/share/fish/vendor_completions.d/asperity.fish \
+	  || { echo "install-test: the installed binary, man page or completions are missing or broken"; exit 1; }
+	@echo "install-test: binary, man pages and completions installed and usable"

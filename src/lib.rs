@@ -36,6 +36,7 @@ pub mod model;
 pub mod output;
 pub mod post;
 pub mod python;
+pub mod reference;
 pub mod run;
 pub mod solver;
 pub mod study;

@@ -123,7 +123,25 @@ enum Command {
     },
     /// Print the JSON schema of the case file (for editors: completion and validation of
     /// case files, e.g. with Taplo or Even Better TOML).
-    Schema,
+    Schema {
+        /// Print the case-file reference as Markdown instead (docs/guide/case-file.md is
+        /// this page).
+        #[arg(long)]
+        markdown: bool,
+    },
+    /// Print the shell completion script for SHELL (e.g. `asperity completions bash >
+    /// ~/.local/share/bash-completion/completions/asperity`).
+    Completions {
+        /// The shell: bash, zsh, fish, elvish or powershell.
+        shell: clap_complete::Shell,
+    },
+    /// Print the man page (roff) on standard output, or with --out write asperity.1 and one
+    /// page per subcommand (asperity-run.1, ...) into DIR.
+    Man {
+        /// Folder for the pages (created if missing), e.g. /usr/local/share/man/man1.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
 }
 
 #[derive(Subcommand)]
@@ -464,10 +482,32 @@ fn execute(command: Command, log_file: &LogFile) -> asperity::Result<()> {
                 dir.join(asperity::init::TEMPLATES[0].0).display()
             );
         }
-        Command::Schema => {
-            let schema = schemars::schema_for!(Case);
+        Command::Schema { markdown: false } => {
+            let schema = asperity::reference::case_schema();
             let text = serde_json::to_string_pretty(&schema).expect("a schema is valid JSON");
             say!("{text}");
+        }
+        Command::Schema { markdown: true } => {
+            say!("{}", asperity::reference::case_file_markdown().trim_end());
+        }
+        Command::Completions { shell } => {
+            let mut command = <Cli as clap::CommandFactory>::command();
+            let mut script = Vec::new();
+            clap_complete::generate(shell, &mut command, "asperity", &mut script);
+            say!("{}", String::from_utf8_lossy(&script).trim_end());
+        }
+        Command::Man { out: None } => {
+            let mut page = Vec::new();
+            clap_mangen::Man::new(<Cli as clap::CommandFactory>::command())
+                .render(&mut page)
+                .map_err(|e| asperity::Error::io("man page", e))?;
+            say!("{}", String::from_utf8_lossy(&page).trim_end());
+        }
+        Command::Man { out: Some(dir) } => {
+            std::fs::create_dir_all(&dir).map_err(|e| asperity::Error::io(&dir, e))?;
+            let command = <Cli as clap::CommandFactory>::command().name("asperity");
+            clap_mangen::generate_to(command, &dir).map_err(|e| asperity::Error::io(&dir, e))?;
+            say!("man pages written to {}", dir.display());
         }
     }
     Ok(())

@@ -68,7 +68,7 @@ fn plan_writes_one_checked_case_per_grid_point_and_the_job_files() {
         assert_eq!(
             *line,
             format!(
-                "'{}' sweep run '{}' --task {k}",
+                "RAYON_NUM_THREADS=1 '{}' sweep run '{}' --task {k}",
                 exe().display(),
                 study.display()
             )
@@ -481,7 +481,7 @@ fn study_and_executable_paths_with_shell_syntax_stay_single_arguments() {
             assert!(status.success(), "{name}: {line}");
         }
         let calls = recorded_calls(&log);
-        let want: Vec<_> = (0..6).map(|k| expected(&k.to_string(), "")).collect();
+        let want: Vec<_> = (0..6).map(|k| expected(&k.to_string(), "1")).collect();
         assert_eq!(calls, want, "{name}: jobs.txt");
 
         let sbatch = std::fs::read_to_string(study.join("array.sbatch")).unwrap();

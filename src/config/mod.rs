@@ -102,9 +102,13 @@ fn one() -> f64 {
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum AnalysisSpec {
     /// σ_zz = 0. `thickness` in mm.
-    PlaneStress { thickness: f64 },
+    PlaneStress {
+        /// Thickness in mm (positive): forces and reactions are per this thickness.
+        thickness: f64,
+    },
     /// ε_zz = 0. `thickness` in mm (default 1).
     PlaneStrain {
+        /// Thickness in mm: forces and reactions are per this thickness.
         #[serde(default = "one")]
         thickness: f64,
     },
@@ -235,13 +239,18 @@ impl LoadSpec {
 pub struct ContactSpec {
     /// Name used in output files and messages (default: "<side_a>-<side_b>" or the curve).
     pub name: Option<String>,
+    /// The physical curve of body A (the relative displacement is B minus A).
     pub side_a: Option<String>,
+    /// The physical curve of body B, facing `side_a`: the normal points into body B.
     pub side_b: Option<String>,
     /// `"coincident"` (default with side_a/side_b) or `"ordered"`.
     pub pairing: Option<PairingKind>,
     /// The shared curve of a conforming mesh to split.
     pub curve: Option<String>,
+    /// With `curve`: the physical surface of body A.
     pub body_a: Option<String>,
+    /// With `curve`: the physical surface of body B, whose elements move onto the copied
+    /// nodes.
     pub body_b: Option<String>,
     /// Integration rule: `"newton_cotes"` (default, lumped) or `"gauss"`.
     #[serde(default)]

@@ -29,6 +29,7 @@ pub struct QuantitySpec {
     pub statistic: Option<Statistic>,
     /// `statistic = "at"`: the coordinate where the pressure is read.
     pub x: Option<f64>,
+    /// `statistic = "at"`: the coordinate where the pressure is read (instead of `x`).
     pub y: Option<f64>,
     /// The exact value, if known.
     pub reference: Option<f64>,

@@ -69,24 +69,66 @@ pub struct SolverSpec {
 #[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 struct RawSolverSpec {
+    /// Newton iterations per increment (1 to 10 000; default 25).
     max_iterations: usize,
+    /// R_n: the largest out-of-balance force component, relative to the time-averaged force
+    /// q̃ (default 5e-4; CalculiX and Abaqus: 5e-3). This and every tolerance below except R_p
+    /// lie in (0, 1e-2].
     residual_tolerance: f64,
+    /// C_n: the largest component of the last correction, relative to the largest
+    /// displacement change of the increment (default 1e-3; CalculiX and Abaqus: 1e-2).
     correction_tolerance: f64,
+    /// R_p: replaces R_n after `late_iteration` iterations (a slowly converging increment);
+    /// in (0, 0.2] (default 2e-2).
     late_residual_tolerance: f64,
+    /// I_P: the iteration after which R_p replaces R_n (default 9).
     late_iteration: usize,
+    /// ε: zero-flux conditions when the force flux is below ε q̃ (e.g. a body unloaded to a
+    /// stress-free state); then the residual must be below ε q̃ and the correction below
+    /// `zero_flux_correction_tolerance` (default 1e-5).
     zero_flux: f64,
+    /// C_ε: the correction criterion under zero flux (default 1e-3).
     zero_flux_correction_tolerance: f64,
+    /// R_l: a residual this small relative to q̃ is accepted without the correction check
+    /// (a linear increment takes one solve; default 1e-8).
     linear_residual_tolerance: f64,
+    /// q_u (N): a fixed average force used instead of the time-averaged q̃ (default: none).
     average_force: Option<f64>,
+    /// The older relative-norm criterion ‖r‖ / max(‖f_ext‖, ‖f_int‖): when given, required in
+    /// addition to the criteria above (e.g. 1e-10 for a reference run); arc-length control
+    /// uses it alone (default there 1e-8).
     force_tolerance: Option<f64>,
+    /// The older ‖δu‖ / ‖u‖ criterion, like `force_tolerance`.
     displacement_tolerance: Option<f64>,
+    /// How often an increment that does not converge is halved and retried (at most 20;
+    /// default 8).
     max_cutbacks: usize,
+    /// Most increment solves of a load-controlled run: output increments, sub-increments
+    /// ending on amplitude breakpoints or made by cut-backs, and retried attempts (default
+    /// 100 000). When the increments and breakpoints alone need more, the model is refused
+    /// before solving (exit code 3); when cut-backs reach it, the run stops keeping its
+    /// converged results (exit code 1).
     max_solves: usize,
+    /// Global algorithm for contact (default `"newton"`). Where they converge, all three
+    /// reach the same solution.
     contact_algorithm: ContactAlgorithmKind,
+    /// Linear solver of models with contact pairs (default `"condensed"`); models without
+    /// contact always use Cholesky.
     linear_solver: LinearSolverKind,
+    /// Start an increment whose loads change in proportion to the last converged
+    /// increment's from the displacements extrapolated from it (default false).
     extrapolate: bool,
+    /// Plausibility bound: a converged increment in which a node moves by more than this
+    /// fraction of the model size (bounding-box diagonal) is a failed increment and is cut back
+    /// (default 0.1).
     max_displacement_increment: f64,
+    /// Plausibility bound: a converged increment with an equivalent strain increment
+    /// √(⅔ Δε:Δε) above this at any integration point is a failed increment and is cut back
+    /// (small-strain theory; default 0.05).
     max_strain_increment: f64,
+    /// A step of a model with a plastic body that cannot be completed is reported as plastic
+    /// collapse (exit code 5) when the secant stiffness Δλ/‖Δu‖ of its last converged increment
+    /// is below this fraction of the run's first increment's (default 0.01).
     collapse_stiffness_ratio: f64,
 }
 

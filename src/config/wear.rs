@@ -14,8 +14,8 @@ pub const JUMP_LIMIT_DOC: &str = "Stability limit of cycle jumping: the depth a 
     |p_N| (1/k_N + l/(pi E*)), the interface (normal stiffness k_N) and the bodies' surfaces \
     under the shortest pressure wave the mesh resolves (wavelength l, the interface element's \
     length; 1/E* = (1 - nu_A^2)/E_A + (1 - nu_B^2)/E_B) in series; 0 < jump_limit <= 1 \
-    (default 0.5: accurate and monotone; 1 wears the whole closure away in one jump). See the \
-    README, \"Cycle jumping and its stability limit\".";
+    (default 0.5: accurate and monotone; 1 wears the whole closure away in one jump). See \
+    docs/guide/fretting-and-wear.md, \"Cycle jumping and its stability limit\".";
 
 /// Largest `jump_limit`: a jump adding more than a point's elastic closure overshoots the
 /// unloaded state of the shortest pressure wave (the pressure then alternates from node to
@@ -30,8 +30,11 @@ pub struct WearSpec {
     pub model: WearLawKind,
     /// Coefficient (1/MPa = mm²/N) of each worn surface.
     pub coefficient: Option<f64>,
-    /// Coefficients of the surface of body A and of body B (instead of `coefficient`).
+    /// Coefficient of the surface of body A (instead of `coefficient`, with
+    /// `coefficient_b`).
     pub coefficient_a: Option<f64>,
+    /// Coefficient of the surface of body B (with `coefficient_a`; a missing one: that
+    /// surface does not wear).
     pub coefficient_b: Option<f64>,
     /// Which surfaces wear with `coefficient`: `"a"`, `"b"` or `"both"` (default).
     pub surface: Option<WearSurface>,

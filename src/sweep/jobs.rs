@@ -27,7 +27,9 @@ pub struct Slurm {
     /// `--mem`: a positive integer with an optional K, M, G or T suffix (megabytes without).
     #[serde(default = "default_memory")]
     pub memory: String,
-    /// `--cpus-per-task`, at least 1.
+    /// CPUs of one run, at least 1: `--cpus-per-task` of `array.sbatch` and the solver
+    /// threads (`RAYON_NUM_THREADS`) of every `jobs.txt` line, so that GNU parallel, which
+    /// starts one job per core, runs `cores` threads in all rather than `cores × cores`.
     #[serde(default = "one")]
     pub cpus: usize,
     /// `--partition`: a partition name (letters, digits, `_`, `-`, `.`) or a comma-separated
@@ -191,14 +193,26 @@ fn slurm_quote(s: &str) -> String {
     quoted
 }
 
+/// The lines of `jobs.txt`: one command per run, each with the solver threads of one run
+/// (`slurm.cpus`), as `array.sbatch` gives each task its `--cpus-per-task`; without it every
+/// run would start one thread per core while GNU parallel runs one job per core.
+fn jobs_lines(dir: &str, n: usize, exe: &str, slurm: &Slurm) -> String {
+    (0..n)
+        .map(|k| {
+            format!(
+                "RAYON_NUM_THREADS={} {exe} sweep run {dir} --task {k}\n",
+                slurm.cpus
+            )
+        })
+        .collect()
+}
+
 /// Writes `jobs.txt` (GNU parallel) and `array.sbatch` (Slurm) of a study with `n` runs;
 /// `study` and `exe` are the texts of [`study_path`] and [`job_path`], `slurm` is checked.
 pub(super) fn write_jobs(study: &str, n: usize, exe: &str, slurm: &Slurm) -> Result<()> {
     let folder = Path::new(study);
     let (exe, dir) = (shell_quote(exe), shell_quote(study));
-    let jobs: String = (0..n)
-        .map(|k| format!("{exe} sweep run {dir} --task {k}\n"))
-        .collect();
+    let jobs = jobs_lines(&dir, n, &exe, slurm);
     write_atomically(&folder.join("jobs.txt"), |w| w.write_all(jobs.as_bytes()))?;
     let partition = slurm
         .partition
@@ -276,6 +290,24 @@ mod tests {
         }
         for bad in ["", "0", "0G", "G", "4X", "-4G", "4 G", "4GB", "1e3", "4G\n"] {
             assert!(!slurm_memory(bad), "{bad:?}");
+        }
+    }
+
+    /// GNU parallel starts one job per core: each line must ask for the CPUs of one run (the
+    /// `cpus` of `[slurm]`, 1 by default), not let the solver take every core.
+    #[test]
+    fn every_jobs_line_sets_the_threads_of_one_run() {
+        for (cpus, want) in [(1, "RAYON_NUM_THREADS=1 "), (4, "RAYON_NUM_THREADS=4 ")] {
+            let slurm = Slurm {
+                cpus,
+                ..Slurm::default()
+            };
+            let text = jobs_lines("'s'", 3, "'a'", &slurm);
+            let lines: Vec<&str> = text.lines().collect();
+            assert_eq!(lines.len(), 3);
+            for (k, line) in lines.iter().enumerate() {
+                assert_eq!(*line, format!("{want}'a' sweep run 's' --task {k}"));
+            }
         }
     }
 

@@ -1,0 +1,59 @@
+//! Shell conventions: completion scripts for bash, zsh and fish and the man pages, made from
+//! the command-line definition itself.
+
+use std::process::Command;
+
+fn asperity(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args(args)
+        .output()
+        .expect("asperity runs");
+    assert!(out.status.success(), "{args:?}: {out:?}");
+    String::from_utf8(out.stdout).expect("UTF-8")
+}
+
+/// Each script completes the subcommands and their options, in its shell's own syntax.
+#[test]
+fn completion_scripts_name_every_subcommand() {
+    for (shell, marker) in [
+        ("bash", "complete -F _asperity"),
+        ("zsh", "#compdef asperity"),
+        ("fish", "complete -c asperity"),
+    ] {
+        let script = asperity(&["completions", shell]);
+        assert!(script.contains(marker), "{shell}: {marker} missing");
+        for word in ["run", "converge", "sweep", "mesh-info", "resume", "threads"] {
+            assert!(script.contains(word), "{shell}: {word} missing");
+        }
+    }
+}
+
+/// bash reads the script without a syntax error and then completes `asperity ru` to `run`.
+#[test]
+fn the_bash_script_completes_a_subcommand() {
+    let script = asperity(&["completions", "bash"]);
+    let test = format!(
+        "{script}\nCOMP_WORDS=(asperity ru); COMP_CWORD=1; COMP_LINE='asperity ru'; \
+         COMP_POINT=11; _asperity asperity ru asperity; printf '%s\\n' \"${{COMPREPLY[@]}}\""
+    );
+    let out = Command::new("bash").args(["-c", &test]).output().unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let words = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(words.lines().collect::<Vec<_>>(), ["run"], "{words}");
+}
+
+#[test]
+fn the_man_page_is_roff_with_every_subcommand() {
+    let page = asperity(&["man"]);
+    assert!(page.contains(".TH asperity 1"), "{page}");
+    for word in ["run", "converge", "sweep", "schema", "completions"] {
+        assert!(page.contains(word), "{word} missing");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("man1");
+    asperity(&["man", "--out", out.to_str().unwrap()]);
+    for page in ["asperity.1", "asperity-run.1", "asperity-sweep-run.1"] {
+        let text = std::fs::read_to_string(out.join(page)).unwrap();
+        assert!(text.starts_with(".ie") || text.contains(".TH"), "{page}");
+    }
+}
