@@ -33,6 +33,7 @@ SIZE    ?= 1
 .PHONY: fuzz
 .PHONY: fretting
 .PHONY: reference install install-test
+.PHONY: example example-slideway example-shrink_fit example-tapered_joint example-fretting example-fit example-sweep examples-test
 
 all: build
 
@@ -119,6 +120,7 @@ test: deps
 	$(PYTHON) pipelines/fretting/check_fretting.py --quick build/test/fretting >build/test/fretting.txt || { cat build/test/fretting.txt; exit 1; }
 	$(call convergence_studies,3,3,build/test/convergence,$(CONVERGENCE_SUMMARY))
 	@$(MAKE) --no-print-directory sweep-test fit-example OUT_FIT=build/test/fit
+	@$(MAKE) --no-print-directory examples-test install-test
 
 # `make doc`: the library's API documentation (target/doc/asperity), failing on a broken link.
 doc:
@@ -257,3 +259,43 @@ install-test: build
 	  grep -q '^complete -c asperity' $$p/share/fish/vendor_completions.d/asperity.fish \
 	  || { echo "install-test: the installed binary, man page or completions are missing or broken"; exit 1; }
 	@echo "install-test: binary, man pages and completions installed and usable"
+
+## --- examples gallery ------------------------------------------------------------
+# examples/<NAME>/README.md says what each shows and the figures it makes. The examples that
+# existed before the gallery keep their own targets (make shrink_fit, ...); these are aliases.
+GALLERY := slideway shrink_fit tapered_joint fretting fit sweep
+example:
+	@if [ -z "$(NAME)" ] || ! echo " $(GALLERY) " | grep -q " $(NAME) "; then \
+	  echo "usage: make example NAME=<name>, one of: $(GALLERY) (examples/README.md)"; exit 2; fi
+	@$(MAKE) --no-print-directory example-$(NAME)
+
+SLIDEWAY_OUT ?= out/slideway
+example-slideway: deps build
+	$(PYTHON) pipelines/slideway/report.py --out $(SLIDEWAY_OUT) $(if $(QUICK),--quick) >/dev/null
+	@echo "results: $(SLIDEWAY_OUT) (REPORT.md, force_displacement.png, stick_zone.png; run/results.pvd for ParaView)"
+example-shrink_fit: shrink_fit
+example-tapered_joint: tapered_joint
+example-fretting: fretting
+example-fit: fit-example
+
+SWEEP_OUT ?= out/sweep/specimen
+example-sweep: export ASPERITY_PIPELINES := $(CURDIR)/pipelines
+example-sweep: venv build
+	$(BIN) sweep plan pipelines/sweep/specimen.toml --out $(SWEEP_OUT)
+	$(BIN) sweep run $(SWEEP_OUT)
+	$(BIN) sweep collect $(SWEEP_OUT)
+	@echo "results: $(SWEEP_OUT) (sweep.csv, force.png, iterations.png; runs/NNNN/ one folder per run)"
+
+# `make examples-test` (part of `make test`): every gallery folder is listed in GALLERY and has
+# its README; the new slideway example runs in its quick form with its checks. The others are
+# checked by the tests above (tapered_joint --quick, shrink_fit, the fretting scripts,
+# fit-example, sweep-test).
+examples-test: deps build
+	@for d in examples/*/; do n=$$(basename $$d); \
+	  echo " $(GALLERY) " | grep -q " $$n " || { echo "examples/$$n is not in GALLERY"; exit 1; }; \
+	  test -s $$d/README.md || { echo "examples/$$n has no README.md"; exit 1; }; done
+	@for n in $(GALLERY); do test -d examples/$$n || { echo "GALLERY lists $$n, examples/$$n is missing"; exit 1; }; done
+	@echo "example slideway (coarse)"
+	@$(MAKE) --no-print-directory example-slideway QUICK=1 SLIDEWAY_OUT=build/test/slideway >/dev/null
+	@test -s build/test/slideway/force_displacement.png && test -s build/test/slideway/stick_zone.png \
+	  || { echo "example slideway: figures missing"; exit 1; }
