@@ -1,12 +1,12 @@
 """Shared helpers of the example pipelines: build case variants, run case files in parallel,
 read the results (summary.json and the CSV tables), write reports. Used by
-pipelines/<example>.py scripts; see README "Examples".
+pipelines/<example>.py scripts; see examples/README.md.
 
 A pipeline script typically:
     cases = [variant(template, out_dir / "a.toml", {"contact[0].law.mu_m": 0.1}), ...]
     summaries = run_cases([(case, out_dir / "a"), ...])   # mesh size: variant(..., size=...)
     history = read_history(out_dir / "a"); contact = read_contact(out_dir / "a", "joint")
-    summaries[0]["totals"]["iterations"]                   # summary.json of the run (README "Output")
+    summaries[0]["totals"]["iterations"]                   # summary.json of the run (docs/guide/outputs.md)
     write_report(out_dir / "REPORT.md", "Title", [("Section", "markdown text"), ...])
 
 Nothing is read from what `asperity` prints: a run's numbers come from its summary.json and
@@ -82,7 +82,7 @@ def variant(template: Path, path: Path, changes: dict | None = None, size: float
 
 
 def read_summary(out: Path) -> dict:
-    """summary.json of a run (README "Output")."""
+    """summary.json of a run (docs/guide/outputs.md)."""
     return json.loads((out / "summary.json").read_text())
 
 

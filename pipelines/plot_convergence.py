@@ -8,7 +8,7 @@ relative error of each level against its reference (solid, where the quantity ha
 against the Richardson-extrapolated value (dashed), and the relative successive differences
 |q_k - q_(k-1)| / |q| (dotted, drawn at the finer level's h), against the relative mesh
 size h. The legend gives the observed order. `asperity converge` runs this script itself
-when it finds it and a Python with matplotlib (README, "Where the plot script is found").
+when it finds it and a Python with matplotlib (docs/guide/convergence-studies.md, "Where the plot script is found").
 """
 import argparse
 import csv

@@ -370,8 +370,8 @@ impl Error {
         }
     }
 
-    /// The process exit status for this error, shared by every subcommand (README "Exit
-    /// codes"): 1 a computation that did not converge (a step, arc-length control, a
+    /// The process exit status for this error, shared by every subcommand
+    /// (docs/guide/troubleshooting.md, "Exit codes"): 1 a computation that did not converge (a step, arc-length control, a
     /// singular system, a run that reached `[solver] max_solves` through cut-backs) or wear
     /// the run cannot follow (a jump beyond its stability limit or breaking the energy
     /// balance, worn through, worn deeper than the body), 3 bad input (case file, mesh, model,

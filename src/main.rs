@@ -270,7 +270,7 @@ fn main() -> ExitCode {
     if let Command::Converge { .. } = cli.command {
         return match converge_command(cli.command) {
             Ok(code) => code,
-            // A study that cannot run keeps its documented 2 (README "Exit codes") until its
+            // A study that cannot run keeps its documented 2 (docs/guide/troubleshooting.md) until its
             // callers move to the shared codes of `Error::exit_code`.
             Err(e) => {
                 eprintln!("error: {e}");
@@ -290,7 +290,7 @@ fn main() -> ExitCode {
     }
     match execute(cli.command, &log_file) {
         Ok(()) => ExitCode::SUCCESS,
-        // README "Exit codes": one mapping for every subcommand, in the library.
+        // Exit codes (docs/guide/troubleshooting.md): one mapping for every subcommand, in the library.
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(e.exit_code())

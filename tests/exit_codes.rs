@@ -1,7 +1,7 @@
-//! The README's exit-code table against `Error::exit_code`: each class of error, by a
-//! representative value, has the code of the table row that describes it, and every sentence
-//! of the README that gives the exit code of a limit load (plastic collapse, friction
-//! capacity) gives the same one.
+//! The exit-code table of the guide (docs/guide/troubleshooting.md) against
+//! `Error::exit_code`: each class of error, by a representative value, has the code of the
+//! table row that describes it, and every sentence of the README and the guide that gives the
+//! exit code of a limit load (plastic collapse, friction capacity) gives the same one.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -9,17 +9,39 @@ use std::path::PathBuf;
 use asperity::Error;
 use asperity::error::{FreeBody, Mechanism};
 
-fn readme() -> String {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("README.md");
-    std::fs::read_to_string(&path).expect("README.md is readable")
+fn read(relative: &str) -> String {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(relative);
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{relative}: {e}"))
+}
+
+/// The page with the exit-code table.
+fn troubleshooting() -> String {
+    read("docs/guide/troubleshooting.md")
+}
+
+/// The README and every page of the guide, one after the other.
+fn documentation() -> String {
+    let guide = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("docs/guide");
+    let mut pages: Vec<PathBuf> = std::fs::read_dir(&guide)
+        .expect("docs/guide is readable")
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .collect();
+    pages.sort();
+    let mut text = read("README.md");
+    for page in pages {
+        text.push_str("\n\n");
+        text.push_str(&std::fs::read_to_string(&page).unwrap());
+    }
+    text
 }
 
 /// The rows of the table under "**Exit codes**": code → meaning.
-fn exit_code_table(readme: &str) -> BTreeMap<u8, String> {
-    let start = readme
+fn exit_code_table(page: &str) -> BTreeMap<u8, String> {
+    let start = page
         .find("**Exit codes**")
-        .expect("the README has an exit-code table");
-    let rows: BTreeMap<u8, String> = readme[start..]
+        .expect("the troubleshooting page has an exit-code table");
+    let rows: BTreeMap<u8, String> = page[start..]
         .lines()
         .skip_while(|l| !l.starts_with('|'))
         .take_while(|l| l.starts_with('|'))
@@ -171,8 +193,8 @@ fn representatives() -> Vec<(Error, &'static str)> {
 }
 
 #[test]
-fn the_readme_exit_code_table_matches_the_program() {
-    let text = readme();
+fn the_guide_exit_code_table_matches_the_program() {
+    let text = troubleshooting();
     let table = exit_code_table(&text);
     for (error, words) in representatives() {
         let rows: Vec<u8> = table
@@ -194,7 +216,7 @@ fn every_sentence_on_limit_loads_gives_their_exit_code() {
         indicator: String::new(),
     })
     .exit_code();
-    let text = readme().replace('\n', " ");
+    let text = documentation().replace('\n', " ");
     let mut checked = 0;
     for sentence in text.split(". ") {
         let lower = sentence.to_lowercase();
@@ -209,12 +231,12 @@ fn every_sentence_on_limit_loads_gives_their_exit_code() {
         assert_eq!(
             digit.to_digit(10),
             Some(code as u32),
-            "the README gives a limit load another exit code: {sentence}"
+            "the documentation gives a limit load another exit code: {sentence}"
         );
         checked += 1;
     }
     assert!(
         checked >= 2,
-        "the README states the exit code of a limit load"
+        "the documentation states the exit code of a limit load"
     );
 }

@@ -37,6 +37,7 @@ fn shipped_cases() -> Vec<PathBuf> {
     let mut cases = Vec::new();
     let mut dirs = vec![
         repo().join("pipelines"),
+        repo().join("examples"),
         repo().join("benches"),
         repo().join("templates"),
     ];

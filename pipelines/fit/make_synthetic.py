@@ -1,4 +1,4 @@
-"""Writes the synthetic joint test of the README's worked example (`asperity fit`).
+"""Writes the synthetic joint test of the worked example of docs/guide/fitting.md (`asperity fit`).
 
 The curves follow the closed forms of the rough-joint law (Buczkowski & Kleiber 1994,
 Eqs. 1-5), written out here independently of asperity's implementation:

@@ -6,7 +6,8 @@
 //! turns a case into materials, laws and loads. Relative paths inside a case file are
 //! relative to the case file's folder.
 //!
-//! The full reference, with an example, is in the README ("Case file reference").
+//! The doc comments of these types are the case-file reference: `asperity schema` and
+//! docs/guide/case-file.md (`crate::reference`) are made from them.
 
 use std::collections::BTreeMap;
 use std::fmt::Display;

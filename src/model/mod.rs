@@ -3,7 +3,7 @@
 //! [`ModelSpec`] (which [`ModelSpec::new`] makes from a case file); the solver only reads it.
 //!
 //! Physical groups are referred to by name: bodies are physical surfaces, supports and loads
-//! are physical curves or points (see the README's naming convention).
+//! are physical curves or points (see docs/guide/meshes.md).
 
 mod constraints;
 mod loads;
