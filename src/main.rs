@@ -18,10 +18,17 @@ use asperity::run::folder::{OutputFolder, OutputMode};
 use asperity::run::progress::{LogFile, LogToStderr};
 use asperity::study;
 
+/// The exit codes, for `--help` and the man page (docs/guide/troubleshooting.md explains each).
+const EXIT_STATUS: &str = "Exit status: 0 success; 1 did not converge (or a fit parameter not \
+    identified, a converge quantity that fails its check); 2 usage or an output folder holding \
+    an earlier run; 3 bad input (case, mesh, model); 4 a file that cannot be read or written; \
+    5 limit load (plastic collapse, friction capacity exceeded, loss of support); 130 \
+    interrupted (continue with --resume). The guide: docs/guide/ in the repository.";
+
 /// Finite-element analysis of 2D plane and axisymmetric contact with interface compliance
 /// and friction (Buczkowski & Kleiber 1994). Units: mm, N, MPa.
 #[derive(Parser)]
-#[command(version, about)]
+#[command(version, about, after_long_help = EXIT_STATUS)]
 struct Cli {
     /// More log output on stderr: -v adds debug lines (Newton iterations, timings), -vv
     /// trace lines. Without it: one INFO line per increment and warnings.

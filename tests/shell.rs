@@ -57,3 +57,32 @@ fn the_man_page_is_roff_with_every_subcommand() {
         assert!(text.starts_with(".ie") || text.contains(".TH"), "{page}");
     }
 }
+
+/// The exit status paragraph of `--help` and the man page names every code of the guide's
+/// table (docs/guide/troubleshooting.md), and no other.
+#[test]
+fn the_help_names_the_exit_codes_of_the_guide() {
+    let page = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/docs/guide/troubleshooting.md"
+    ))
+    .unwrap();
+    let table: Vec<String> = page[page.find("**Exit codes**").unwrap()..]
+        .lines()
+        .skip_while(|l| !l.starts_with('|'))
+        .take_while(|l| l.starts_with('|'))
+        .filter_map(|l| l.split('|').nth(1).map(str::trim))
+        .filter(|c| c.parse::<u8>().is_ok())
+        .map(str::to_string)
+        .collect();
+    let help = asperity(&["--help"]);
+    let status = &help[help
+        .rfind("Exit status:")
+        .expect("an exit status paragraph")..];
+    let named: Vec<String> = status
+        .split(';')
+        .filter_map(|part| part.split_whitespace().find(|w| w.parse::<u8>().is_ok()))
+        .map(str::to_string)
+        .collect();
+    assert_eq!(named, table, "{status}");
+}
