@@ -78,18 +78,22 @@ pub struct Case {
     pub path: PathBuf,
 }
 
-/// Where the mesh comes from: an existing `.msh` file, or a `.geo` script meshed by gmsh.
+/// Where the mesh comes from: an existing `.msh` file, or a `.geo` script meshed by gmsh
+/// (exactly one of `file` and `geo`).
 #[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MeshSource {
-    /// An MSH 4.1 file.
+    /// An MSH 4.1 file (ascii or binary, second order) of at most 1 GiB.
     pub file: Option<PathBuf>,
-    /// A gmsh `.geo` script, meshed with `gmsh -2 -order 2` at run time.
+    /// A gmsh `.geo` script, meshed with `gmsh -2 -order 2` at run time into `mesh.msh` of
+    /// the output folder.
     pub geo: Option<PathBuf>,
-    /// Mesh size factor passed to gmsh (`-clscale`); smaller is finer.
+    /// Mesh size factor passed to gmsh (`-clscale`), > 0; smaller is finer. A mesh estimated
+    /// above 1 000 000 elements is refused before gmsh makes it.
     #[serde(default = "one")]
     pub size: f64,
-    /// Values for the script's `DefineConstant` parameters (`-setnumber NAME VALUE`).
+    /// Values for the script's `DefineConstant` parameters (`-setnumber NAME VALUE`): names
+    /// are identifiers, values finite. gmsh is stopped after 600 s.
     #[serde(default)]
     pub parameters: BTreeMap<String, f64>,
 }
@@ -431,7 +435,7 @@ impl Steps {
 #[serde(deny_unknown_fields)]
 pub struct OutputSpec {
     /// Output folder (relative to the case file); the CLI's `--out` overrides it. Default:
-    /// `out/<case file name>` in the current folder.
+    /// `out/<case file name>` next to the case file.
     pub dir: Option<PathBuf>,
     /// Write VTU/PVD field output (on by default). CSV tables are always written.
     #[serde(default = "yes")]
