@@ -726,7 +726,7 @@ pub struct LoadPoint {
 }
 
 impl LoadPoint {
-    /// "step 'press' (step[0])", or "load step 3" of the `[steps]` form.
+    /// "step 'press' (`step[0]`)", or "load step 3" of the `[steps]` form.
     pub fn step_name(&self) -> String {
         match &self.step {
             Some((name, i)) => format!("step '{name}' (step[{i}])"),
@@ -734,7 +734,7 @@ impl LoadPoint {
         }
     }
 
-    /// The step and, in a cyclic step, the cycle: "step 'service' (step[1]), cycle 3 of 21".
+    /// The step and, in a cyclic step, the cycle: "step 'service' (`step[1]`), cycle 3 of 21".
     pub fn describe_step(&self) -> String {
         match self.cycle {
             Some((c, n)) => format!("{}, simulated cycle {c} of {n}", self.step_name()),

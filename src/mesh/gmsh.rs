@@ -95,10 +95,10 @@ pub fn mesh_geo(
 /// Why probes: gmsh reports no element count before meshing, and the count cannot be read
 /// off the script (transfinite counts, size fields, `Ceil` of the size factor and absolute
 /// size limits all enter). So the script is meshed, first order, at size factors
-/// `size` × 4^k from the first one above [`COARSEST_PROBE`] down to `size` × 4, each probe
+/// `size` × 4^k from the first one above `COARSEST_PROBE` down to `size` × 4, each probe
 /// at most about 16 times the previous one. In 2D a count grows at most as 1/factor², so
 /// the count at `size` is at most the probe's × 16^k: below the limit, the mesh is
-/// accepted. It is refused only when a probe of at least [`RELIABLE_PROBE`] elements,
+/// accepted. It is refused only when a probe of at least `RELIABLE_PROBE` elements,
 /// extrapolated with the growth actually observed from the previous probe (a script with
 /// fixed transfinite counts does not grow at all), still exceeds the limit. The probes cost
 /// a small fraction of the mesh they predict: a 10⁻⁶ factor on a small model is refused

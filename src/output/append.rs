@@ -6,7 +6,7 @@
 //! counts every byte it was given: the file's length and its CRC-32 so far, its
 //! [`FileMark`]. The restart record keeps the marks of a run's growing files instead of their
 //! rows, so it stays the size of the model however long the run. A resumed run
-//! [`restore`]s each file to its mark: it checks the checksum of the file's first `length`
+//! restores each file to its mark: it checks the checksum of the file's first `length`
 //! bytes and cuts off what came after (rows of frames after the record, or the partial last
 //! line of a run killed while appending), so it continues the file exactly where the record
 //! left it.

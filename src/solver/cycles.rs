@@ -33,7 +33,7 @@
 //! **One place, one rate.** The bodies resist only modes of the surface. The two integration
 //! points at a corner node shared by two elements are one place of it; a difference between
 //! their depths meets k_N alone, which a stiff penalty makes far stiffer than k_eff, so a jump
-//! extrapolating each point's own rate would amplify it (see [`jump_depths`], and
+//! extrapolating each point's own rate would amplify it (see `jump_depths`, and
 //! docs/fretting.md, "Cycle jumping"). The jump extrapolates the place's mean rate instead.
 //!
 //! **Wear the model cannot hold.** A depth beyond the extent of the body behind the surface
@@ -87,7 +87,7 @@ pub struct CycleEnd {
 /// interface `states`: the last-cycle results are stored and the wear (and dissipation) of
 /// the cycle is extrapolated over the `jump_cycles − 1` cycles not simulated, its work moved
 /// to the wear work of `energy`. The points at one place of the surface (a corner node shared
-/// by two elements) are extrapolated with their common wear rate ([`surface_places`]).
+/// by two elements) are extrapolated with their common wear rate (`surface_places`).
 /// Errs, leaving the states unchanged, when the depth a jump adds exceeds the stability limit
 /// at some place ([`Error::WearJump`]), or the total depth would exceed the pair's
 /// `max_depth` ([`Error::WornThrough`]) or the extent of the body behind the worn surface

@@ -15,7 +15,7 @@ use crate::solver::state::{Solution, StiffnessHistory};
 /// Completes `failure` with where it happened: the node with the largest out-of-balance
 /// force of the last attempt (and its body), how many interface points changed their
 /// contact status against the last converged state, and the mechanism its contact states
-/// show, if any ([`contact_mechanism`]).
+/// show, if any (`contact_mechanism`).
 pub fn diagnose(
     model: &Model,
     solution: &Solution,
@@ -183,7 +183,7 @@ fn equivalent_strain(e: &crate::material::Voigt) -> f64 {
 
 /// The error of a step that could not be completed: [`Error::Collapse`] when its load
 /// exceeds what the model can carry — the contact states of the last attempt show a
-/// mechanism (friction capacity exhausted, a lost support: [`contact_mechanism`]), or, with
+/// mechanism (friction capacity exhausted, a lost support: `contact_mechanism`), or, with
 /// a plastic body and a rising load, the structure's stiffness collapsed (the secant
 /// stiffness of the last converged increment fell below `[solver]
 /// collapse_stiffness_ratio` of the first one, or an attempt met a tangent that could not be
