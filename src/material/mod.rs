@@ -25,6 +25,9 @@ pub const ZZ: usize = 3;
 /// (a backstress) in a point's internal-variable slice.
 pub const VOIGT_LEN: usize = 4;
 
+/// The most internal variables a material may have per point (five backstresses).
+pub const MAX_INTERNAL_VARIABLES: usize = cyclic::MAX_KINEMATIC_TERMS * VOIGT_LEN;
+
 /// Indices of the normal components in [`Voigt`] vectors (xx, yy, zz).
 pub const NORMAL: [usize; 3] = [0, 1, ZZ];
 

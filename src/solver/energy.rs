@@ -26,7 +26,7 @@ use crate::element::ElementVector;
 use crate::element::continuum::point_kinematics;
 use crate::element::interface6::{InterfacePoint, interface_point, relative_operator};
 use crate::element::quadrature::{MAX_CELL_POINTS, cell_rule};
-use crate::element::set::INTERFACE_POINTS;
+use crate::element::set::{INTERFACE_POINTS, InternalLayout};
 use crate::material::PointState;
 use crate::model::Model;
 
@@ -196,6 +196,10 @@ pub struct Increment<'a> {
     pub trial: &'a [PointState],
     pub interface_committed: &'a [InterfaceState],
     pub interface_trial: &'a [InterfaceState],
+    /// The continuum's internal variables (backstresses) at the start and end.
+    pub internal_layout: &'a InternalLayout,
+    pub internal_committed: &'a [f64],
+    pub internal_trial: &'a [f64],
     pub external_force: &'a [f64],
     pub internal_force: &'a [f64],
 }
@@ -283,9 +287,10 @@ impl EnergyLedger {
                 numerical += 0.5 * (c.stress - t.stress).dot(&plastic_increment) * dv;
             }
         }
+        let (stored, released) = hardening_energy(model, increment, &self.weights.volumes);
         let t = &mut self.total;
-        t.elastic_energy = elastic;
-        t.plastic_dissipation += plastic;
+        t.elastic_energy = elastic + stored;
+        t.plastic_dissipation += plastic - released;
         t.numerical_dissipation += numerical;
     }
 
@@ -323,4 +328,34 @@ impl EnergyLedger {
         }
         sum
     }
+}
+
+/// The energy stored in the backstresses of kinematic hardening at the end of `increment`,
+/// Σ ψ dV with ψ = Σ_k 3/(4 C_k) α_k:α_k, and its change over the increment: counted as
+/// stored (with the elastic energy), so the plastic work σ:Δεᵖ minus that change is the
+/// plastic dissipation. (0, 0) without internal variables. `volumes` are the slots' dV.
+fn hardening_energy(model: &Model, increment: &Increment, volumes: &[f64]) -> (f64, f64) {
+    let layout = increment.internal_layout;
+    if layout.is_empty() {
+        return (0.0, 0.0);
+    }
+    let (mut stored, mut change) = (0.0, 0.0);
+    let continuum = &model.continuum;
+    for (e, cell) in continuum.cells.iter().enumerate() {
+        let material = continuum.materials[cell.body as usize].as_ref();
+        let stride = material.internal_variables();
+        let range = layout.range(e);
+        if stride == 0 || range.is_empty() {
+            continue;
+        }
+        let trial = increment.internal_trial[range.clone()].chunks_exact(stride);
+        let committed = increment.internal_committed[range].chunks_exact(stride);
+        let cell_volumes = &volumes[e * MAX_CELL_POINTS..(e + 1) * MAX_CELL_POINTS];
+        for ((t, c), &dv) in trial.zip(committed).zip(cell_volumes) {
+            let psi = material.hardening_energy(t);
+            stored += psi * dv;
+            change += (psi - material.hardening_energy(c)) * dv;
+        }
+    }
+    (stored, change)
 }
