@@ -54,8 +54,8 @@
 use super::elastic::LinearElastic;
 use super::j2::YIELD_TOL;
 use super::{
-    Material, NORMAL, OutOfPlane, PointState, SHEAR, Tangent, VOIGT_LEN, Voigt, ZZ, contraction,
-    deviator, engineering, identity,
+    Material, OutOfPlane, PointState, Tangent, VOIGT_LEN, Voigt, ZZ, contraction, deviator,
+    engineering, identity,
 };
 use crate::error::ParameterError;
 
@@ -469,6 +469,10 @@ impl Material for CyclicPlasticity {
         self.terms() * VOIGT_LEN
     }
 
+    fn backstress(&self, internal: &[f64]) -> Voigt {
+        self.backstresses(internal).iter().sum()
+    }
+
     fn hardening_energy(&self, internal: &[f64]) -> f64 {
         let alphas = self.backstresses(internal);
         self.kinematic
@@ -514,23 +518,6 @@ impl Material for CyclicPlasticity {
 /// surface's centre from the origin in stress units.
 pub fn centre_norm(alpha: &Voigt) -> f64 {
     SQRT_3_2 * contraction(alpha, alpha).sqrt()
-}
-
-/// Names of the components of a backstress in the output, in Voigt order (normal then shear).
-pub fn component_names(axisymmetric: bool) -> [&'static str; VOIGT_LEN] {
-    let mut names = [""; VOIGT_LEN];
-    let (normal, shear): ([&str; 3], [&str; 1]) = if axisymmetric {
-        (["rr", "zz", "tt"], ["rz"])
-    } else {
-        (["xx", "yy", "zz"], ["xy"])
-    };
-    for (&i, name) in NORMAL.iter().zip(normal) {
-        names[i] = name;
-    }
-    for (&i, name) in SHEAR.iter().zip(shear) {
-        names[i] = name;
-    }
-    names
 }
 
 #[cfg(test)]

@@ -143,6 +143,12 @@ pub trait Material: Send + Sync + std::fmt::Debug {
         self.update(strain, committed, out_of_plane)
     }
 
+    /// The centre of the yield surface, the total backstress α = Σ α_k (stress-like Voigt),
+    /// of a point whose internal variables are `internal`; zero by default.
+    fn backstress(&self, _internal: &[f64]) -> Voigt {
+        Voigt::zeros()
+    }
+
     /// Energy per unit volume stored in the internal variables (MPa): the free energy of
     /// the backstresses, Σ 3/(4 C_k) α_k:α_k. Counted as stored by the energy balance; the
     /// plastic work minus its change is dissipated. 0 by default.

@@ -29,6 +29,7 @@ use super::append::FileMark;
 use crate::contact::InterfaceState;
 use crate::material::PointState;
 use crate::solver::energy::EnergyLedger;
+use crate::solver::shakedown::BodyCycles;
 use crate::solver::state::{
     InternalVariables, LoopState, Progress, Resume, RunStatistics, Solution,
 };
@@ -113,6 +114,8 @@ struct Body<'a> {
     interface_committed: Cow<'a, [InterfaceState]>,
     /// The continuum's committed internal variables (empty without kinematic hardening).
     internal_committed: Cow<'a, [f64]>,
+    /// The bodies' cycle trackers and shakedown verdicts.
+    body_cycles: Cow<'a, BodyCycles>,
     energy: Cow<'a, EnergyLedger>,
     output: Cow<'a, OutputState>,
 }
@@ -141,6 +144,7 @@ pub(super) fn encode_record(
         committed: Cow::Borrowed(&solution.committed),
         interface_committed: Cow::Borrowed(&solution.interface_committed),
         internal_committed: Cow::Borrowed(&solution.internal.committed),
+        body_cycles: Cow::Borrowed(&solution.internal.cycles),
         energy: Cow::Borrowed(&solution.energy),
         output: Cow::Borrowed(output),
     };
@@ -242,6 +246,7 @@ impl Body<'_> {
                 layout: template.internal.layout.clone(),
                 trial: self.internal_committed.to_vec(),
                 committed: self.internal_committed.into_owned(),
+                cycles: self.body_cycles.into_owned(),
             },
             energy: self.energy.into_owned(),
             // Output of the last cycle end only, not a state to continue from.

@@ -20,6 +20,7 @@ use crate::solver::cycles;
 use crate::solver::energy::{EnergyLedger, Increment};
 use crate::solver::mechanics::Mechanics;
 use crate::solver::newton::{ForceAverage, NewtonLog};
+use crate::solver::shakedown::BodyCycles;
 
 /// The evolving solution: displacements and integration-point states.
 #[derive(Clone, Debug)]
@@ -56,7 +57,7 @@ impl Solution {
             trial: vec![PointState::default(); states],
             interface_committed: vec![InterfaceState::default(); interface],
             interface_trial: vec![InterfaceState::default(); interface],
-            internal: InternalVariables::new(InternalLayout::new(&model.continuum)),
+            internal: InternalVariables::new(model),
             energy: EnergyLedger::default(),
             jump_use: vec![0.0; model.interface.pairs.len()],
         }
@@ -123,12 +124,14 @@ impl Solution {
             external_force,
             internal_force,
         };
-        self.energy.record_increment(model, &increment);
+        let bodies = self.energy.record_increment(model, &increment);
+        self.internal.cycles.record(&bodies);
     }
 
     /// Starts a load cycle (or a step) at every interface point of the committed state
     /// ([`cycles::start_cycle`]); the trial states follow.
     pub fn start_cycle(&mut self) {
+        self.internal.cycles.start_cycle(&self.committed);
         cycles::start_cycle(&mut self.interface_committed);
         self.interface_trial
             .copy_from_slice(&self.interface_committed);
@@ -151,6 +154,14 @@ impl Solution {
         Ok(end.worn)
     }
 
+    /// Ends the bodies' cycle of output increment `step` at the committed states (before
+    /// [`Self::end_cycle`]'s wear jump): their plastic dissipation and ratcheting over the
+    /// cycle and, at the end of a cyclic step, their shakedown verdicts
+    /// ([`BodyCycles::end_cycle`]).
+    pub fn end_body_cycle(&mut self, model: &Model, step: usize) {
+        self.internal.cycles.end_cycle(model, step, &self.committed);
+    }
+
     /// Checks the energy balance after a wear jump and the re-equilibrium that followed it
     /// ([`cycles::check_jump_energy`]).
     pub fn check_jump_energy(&self, model: &Model, jump_cycles: f64) -> Result<()> {
@@ -166,16 +177,21 @@ pub struct InternalVariables {
     pub layout: InternalLayout,
     pub committed: Vec<f64>,
     pub trial: Vec<f64>,
+    /// The bodies' cycle trackers (plastic dissipation and ratcheting per cycle, shakedown
+    /// verdicts), of the committed state.
+    pub cycles: BodyCycles,
 }
 
 impl InternalVariables {
-    /// Zero internal variables laid out by `layout`.
-    pub fn new(layout: InternalLayout) -> Self {
+    /// Zero internal variables of `model`'s bodies.
+    pub fn new(model: &Model) -> Self {
+        let layout = InternalLayout::new(&model.continuum);
         let len = layout.len();
         Self {
             layout,
             committed: vec![0.0; len],
             trial: vec![0.0; len],
+            cycles: BodyCycles::new(model),
         }
     }
 }
