@@ -299,3 +299,16 @@ examples-test: deps build
 	@$(MAKE) --no-print-directory example-slideway QUICK=1 SLIDEWAY_OUT=build/test/slideway >/dev/null
 	@test -s build/test/slideway/force_displacement.png && test -s build/test/slideway/stick_zone.png \
 	  || { echo "example slideway: figures missing"; exit 1; }
+
+## --- cyclic plasticity (issue 27) ------------------------------------------------
+# `make cyclic_press_fit`: the press fit under cyclic external pressure with isotropic and
+# with kinematic hardening side by side -> out/cyclic_press_fit (REPORT.md, loops.png,
+# cycles.png, one run folder per hardening). Its quick form is tests/cyclic_press_fit.rs.
+.PHONY: cyclic_press_fit
+CYCLIC_OUT ?= out/cyclic_press_fit
+cyclic_press_fit: deps build
+	@for h in isotropic kinematic; do \
+	  $(BIN) run pipelines/cyclic_press_fit/$$h.toml --out $(CYCLIC_OUT)/$$h --force || exit 1; \
+	done
+	$(PYTHON) pipelines/cyclic_press_fit/report.py $(CYCLIC_OUT)
+	@echo "results: $(CYCLIC_OUT) (REPORT.md, loops.png, cycles.png, results.pvd per run for ParaView)"

@@ -72,6 +72,7 @@ fn solution() -> Solution {
         u: (0..10).map(awkward).collect(),
         trial: vec![PointState::default(); 7],
         interface_trial: vec![InterfaceState::default(); 5],
+        internal: Default::default(),
         committed,
         interface_committed,
         energy: EnergyLedger {
@@ -150,6 +151,7 @@ fn a_record_gives_back_every_bit() {
         trial: vec![PointState::default(); 7],
         interface_committed: vec![InterfaceState::default(); 5],
         interface_trial: vec![InterfaceState::default(); 5],
+        internal: Default::default(),
         energy: EnergyLedger::default(),
         jump_use: vec![0.0],
     };

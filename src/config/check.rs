@@ -9,7 +9,7 @@
 
 use std::collections::BTreeSet;
 
-use super::{AnalysisSpec, Case, check_name};
+use super::{AnalysisSpec, Case, MAX_KINEMATIC_TERMS, check_name};
 use crate::Result;
 
 /// Most load steps (`[steps] count`, the length of `factors`) and arc-length increments: a
@@ -116,6 +116,73 @@ impl Case {
                     format!("body[{i}].material.hardening"),
                     h,
                     format!("`hardening` needs a `yield_stress` (body '{}')", b.group),
+                ));
+            }
+            self.check_cyclic_hardening(i, b)?;
+        }
+        Ok(())
+    }
+
+    /// `kinematic` and `isotropic` of body `i`: only with a yield stress, one to five
+    /// backstresses, each C > 0 and gamma ≥ 0, Voce b ≥ 0 and Q > −yield_stress (the
+    /// material checks the rest when it is built).
+    fn check_cyclic_hardening(&self, i: usize, b: &super::BodySpec) -> Result<()> {
+        let m = &b.material;
+        let key = |k: &str| format!("body[{i}].material.{k}");
+        if m.yield_stress.is_none() && m.has_cyclic_hardening() {
+            let name = if m.kinematic.is_some() {
+                "kinematic"
+            } else {
+                "isotropic"
+            };
+            return Err(self.invalid(
+                key(name),
+                "(given)",
+                format!("`{name}` needs a `yield_stress` (body '{}')", b.group),
+            ));
+        }
+        if let Some(terms) = m.kinematic.as_ref().map(|k| k.as_slice()) {
+            if terms.is_empty() || terms.len() > MAX_KINEMATIC_TERMS {
+                return Err(self.invalid(
+                    key("kinematic"),
+                    terms.len(),
+                    format!(
+                        "give 1 to {MAX_KINEMATIC_TERMS} backstresses {{ C, gamma }} (body '{}')",
+                        b.group
+                    ),
+                ));
+            }
+            for (k, t) in terms.iter().enumerate() {
+                if !(t.c.is_finite() && t.c > 0.0) {
+                    return Err(self.invalid(
+                        key(&format!("kinematic[{k}].C")),
+                        t.c,
+                        "the kinematic hardening modulus C (MPa) must be positive and finite",
+                    ));
+                }
+                if !(t.gamma.is_finite() && t.gamma >= 0.0) {
+                    return Err(self.invalid(
+                        key(&format!("kinematic[{k}].gamma")),
+                        t.gamma,
+                        "the recovery rate gamma must be finite and non-negative (0: Prager)",
+                    ));
+                }
+            }
+        }
+        if let Some(v) = m.isotropic {
+            if !(v.b.is_finite() && v.b >= 0.0) {
+                return Err(self.invalid(
+                    key("isotropic.b"),
+                    v.b,
+                    "the Voce rate b must be finite and non-negative",
+                ));
+            }
+            let sy = m.yield_stress.unwrap_or(0.0);
+            if !(v.q.is_finite() && v.q > -sy) {
+                return Err(self.invalid(
+                    key("isotropic.Q"),
+                    v.q,
+                    format!("the Voce saturation Q (MPa) must be finite and greater than -yield_stress = {}", -sy),
                 ));
             }
         }

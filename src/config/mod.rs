@@ -168,6 +168,95 @@ pub struct MaterialSpec {
     /// Fig. 11, is this H.
     /// Default 0 (perfectly plastic).
     pub hardening: Option<f64>,
+    /// Nonlinear kinematic hardening (Abaqus' *PLASTIC, HARDENING=COMBINED): one to five
+    /// Armstrong–Frederick backstresses summed as in Chaboche,
+    /// `kinematic = [{ C = 40000.0, gamma = 300.0 }, { C = 2000.0, gamma = 0.0 }]`. Each
+    /// evolves as dα = ⅔ C dεᵖ − γ α dε̄ᵖ and saturates at C/γ (uniaxial); `gamma = 0` is
+    /// linear Prager/Ziegler hardening. Moves the yield surface (Bauschinger effect,
+    /// ratcheting). Needs `yield_stress`. See docs/guide/plasticity.md.
+    #[serde(default, deserialize_with = "backstresses")]
+    #[schemars(with = "Option<Vec<KinematicSpec>>", length(min = 1, max = 5))]
+    pub kinematic: Option<Backstresses>,
+    /// Voce saturation isotropic hardening (Abaqus' *CYCLIC HARDENING, PARAMETERS),
+    /// `isotropic = { Q = 80.0, b = 10.0 }`: σ_y = σ_Y + Q (1 − e^(−b ε̄ᵖ)), added to the
+    /// linear `hardening` when both are given. Q < 0 is cyclic softening. Needs
+    /// `yield_stress`.
+    pub isotropic: Option<VoceSpec>,
+}
+
+/// The most backstresses `kinematic` may list (the material's
+/// [`MAX_KINEMATIC_TERMS`](crate::material::cyclic::MAX_KINEMATIC_TERMS), checked equal by a
+/// test of `model::spec`).
+pub const MAX_KINEMATIC_TERMS: usize = 5;
+
+/// The backstresses of `kinematic` (at most [`MAX_KINEMATIC_TERMS`], kept inline so that a
+/// material stays plain copyable data).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Backstresses {
+    terms: [KinematicSpec; MAX_KINEMATIC_TERMS],
+    len: usize,
+}
+
+impl Backstresses {
+    /// The backstresses, in the order given.
+    pub fn as_slice(&self) -> &[KinematicSpec] {
+        &self.terms[..self.len]
+    }
+}
+
+/// `kinematic`: a list of at most [`MAX_KINEMATIC_TERMS`] backstresses (an empty one is
+/// refused by the case check, which names the key).
+fn backstresses<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<Option<Backstresses>, D::Error> {
+    let v: Vec<KinematicSpec> = Vec::deserialize(d)?;
+    let mut b = Backstresses {
+        len: v.len(),
+        ..Backstresses::default()
+    };
+    b.terms
+        .get_mut(..v.len())
+        .ok_or_else(|| {
+            serde::de::Error::custom(format!(
+                "kinematic: give 1 to {MAX_KINEMATIC_TERMS} backstresses {{ C, gamma }}, got {}",
+                v.len()
+            ))
+        })?
+        .copy_from_slice(&v);
+    Ok(Some(b))
+}
+
+/// One Armstrong–Frederick backstress of `kinematic`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct KinematicSpec {
+    /// Initial kinematic hardening modulus C in MPa (> 0): the slope of the backstress
+    /// against uniaxial plastic strain at the start.
+    #[serde(rename = "C")]
+    pub c: f64,
+    /// Rate of dynamic recovery γ (≥ 0, dimensionless): the backstress saturates at C/γ after
+    /// a plastic strain of a few 1/γ; 0 is linear (Prager) hardening.
+    pub gamma: f64,
+}
+
+/// Voce isotropic hardening, `isotropic`.
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct VoceSpec {
+    /// Saturation increase of the yield stress Q in MPa (> −yield_stress; negative: cyclic
+    /// softening).
+    #[serde(rename = "Q")]
+    pub q: f64,
+    /// Rate b (≥ 0, dimensionless): Q is reached after an accumulated plastic strain of a few
+    /// 1/b.
+    pub b: f64,
+}
+
+impl MaterialSpec {
+    /// Whether the material has the cyclic hardening keys (`kinematic` or `isotropic`).
+    pub fn has_cyclic_hardening(&self) -> bool {
+        self.kinematic.is_some() || self.isotropic.is_some()
+    }
 }
 
 /// Prescribed displacement components on the nodes of a physical curve or point. Values are

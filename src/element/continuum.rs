@@ -203,18 +203,24 @@ pub fn min_jacobian(kind: CellKind, coords: &[[f64; 2]; 8]) -> f64 {
 
 /// Tangent stiffness and internal force of one continuum cell for element displacements `u`.
 ///
-/// Each integration point's material is updated from `committed[g]` into `trial[g]`. The
-/// tangent is accumulated into `k` only when `k` is given (residual-only evaluations skip it).
-/// Cells must have passed [`min_jacobian`] at model set-up.
+/// Each integration point's material is updated from `committed[g]` into `trial[g]`, and,
+/// for a material with internal variables, from the cell's `history` (point after point,
+/// [`Material::internal_variables`] each). The tangent is accumulated into `k` only when `k`
+/// is given (residual-only evaluations skip it). Cells must have passed [`min_jacobian`] at
+/// model set-up.
 pub fn evaluate_cell(
     analysis: &Analysis,
     kind: CellKind,
     coords: &[[f64; 2]; 8],
     formulation: Formulation,
-    material: &dyn Material,
+    material: CellMaterial,
     input: &ElementInput<PointState>,
     output: ElementOutput<PointState>,
 ) {
+    let CellMaterial {
+        law: material,
+        mut history,
+    } = material;
     let ElementInput { u, committed, .. } = *input;
     let ElementOutput { trial, mut k, f } = output;
     let out_of_plane = if analysis.is_plane_stress() {
@@ -222,16 +228,51 @@ pub fn evaluate_cell(
     } else {
         OutOfPlane::StrainGiven
     };
+    let stride = material.internal_variables();
     let points = cell_kinematics(analysis, kind, coords, formulation);
     for (g, pk) in points.iter().enumerate() {
         let strain: Voigt = pk.b * u;
-        let (state, d) = material.update(&strain, &committed[g], out_of_plane);
+        let (state, d) = match history.as_mut() {
+            Some(h) => {
+                let slots = g * stride..(g + 1) * stride;
+                material.update_with_history(
+                    &strain,
+                    &committed[g],
+                    &h.committed[slots.clone()],
+                    &mut h.trial[slots],
+                    out_of_plane,
+                )
+            }
+            None => material.update(&strain, &committed[g], out_of_plane),
+        };
         f.gemv_tr(pk.dvol, &pk.b, &state.stress, 1.0);
         if let Some(k) = k.as_deref_mut() {
             let db = d * pk.b;
             k.gemm_tr(pk.dvol, &pk.b, &db, 1.0);
         }
         trial[g] = state;
+    }
+}
+
+/// The internal variables of one cell's points ([`Material::internal_variables`] per point,
+/// point after point): the committed ones read, the trial ones written.
+#[derive(Debug)]
+pub struct CellHistory<'a> {
+    pub committed: &'a [f64],
+    pub trial: &'a mut [f64],
+}
+
+/// A cell's material and, when it has internal variables, their history.
+#[derive(Debug)]
+pub struct CellMaterial<'a> {
+    pub law: &'a dyn Material,
+    pub history: Option<CellHistory<'a>>,
+}
+
+impl<'a> From<&'a dyn Material> for CellMaterial<'a> {
+    /// A material without internal variables.
+    fn from(law: &'a dyn Material) -> Self {
+        Self { law, history: None }
     }
 }
 
@@ -369,7 +410,7 @@ mod tests {
             kind,
             &cell(kind),
             formulation,
-            material,
+            material.into(),
             &ElementInput {
                 u,
                 committed,

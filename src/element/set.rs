@@ -1,9 +1,12 @@
 //! Element sets: the [`ElementSet`] trait the assembler is generic over, and the model's two
 //! sets, the continuum cells of the bodies and the interface elements of the contact pairs.
 
-use super::continuum::{Formulation, evaluate_cell};
+use std::ops::Range;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use super::continuum::{CellHistory, CellMaterial, Formulation, evaluate_cell};
 use super::interface6::{InterfaceElement, evaluate_interface};
-use super::quadrature::MAX_CELL_POINTS;
+use super::quadrature::{MAX_CELL_POINTS, cell_rule};
 use super::{Analysis, ElementInput, ElementMatrix, ElementOutput, ElementVector};
 use crate::contact::wear::WearModel;
 use crate::contact::{InterfaceLaw, InterfaceState};
@@ -109,7 +112,7 @@ impl ElementSet for ContinuumSet {
             c.kind,
             &c.coords,
             formulation,
-            material,
+            material.into(),
             input,
             output,
         );
@@ -144,6 +147,152 @@ impl ContinuumSet {
     /// (small strains) and its internal force is K_c · u.
     pub fn is_linear(&self) -> bool {
         self.materials.iter().all(|m| m.is_linear())
+    }
+}
+
+/// Where each cell's internal variables (backstresses, [`Material::internal_variables`] per
+/// point) lie in the flat internal-variable array of the continuum: the UMAT "STATEV" shape,
+/// a cell's points one after the other. Cells of bodies without internal variables take no
+/// room, and a model without any has an empty layout (no offsets at all).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct InternalLayout {
+    /// Start of every cell's range and the end of the last (empty without internal
+    /// variables).
+    offsets: Vec<usize>,
+}
+
+impl InternalLayout {
+    /// The layout of `set`'s cells.
+    pub fn new(set: &ContinuumSet) -> Self {
+        if set.materials.iter().all(|m| m.internal_variables() == 0) {
+            return Self::default();
+        }
+        let mut offsets = Vec::with_capacity(set.cells.len() + 1);
+        let mut end = 0;
+        offsets.push(end);
+        for c in &set.cells {
+            let stride = set.materials[c.body as usize].internal_variables();
+            end += stride * cell_rule(c.kind).len();
+            offsets.push(end);
+        }
+        Self { offsets }
+    }
+
+    /// Whether no cell has internal variables.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Length of the internal-variable array.
+    pub fn len(&self) -> usize {
+        self.offsets.last().copied().unwrap_or(0)
+    }
+
+    /// The range of cell `e`'s internal variables.
+    pub fn range(&self, e: usize) -> Range<usize> {
+        match self.offsets.get(e..e + 2) {
+            Some(&[start, end]) => start..end,
+            _ => 0..0,
+        }
+    }
+}
+
+/// The continuum cells together with their internal variables: the set assembly evaluates
+/// when some body has internal variables (kinematic hardening). The trial values are written
+/// by the parallel element evaluations, each into its own cell's range, through atomic
+/// stores (plain stores on the usual targets) so that no evaluation order can race.
+#[derive(Debug)]
+pub struct ContinuumWithHistory<'a> {
+    pub set: &'a ContinuumSet,
+    pub layout: &'a InternalLayout,
+    pub committed: &'a [f64],
+    trial: &'a [AtomicU64],
+}
+
+/// Internal variables one cell holds at most: its points times the largest stride.
+const MAX_CELL_INTERNAL: usize = MAX_CELL_POINTS * crate::material::MAX_INTERNAL_VARIABLES;
+
+impl<'a> ContinuumWithHistory<'a> {
+    /// The set with its committed internal variables and the trial ones to write.
+    pub fn new(
+        set: &'a ContinuumSet,
+        layout: &'a InternalLayout,
+        committed: &'a [f64],
+        trial: &'a mut [f64],
+    ) -> Self {
+        const { assert!(std::mem::align_of::<AtomicU64>() == std::mem::align_of::<f64>()) };
+        assert_eq!(committed.len(), layout.len());
+        assert_eq!(trial.len(), layout.len());
+        // SAFETY: AtomicU64 has the size of f64 and (checked above) its alignment, and the
+        // exclusive borrow of `trial` for 'a makes these atomics its only access.
+        let trial = unsafe {
+            std::slice::from_raw_parts(trial.as_mut_ptr().cast::<AtomicU64>(), trial.len())
+        };
+        Self {
+            set,
+            layout,
+            committed,
+            trial,
+        }
+    }
+}
+
+impl ElementSet for ContinuumWithHistory<'_> {
+    type State = PointState;
+
+    fn len(&self) -> usize {
+        self.set.len()
+    }
+
+    fn nodes(&self, e: usize) -> &[u32] {
+        self.set.nodes(e)
+    }
+
+    fn points_per_element(&self) -> usize {
+        MAX_CELL_POINTS
+    }
+
+    fn evaluate(
+        &self,
+        e: usize,
+        input: &ElementInput<PointState>,
+        output: ElementOutput<PointState>,
+    ) {
+        let range = self.layout.range(e);
+        if range.is_empty() {
+            return self.set.evaluate(e, input, output);
+        }
+        let set = self.set;
+        let c = &set.cells[e];
+        let body = c.body as usize;
+        let mut trial = [0.0; MAX_CELL_INTERNAL];
+        let trial = &mut trial[..range.len()];
+        evaluate_cell(
+            &set.analysis,
+            c.kind,
+            &c.coords,
+            set.formulations[body],
+            CellMaterial {
+                law: set.materials[body].as_ref(),
+                history: Some(CellHistory {
+                    committed: &self.committed[range.clone()],
+                    trial: &mut *trial,
+                }),
+            },
+            input,
+            output,
+        );
+        for (slot, value) in self.trial[range].iter().zip(trial.iter()) {
+            slot.store(value.to_bits(), Ordering::Relaxed);
+        }
+    }
+
+    fn tangent_is_reference(&self, trial: &[PointState]) -> bool {
+        self.set.tangent_is_reference(trial)
+    }
+
+    fn reference_tangent(&self, e: usize, k: &mut ElementMatrix) {
+        self.set.reference_tangent(e, k)
     }
 }
 

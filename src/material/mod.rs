@@ -6,6 +6,7 @@
 //! arrays, *committed* and *trial*; trial states are copied into committed ones only when a
 //! load step converges, so a failed or cut-back step leaves history untouched.
 
+pub mod cyclic;
 pub mod elastic;
 pub mod j2;
 
@@ -19,6 +20,49 @@ pub type Tangent = SMatrix<f64, 4, 4>;
 
 /// Index of the out-of-plane (zz or θθ) component in [`Voigt`] vectors.
 pub const ZZ: usize = 3;
+
+/// Number of components of a [`Voigt`] vector: the stride of a stress-like internal variable
+/// (a backstress) in a point's internal-variable slice.
+pub const VOIGT_LEN: usize = 4;
+
+/// The most internal variables a material may have per point (five backstresses).
+pub const MAX_INTERNAL_VARIABLES: usize = cyclic::MAX_KINEMATIC_TERMS * VOIGT_LEN;
+
+/// Indices of the normal components in [`Voigt`] vectors (xx, yy, zz).
+pub const NORMAL: [usize; 3] = [0, 1, ZZ];
+
+/// Indices of the shear components in [`Voigt`] vectors (xy): a strain stores engineering
+/// shear there, a stress the tensor component. New code names components through these
+/// constants and the helpers below, never by literal index, so that widening [`Voigt`] (a
+/// twist's rθ and zθ) is a change here only.
+pub const SHEAR: [usize; 1] = [2];
+
+/// The identity m in Voigt form (1 on the normal components): tr σ = mᵀσ.
+pub fn identity() -> Voigt {
+    let mut m = Voigt::zeros();
+    NORMAL.iter().for_each(|&i| m[i] = 1.0);
+    m
+}
+
+/// The deviator s = σ − ⅓ (tr σ) m of a stress-like Voigt vector.
+pub fn deviator(s: &Voigt) -> Voigt {
+    let m = identity();
+    s - m * (m.dot(s) / 3.0)
+}
+
+/// The tensor contraction a:b of two stress-like Voigt vectors (tensor shear components, so
+/// each shear product counts twice).
+pub fn contraction(a: &Voigt, b: &Voigt) -> f64 {
+    a.dot(b) + SHEAR.iter().map(|&i| a[i] * b[i]).sum::<f64>()
+}
+
+/// A stress-like (tensor-component) Voigt vector as a strain-like one (engineering shear):
+/// the shear components doubled.
+pub fn engineering(tensor: &Voigt) -> Voigt {
+    let mut v = *tensor;
+    SHEAR.iter().for_each(|&i| v[i] *= 2.0);
+    v
+}
 
 /// How the out-of-plane component is determined.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -74,6 +118,42 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     /// history (then the bodies' stiffness is constant and needs assembling only once).
     fn is_linear(&self) -> bool {
         false
+    }
+
+    /// Number of internal variables per integration point beyond [`PointState`] (the UMAT
+    /// "NSTATV"): the backstress components of kinematic hardening. 0 (the default) for a
+    /// material without them, which then costs no storage.
+    fn internal_variables(&self) -> usize {
+        0
+    }
+
+    /// [`Self::update`] of a material with internal variables: reads the committed ones
+    /// from `committed_internal` and writes the new ones to `trial_internal` (both
+    /// [`Self::internal_variables`] long). The default, for materials without any, is
+    /// [`Self::update`].
+    fn update_with_history(
+        &self,
+        strain: &Voigt,
+        committed: &PointState,
+        committed_internal: &[f64],
+        trial_internal: &mut [f64],
+        out_of_plane: OutOfPlane,
+    ) -> (PointState, Tangent) {
+        debug_assert!(committed_internal.is_empty() && trial_internal.is_empty());
+        self.update(strain, committed, out_of_plane)
+    }
+
+    /// The centre of the yield surface, the total backstress α = Σ α_k (stress-like Voigt),
+    /// of a point whose internal variables are `internal`; zero by default.
+    fn backstress(&self, _internal: &[f64]) -> Voigt {
+        Voigt::zeros()
+    }
+
+    /// Energy per unit volume stored in the internal variables (MPa): the free energy of
+    /// the backstresses, Σ 3/(4 C_k) α_k:α_k. Counted as stored by the energy balance; the
+    /// plastic work minus its change is dissipated. 0 by default.
+    fn hardening_energy(&self, _internal: &[f64]) -> f64 {
+        0.0
     }
 }
 

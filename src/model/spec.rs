@@ -18,6 +18,7 @@ use crate::element::continuum::Formulation;
 use crate::element::interface6::InterfaceRule;
 use crate::error::ParameterError;
 use crate::material::Material;
+use crate::material::cyclic::{CyclicPlasticity, KinematicTerm, Voce};
 use crate::material::elastic::LinearElastic;
 use crate::material::j2::J2Plasticity;
 use crate::mesh::interface::Pairing;
@@ -396,17 +397,30 @@ fn arc_length(case: &Case, supports: &[Prescribed]) -> Result<Option<ArcLength>>
     Ok(Some(arc))
 }
 
-/// The constitutive model of a body: linear elastic, or J2 plasticity when a yield stress
-/// is given.
+/// The constitutive model of a body: linear elastic, J2 plasticity with linear isotropic
+/// hardening when a yield stress is given, and with combined (kinematic and Voce) hardening
+/// when `kinematic` or `isotropic` is given too.
 fn build_material(spec: &MaterialSpec) -> std::result::Result<Box<dyn Material>, ParameterError> {
     let elastic = LinearElastic::new(spec.e, spec.nu)?;
+    let hardening = spec.hardening.unwrap_or(0.0);
     Ok(match spec.yield_stress {
         None => Box::new(elastic),
-        Some(sy) => Box::new(J2Plasticity::new(
-            elastic,
-            sy,
-            spec.hardening.unwrap_or(0.0),
-        )?),
+        Some(sy) if spec.has_cyclic_hardening() => {
+            let kinematic: Vec<KinematicTerm> = (spec.kinematic.iter().flat_map(|k| k.as_slice()))
+                .map(|t| KinematicTerm {
+                    c: t.c,
+                    gamma: t.gamma,
+                })
+                .collect();
+            let voce = spec
+                .isotropic
+                .map(|v| Voce { q: v.q, b: v.b })
+                .unwrap_or_default();
+            Box::new(CyclicPlasticity::new(
+                elastic, sy, hardening, voce, &kinematic,
+            )?)
+        }
+        Some(sy) => Box::new(J2Plasticity::new(elastic, sy, hardening)?),
     })
 }
 
@@ -551,6 +565,69 @@ mod tests {
             (Path::new("c.toml"), "body[0].material.E", "-1")
         );
         assert!(reason.contains("'plate'"), "{reason}");
+    }
+
+    /// The case file's limit on backstresses is the material's.
+    #[test]
+    fn backstress_limits_agree() {
+        assert_eq!(
+            crate::config::MAX_KINEMATIC_TERMS,
+            crate::material::cyclic::MAX_KINEMATIC_TERMS
+        );
+    }
+
+    /// The cyclic hardening keys build the combined-hardening material; a bad value, or the
+    /// keys without a yield stress, is an error naming the key.
+    #[test]
+    fn cyclic_hardening_keys_build_and_name_bad_values() {
+        let with = |keys: &str| {
+            CASE.replace(
+                "material = { E = 210000.0, nu = 0.3 }",
+                &format!("material = {{ E = 210000.0, nu = 0.3, {keys} }}"),
+            )
+        };
+        let built = spec(&with(
+            "yield_stress = 250.0, kinematic = [{ C = 1e4, gamma = 50.0 }, { C = 1e3, gamma = 0.0 }], \
+             isotropic = { Q = 50.0, b = 5.0 }",
+        ))
+        .unwrap();
+        let m = &built.bodies[0].material;
+        assert_eq!(m.internal_variables(), 8);
+        assert!(
+            m.describe()
+                .contains("backstress 2: C = 1000 MPa, gamma = 0")
+        );
+        for (keys, expected) in [
+            (
+                "kinematic = [{ C = 1e4, gamma = 50.0 }]",
+                "body[0].material.kinematic",
+            ),
+            (
+                "yield_stress = 250.0, kinematic = []",
+                "body[0].material.kinematic",
+            ),
+            (
+                "yield_stress = 250.0, kinematic = [{ C = 1e4, gamma = 1.0 }, { C = -1.0, gamma = 0.0 }]",
+                "body[0].material.kinematic[1].C",
+            ),
+            (
+                "yield_stress = 250.0, kinematic = [{ C = 1e4, gamma = -1.0 }]",
+                "body[0].material.kinematic[0].gamma",
+            ),
+            (
+                "yield_stress = 250.0, isotropic = { Q = -300.0, b = 1.0 }",
+                "body[0].material.isotropic.Q",
+            ),
+            (
+                "isotropic = { Q = 30.0, b = 1.0 }",
+                "body[0].material.isotropic",
+            ),
+        ] {
+            let Err(Error::InvalidParameter { key, .. }) = spec(&with(keys)) else {
+                panic!("{keys}: expected an invalid parameter")
+            };
+            assert_eq!(key, expected, "{keys}");
+        }
     }
 
     #[test]

@@ -29,12 +29,16 @@ use super::append::FileMark;
 use crate::contact::InterfaceState;
 use crate::material::PointState;
 use crate::solver::energy::EnergyLedger;
-use crate::solver::state::{LoopState, Progress, Resume, RunStatistics, Solution};
+use crate::solver::shakedown::BodyCycles;
+use crate::solver::state::{
+    InternalVariables, LoopState, Progress, Resume, RunStatistics, Solution,
+};
 use crate::{Error, Result};
 
 /// First bytes of a record; the trailing digit is the format version (3: `postcard`; 4: the
-/// growing files' lengths and checksums instead of their rows).
-const MAGIC: &[u8; 16] = b"asperity-rst-v4\n";
+/// growing files' lengths and checksums instead of their rows; 5: the continuum's internal
+/// variables, the backstresses of kinematic hardening).
+const MAGIC: &[u8; 16] = b"asperity-rst-v5\n";
 /// Bytes of [`MAGIC`] before the format version.
 const MAGIC_NAME: usize = 14;
 
@@ -108,6 +112,10 @@ struct Body<'a> {
     u: Cow<'a, [f64]>,
     committed: Cow<'a, [PointState]>,
     interface_committed: Cow<'a, [InterfaceState]>,
+    /// The continuum's committed internal variables (empty without kinematic hardening).
+    internal_committed: Cow<'a, [f64]>,
+    /// The bodies' cycle trackers and shakedown verdicts.
+    body_cycles: Cow<'a, BodyCycles>,
     energy: Cow<'a, EnergyLedger>,
     output: Cow<'a, OutputState>,
 }
@@ -135,6 +143,8 @@ pub(super) fn encode_record(
         u: Cow::Borrowed(&solution.u),
         committed: Cow::Borrowed(&solution.committed),
         interface_committed: Cow::Borrowed(&solution.interface_committed),
+        internal_committed: Cow::Borrowed(&solution.internal.committed),
+        body_cycles: Cow::Borrowed(&solution.internal.cycles),
         energy: Cow::Borrowed(&solution.energy),
         output: Cow::Borrowed(output),
     };
@@ -203,6 +213,11 @@ pub fn read_record(path: &Path, case: &str, template: &Solution) -> Result<Recor
             body.interface_committed.len(),
             template.interface_committed.len(),
         ),
+        (
+            "internal variables",
+            body.internal_committed.len(),
+            template.internal.committed.len(),
+        ),
     ];
     if let Some((what, found, expected)) = sizes.into_iter().find(|(_, f, e)| f != e) {
         return Err(refuse(format!(
@@ -227,6 +242,12 @@ impl Body<'_> {
             committed,
             interface_trial: interface_committed.clone(),
             interface_committed,
+            internal: InternalVariables {
+                layout: template.internal.layout.clone(),
+                trial: self.internal_committed.to_vec(),
+                committed: self.internal_committed.into_owned(),
+                cycles: self.body_cycles.into_owned(),
+            },
             energy: self.energy.into_owned(),
             // Output of the last cycle end only, not a state to continue from.
             jump_use: template.jump_use.clone(),
@@ -254,6 +275,7 @@ mod tests {
             trial: vec![PointState::default(); 2],
             interface_committed: vec![InterfaceState::default()],
             interface_trial: vec![InterfaceState::default()],
+            internal: Default::default(),
             energy: EnergyLedger::default(),
             jump_use: vec![],
         }

@@ -16,6 +16,7 @@ use crate::Result;
 use crate::model::Model;
 use crate::model::timeline::Frame;
 use crate::solver::energy::Energy;
+use crate::solver::shakedown::ShakedownVerdict;
 
 /// The contents of `summary.json`.
 #[derive(Clone, Debug, Serialize)]
@@ -45,6 +46,11 @@ pub struct Summary {
     pub final_residual: Option<f64>,
     /// The energy balance: totals, per analysis step and per load cycle.
     pub energy: EnergyReport,
+    /// Per cyclic step and body, its shakedown verdict ("elastic shakedown", "plastic
+    /// shakedown" or "ratcheting") with the threshold and the last simulated cycle's
+    /// values it is made from ([`crate::solver::shakedown`]); absent without cyclic steps.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub shakedown: Vec<ShakedownVerdict>,
 }
 
 /// How a run ended.
@@ -379,6 +385,7 @@ impl Summary {
             reactions: Named::default(),
             final_residual: None,
             energy: EnergyReport::default(),
+            shakedown: Vec::new(),
         }
     }
 

@@ -142,6 +142,18 @@ pub const CYCLES: [&str; 9] = [
     "jump_limit_share",
 ];
 
+/// The columns `cycles.csv` adds per body when some body can flow plastically
+/// ([`crate::solver::shakedown::BodyCycle`]): `<body>_plastic_dissipation` (N·mm),
+/// `<body>_ratchet_strain` (the largest net equivalent plastic strain change of the cycle
+/// at a point) and `<body>_plastic_strain_increment` (the largest increase of ε̄ᵖ over the
+/// cycle at a point). A model without contact pairs has one row per cycle, with the
+/// `contact` columns empty.
+pub const BODY_CYCLE_COLUMNS: [&str; 3] = [
+    "plastic_dissipation",
+    "ratchet_strain",
+    "plastic_strain_increment",
+];
+
 /// Columns of `wear_<pair>.csv`: the profile along side A at each cycle end.
 pub const WEAR: [&str; 8] = [
     "analysis_step",
@@ -201,8 +213,10 @@ fn pair_sums(model: &Model, states: &[InterfaceState], jump: f64) -> Vec<PairSum
 pub struct FrettingTables {
     /// [`HYSTERESIS`] per pair.
     hysteresis: Vec<GrowingCsv>,
-    /// [`CYCLES`], all pairs.
+    /// [`CYCLES`], all pairs, and [`BODY_CYCLE_COLUMNS`] per body when `bodies`.
     cycles: GrowingCsv,
+    /// Whether `cycles.csv` has the bodies' columns (some body can flow plastically).
+    bodies: bool,
     /// [`WEAR`] per pair (`None` for pairs that do not wear).
     wear: Vec<Option<GrowingCsv>>,
     /// The traced points of each pair and their table of [`POINT_LOOPS`] (`None` for a pair
@@ -215,9 +229,17 @@ impl FrettingTables {
     /// Empty tables for the pairs of `model`.
     pub fn new(model: &Model) -> Self {
         let pairs = &model.interface.pairs;
+        let bodies = model.continuum.materials.iter().any(|m| !m.is_linear());
+        let mut cycles: Vec<String> = CYCLES.iter().map(|c| c.to_string()).collect();
+        if bodies {
+            for body in &model.bodies {
+                cycles.extend(BODY_CYCLE_COLUMNS.iter().map(|c| format!("{body}_{c}")));
+            }
+        }
         Self {
             hysteresis: pairs.iter().map(|_| growing(&HYSTERESIS)).collect(),
-            cycles: growing(&CYCLES),
+            cycles: GrowingCsv::new(&cycles),
+            bodies,
             wear: pairs
                 .iter()
                 .map(|p| p.wear().map(|_| growing(&WEAR)))
@@ -269,6 +291,21 @@ impl FrettingTables {
         if !frame.cycle_end {
             return Ok(());
         }
+        let body_cells: Vec<Cell> = if self.bodies {
+            let last = &step.solution.internal.cycles.last;
+            last.iter()
+                .flat_map(|c| {
+                    [
+                        c.plastic_dissipation,
+                        c.ratchet_strain,
+                        c.plastic_strain_increment,
+                    ]
+                })
+                .map(Cell::Number)
+                .collect()
+        } else {
+            Vec::new()
+        };
         for (p, (s, pair)) in sums.iter().zip(pairs).enumerate() {
             let mut row: Vec<Cell> = position.map(Cell::Number).to_vec();
             row.push(Cell::Text(pair.name.clone()));
@@ -282,7 +319,15 @@ impl FrettingTables {
                 ]
                 .map(Cell::Number),
             );
+            row.extend(body_cells.iter().cloned());
             self.cycles.push(&table_label("cycles", &pair.name), &row)?;
+        }
+        if pairs.is_empty() && self.bodies {
+            let mut row: Vec<Cell> = position.map(Cell::Number).to_vec();
+            row.extend(std::iter::repeat_n(Cell::Empty, 6));
+            row.extend(body_cells);
+            self.cycles
+                .push(std::path::Path::new("cycles table"), &row)?;
         }
         for (p, (table, pair)) in self.wear.iter_mut().zip(pairs).enumerate() {
             let Some(table) = table else { continue };
@@ -340,7 +385,7 @@ impl FrettingTables {
                 .as_mut()
                 .map(|table| (FrettingTable::PointLoops(&p.name), table))
         }));
-        if !pairs.is_empty() {
+        if !pairs.is_empty() || self.bodies {
             out.push((FrettingTable::Cycles, &mut self.cycles));
         }
         let wear = pairs.iter().zip(&mut self.wear);

@@ -22,12 +22,13 @@ use crate::output::{Field, FieldValues, Grid, tensor_component_names, vtk_cell_t
 use crate::solver::state::StepResult;
 use interface::InterfaceOutput;
 
+pub mod backstress;
 pub mod fretting;
 pub mod interface;
 pub mod quantities;
 
 /// Extrapolation matrix (nodes × integration points) of a cell kind.
-fn extrapolation(kind: CellKind) -> &'static DMatrix<f64> {
+pub(crate) fn extrapolation(kind: CellKind) -> &'static DMatrix<f64> {
     static QUAD8: OnceLock<DMatrix<f64>> = OnceLock::new();
     static TRI6: OnceLock<DMatrix<f64>> = OnceLock::new();
     let cell = match kind {
@@ -272,6 +273,9 @@ pub fn step_grids(
     bodies
         .point_data
         .push(Field::new("reaction_force", 3, FieldValues::F64(values)));
+    bodies
+        .point_data
+        .extend(backstress::fields(model, points, &solution.internal));
     bodies.field_data.extend(info.field_data());
     let interface = (!model.interface.elements.is_empty()).then(|| {
         let mut grid = interface.grid(model, &solution.interface_committed);

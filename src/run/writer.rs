@@ -279,6 +279,10 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             }
             self.summary.energy.push(mark);
         }
+        let verdicts = &step.solution.internal.cycles.verdicts;
+        if self.summary.shakedown.len() != verdicts.len() {
+            self.summary.shakedown.clone_from(verdicts);
+        }
         self.queue_appends()?;
         if let Some(p) = progress {
             self.queue_record(p)?;

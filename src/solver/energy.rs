@@ -26,7 +26,7 @@ use crate::element::ElementVector;
 use crate::element::continuum::point_kinematics;
 use crate::element::interface6::{InterfacePoint, interface_point, relative_operator};
 use crate::element::quadrature::{MAX_CELL_POINTS, cell_rule};
-use crate::element::set::INTERFACE_POINTS;
+use crate::element::set::{INTERFACE_POINTS, InternalLayout};
 use crate::material::PointState;
 use crate::model::Model;
 
@@ -196,6 +196,10 @@ pub struct Increment<'a> {
     pub trial: &'a [PointState],
     pub interface_committed: &'a [InterfaceState],
     pub interface_trial: &'a [InterfaceState],
+    /// The continuum's internal variables (backstresses) at the start and end.
+    pub internal_layout: &'a InternalLayout,
+    pub internal_committed: &'a [f64],
+    pub internal_trial: &'a [f64],
     pub external_force: &'a [f64],
     pub internal_force: &'a [f64],
 }
@@ -204,16 +208,19 @@ impl EnergyLedger {
     /// Adds the converged `increment`; the drivers call this (through
     /// [`crate::solver::state::Solution::record_energy`]) just before committing the trial
     /// states.
-    pub fn record_increment(&mut self, model: &Model, increment: &Increment) {
+    ///
+    /// Returns the increment's plastic dissipation per body.
+    pub fn record_increment(&mut self, model: &Model, increment: &Increment) -> Vec<f64> {
         self.weights.ensure(model);
         self.total.external_work += self.external_work(model, increment);
-        self.record_bodies(model, increment);
+        let bodies = self.record_bodies(model, increment);
         let i = self.interface_work(model, increment);
         let t = &mut self.total;
         t.friction_dissipation += i.friction;
         t.wear_work += i.wear;
         t.numerical_dissipation += i.numerical;
         t.interface_energy += i.work - i.friction - i.numerical - i.wear;
+        bodies
     }
 
     /// Accounts for wear added to interface point `point` (index into the interface states)
@@ -264,9 +271,10 @@ impl EnergyLedger {
     }
 
     /// The bodies' stored energy (from the trial states), plastic work and the numerical
-    /// part of the trapezoidal rule on it.
-    fn record_bodies(&mut self, model: &Model, increment: &Increment) {
+    /// part of the trapezoidal rule on it; returns the plastic dissipation per body.
+    fn record_bodies(&mut self, model: &Model, increment: &Increment) -> Vec<f64> {
         let (mut elastic, mut plastic, mut numerical) = (0.0, 0.0, 0.0);
+        let mut bodies = vec![0.0; model.bodies.len()];
         let cells = &model.continuum.cells;
         let slots = increment
             .trial
@@ -279,14 +287,19 @@ impl EnergyLedger {
             for ((t, c), &dv) in trial.iter().zip(committed).zip(volumes).take(points) {
                 let plastic_increment = t.plastic_strain - c.plastic_strain;
                 elastic += material.elastic_energy(t) * dv;
-                plastic += t.stress.dot(&plastic_increment) * dv;
+                let work = t.stress.dot(&plastic_increment) * dv;
+                plastic += work;
+                bodies[cell.body as usize] += work;
                 numerical += 0.5 * (c.stress - t.stress).dot(&plastic_increment) * dv;
             }
         }
+        let (stored, released) =
+            hardening_energy(model, increment, &self.weights.volumes, &mut bodies);
         let t = &mut self.total;
-        t.elastic_energy = elastic;
-        t.plastic_dissipation += plastic;
+        t.elastic_energy = elastic + stored;
+        t.plastic_dissipation += plastic - released;
         t.numerical_dissipation += numerical;
+        bodies
     }
 
     /// The interface terms of the increment.
@@ -323,4 +336,42 @@ impl EnergyLedger {
         }
         sum
     }
+}
+
+/// The energy stored in the backstresses of kinematic hardening at the end of `increment`,
+/// Σ ψ dV with ψ = Σ_k 3/(4 C_k) α_k:α_k, and its change over the increment: counted as
+/// stored (with the elastic energy), so the plastic work σ:Δεᵖ minus that change is the
+/// plastic dissipation. (0, 0) without internal variables. `volumes` are the slots' dV; the
+/// change is also taken off each body's plastic dissipation in `bodies`.
+fn hardening_energy(
+    model: &Model,
+    increment: &Increment,
+    volumes: &[f64],
+    bodies: &mut [f64],
+) -> (f64, f64) {
+    let layout = increment.internal_layout;
+    if layout.is_empty() {
+        return (0.0, 0.0);
+    }
+    let (mut stored, mut change) = (0.0, 0.0);
+    let continuum = &model.continuum;
+    for (e, cell) in continuum.cells.iter().enumerate() {
+        let material = continuum.materials[cell.body as usize].as_ref();
+        let stride = material.internal_variables();
+        let range = layout.range(e);
+        if stride == 0 || range.is_empty() {
+            continue;
+        }
+        let trial = increment.internal_trial[range.clone()].chunks_exact(stride);
+        let committed = increment.internal_committed[range].chunks_exact(stride);
+        let cell_volumes = &volumes[e * MAX_CELL_POINTS..(e + 1) * MAX_CELL_POINTS];
+        for ((t, c), &dv) in trial.zip(committed).zip(cell_volumes) {
+            let psi = material.hardening_energy(t);
+            let released = (psi - material.hardening_energy(c)) * dv;
+            stored += psi * dv;
+            change += released;
+            bodies[cell.body as usize] -= released;
+        }
+    }
+    (stored, change)
 }

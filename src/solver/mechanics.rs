@@ -9,7 +9,9 @@ use crate::assembly::{
 };
 use crate::contact::{ContactAlgorithm, InterfaceState};
 use crate::element::interface6::evaluate_interface;
-use crate::element::set::{ElementSet, INTERFACE_POINTS, InterfaceSet};
+use crate::element::set::{
+    ContinuumWithHistory, ElementSet, INTERFACE_POINTS, InterfaceSet, InternalLayout,
+};
 use crate::element::{ElementInput, ElementMatrix, ElementOutput, ElementVector};
 use crate::material::PointState;
 use crate::model::Model;
@@ -90,6 +92,11 @@ pub struct Mechanics<'a> {
     /// Interface states committed at the last converged increment, and of this iteration.
     pub interface_committed: &'a [InterfaceState],
     pub interface_trial: &'a mut [InterfaceState],
+    /// The continuum's internal variables (backstresses), committed and of this iteration;
+    /// empty when no body has any.
+    pub internal_layout: &'a InternalLayout,
+    pub internal_committed: &'a [f64],
+    pub internal_trial: &'a mut [f64],
 }
 
 impl Problem for Mechanics<'_> {
@@ -145,7 +152,15 @@ impl Problem for Mechanics<'_> {
     fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) {
         let m = self.model;
         let (cc, ct) = (self.committed, &mut *self.trial);
-        if m.continuum.is_linear() {
+        if !self.internal_layout.is_empty() {
+            let set = ContinuumWithHistory::new(
+                &m.continuum,
+                self.internal_layout,
+                self.internal_committed,
+                self.internal_trial,
+            );
+            system.assemble_reusing(input, &set, &m.continuum_coloring, cc, ct);
+        } else if m.continuum.is_linear() {
             system.assemble(input, &m.continuum, &m.continuum_coloring, cc, ct);
         } else {
             system.assemble_reusing(input, &m.continuum, &m.continuum_coloring, cc, ct);

@@ -12,5 +12,6 @@ pub mod energy;
 pub mod linear;
 pub mod mechanics;
 pub mod newton;
+pub mod shakedown;
 pub mod state;
 pub mod stepping;

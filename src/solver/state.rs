@@ -12,7 +12,7 @@
 use crate::Result;
 use crate::contact::InterfaceState;
 use crate::element::quadrature::MAX_CELL_POINTS;
-use crate::element::set::INTERFACE_POINTS;
+use crate::element::set::{INTERFACE_POINTS, InternalLayout};
 use crate::material::PointState;
 use crate::model::Model;
 use crate::model::timeline::Frame;
@@ -20,6 +20,7 @@ use crate::solver::cycles;
 use crate::solver::energy::{EnergyLedger, Increment};
 use crate::solver::mechanics::Mechanics;
 use crate::solver::newton::{ForceAverage, NewtonLog};
+use crate::solver::shakedown::BodyCycles;
 
 /// The evolving solution: displacements and integration-point states.
 #[derive(Clone, Debug)]
@@ -34,6 +35,8 @@ pub struct Solution {
     pub interface_committed: Vec<InterfaceState>,
     /// Interface states of the current iteration.
     pub interface_trial: Vec<InterfaceState>,
+    /// The continuum's internal variables (backstresses), committed and trial.
+    pub internal: InternalVariables,
     /// Energy totals of the converged increments.
     pub energy: EnergyLedger,
     /// Per contact pair, the largest share of its stability limit that the last cycle's wear
@@ -54,6 +57,7 @@ impl Solution {
             trial: vec![PointState::default(); states],
             interface_committed: vec![InterfaceState::default(); interface],
             interface_trial: vec![InterfaceState::default(); interface],
+            internal: InternalVariables::new(model),
             energy: EnergyLedger::default(),
             jump_use: vec![0.0; model.interface.pairs.len()],
         }
@@ -64,6 +68,9 @@ impl Solution {
         self.committed.copy_from_slice(&self.trial);
         self.interface_committed
             .copy_from_slice(&self.interface_trial);
+        self.internal
+            .committed
+            .copy_from_slice(&self.internal.trial);
     }
 
     /// Makes the trial states the committed ones again (after a failed attempt, or before
@@ -72,6 +79,9 @@ impl Solution {
         self.trial.copy_from_slice(&self.committed);
         self.interface_trial
             .copy_from_slice(&self.interface_committed);
+        self.internal
+            .trial
+            .copy_from_slice(&self.internal.committed);
     }
 
     /// The displacements and, apart from them, the mechanical problem of `model` over this
@@ -83,6 +93,9 @@ impl Solution {
             trial: &mut self.trial,
             interface_committed: &self.interface_committed,
             interface_trial: &mut self.interface_trial,
+            internal_layout: &self.internal.layout,
+            internal_committed: &self.internal.committed,
+            internal_trial: &mut self.internal.trial,
         };
         (&mut self.u, problem)
     }
@@ -105,15 +118,20 @@ impl Solution {
             trial: &self.trial,
             interface_committed: &self.interface_committed,
             interface_trial: &self.interface_trial,
+            internal_layout: &self.internal.layout,
+            internal_committed: &self.internal.committed,
+            internal_trial: &self.internal.trial,
             external_force,
             internal_force,
         };
-        self.energy.record_increment(model, &increment);
+        let bodies = self.energy.record_increment(model, &increment);
+        self.internal.cycles.record(&bodies);
     }
 
     /// Starts a load cycle (or a step) at every interface point of the committed state
     /// ([`cycles::start_cycle`]); the trial states follow.
     pub fn start_cycle(&mut self) {
+        self.internal.cycles.start_cycle(&self.committed);
         cycles::start_cycle(&mut self.interface_committed);
         self.interface_trial
             .copy_from_slice(&self.interface_committed);
@@ -136,10 +154,45 @@ impl Solution {
         Ok(end.worn)
     }
 
+    /// Ends the bodies' cycle of output increment `step` at the committed states (before
+    /// [`Self::end_cycle`]'s wear jump): their plastic dissipation and ratcheting over the
+    /// cycle and, at the end of a cyclic step, their shakedown verdicts
+    /// ([`BodyCycles::end_cycle`]).
+    pub fn end_body_cycle(&mut self, model: &Model, step: usize) {
+        self.internal.cycles.end_cycle(model, step, &self.committed);
+    }
+
     /// Checks the energy balance after a wear jump and the re-equilibrium that followed it
     /// ([`cycles::check_jump_energy`]).
     pub fn check_jump_energy(&self, model: &Model, jump_cycles: f64) -> Result<()> {
         cycles::check_jump_energy(model, &self.energy.total, &self.jump_use, jump_cycles)
+    }
+}
+
+/// The continuum's internal variables (the backstresses of kinematic hardening): a flat
+/// array per state, committed and trial like the integration-point states, laid out by
+/// [`InternalLayout`]. All three are empty for a model without any, which so pays nothing.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct InternalVariables {
+    pub layout: InternalLayout,
+    pub committed: Vec<f64>,
+    pub trial: Vec<f64>,
+    /// The bodies' cycle trackers (plastic dissipation and ratcheting per cycle, shakedown
+    /// verdicts), of the committed state.
+    pub cycles: BodyCycles,
+}
+
+impl InternalVariables {
+    /// Zero internal variables of `model`'s bodies.
+    pub fn new(model: &Model) -> Self {
+        let layout = InternalLayout::new(&model.continuum);
+        let len = layout.len();
+        Self {
+            layout,
+            committed: vec![0.0; len],
+            trial: vec![0.0; len],
+            cycles: BodyCycles::new(model),
+        }
     }
 }
 

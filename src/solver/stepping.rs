@@ -215,6 +215,9 @@ pub fn run_steps_from(
         };
         // The cycle's last increment is committed: store its results and jump its wear
         // before anything is recorded, so that every record is a state to continue from.
+        if schedule.timeline().ends_cycle(step).is_some() {
+            solution.end_body_cycle(model, step);
+        }
         let cycle_end = match schedule.timeline().ends_cycle(step) {
             None => Ok(()),
             Some(jump) => match solution.end_cycle(model, jump as f64) {
