@@ -20,7 +20,7 @@ use crate::output::summary::{EnergyMark, Summary};
 use crate::output::writer::{Content, RecordWriter};
 use crate::post::fretting::{FrettingTables, TracedPoint, trace_point};
 use crate::post::interface::{InterfaceOutput, resultants};
-use crate::post::quantities::evaluate;
+use crate::post::quantities::{evaluate, pair_quantities};
 use crate::post::{BodyPoints, StepInfo, reactions, step_grids};
 use crate::solver::newton::NewtonLog;
 use crate::solver::state::{Observer, Progress, Resume, Solution, StepResult};
@@ -397,7 +397,16 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             resultants.as_flattened(),
             &requested,
         ];
-        Ok(self.layout.row(&model.schedule, step, time, values))
+        let pairs = pair_quantities(model, &step.solution.interface_committed);
+        let pairs: Vec<_> = pairs
+            .into_iter()
+            .enumerate()
+            .map(|(p, q)| {
+                let before = self.layout.dissipation(&self.last_row, p);
+                (q, q.dissipation - before)
+            })
+            .collect();
+        Ok(self.layout.row(model, step, time, values, &pairs))
     }
 
     /// Queues the restart record of a converged increment (when the run keeps them), after
