@@ -319,3 +319,32 @@ fn pyvista_shows_the_parts_by_name() {
         "{text}"
     );
 }
+
+/// `asperity fit` of a law whose penalty stiffness is left out: a material-point test has no
+/// mesh to default it from, so the fit file is refused, naming the key; given, it fits.
+#[test]
+fn a_fit_at_a_material_point_needs_the_penalty_stiffness() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("shear.csv");
+    std::fs::write(
+        &data,
+        "# units: displacement = mm, shear = MPa\ndisplacement,shear\n0.001,3\n0.002,6\n0.004,9\n0.008,9\n",
+    )
+    .unwrap();
+    let fit = |stiffness: &str| {
+        let path = dir.path().join("fit.toml");
+        let text = format!(
+            "law = \"linear_coulomb\"\n[parameters]\nfriction = {{ initial = 0.5, min = 0.0, max = 2.0 }}\n\
+             {stiffness}\n[[test]]\nkind = \"tangential\"\ndata = \"shear.csv\"\npressure = 30.0\n"
+        );
+        std::fs::write(&path, text).unwrap();
+        asperity::fit::Fit::from_file(&path)
+    };
+    let message = fit("").unwrap_err().to_string();
+    assert!(
+        message.contains("parameters.normal_stiffness") && message.contains("no mesh"),
+        "{message}"
+    );
+    let given = "normal_stiffness = { value = 1e4 }\ntangential_stiffness = { value = 3e3 }";
+    assert!(fit(given).is_ok());
+}
