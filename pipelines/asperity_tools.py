@@ -159,11 +159,13 @@ def read_contact(out: Path, pair: str, step: int | None = None) -> dict[str, np.
 
 
 def read_step(out: Path, step: int | None = None):
-    """The VTU files of step `step` (1-based; default: the last) that results.pvd lists, as a
-    pyvista MultiBlock whose blocks carry the PVD's part names (`bodies`, `interface`), and
-    whose own field_data `step` is the step (its position in the series). pyvista's own PVD
-    reader drops the names (Block-00, Block-01). Each block's field_data holds what its VTU
-    records (`TimeValue`, `load_factor`, names of bodies and pairs)."""
+    """The whole-model VTU files of step `step` (1-based; default: the last) of the series
+    results.pvd, as a pyvista MultiBlock with the blocks `bodies` and (with contact pairs)
+    `interface`, and whose own field_data `step` is the step (its position in the series).
+    results.pvd lists a `frame_NNNN.vtm` per step (its bodies and pairs by name, which
+    `pyvista.read` shows); its whole-model files are `bodies_NNNN.vtu` and `interface_NNNN.vtu`.
+    Each block's field_data holds what its VTU records (`TimeValue`, `load_factor`, names of
+    bodies and pairs)."""
     import xml.etree.ElementTree as ET
 
     import pyvista as pv
@@ -177,7 +179,14 @@ def read_step(out: Path, step: int | None = None):
     blocks = pv.MultiBlock()
     blocks.field_data["step"] = [times.index(time) + 1]
     for t, name, file in entries:
-        if t == time:
+        if t != time:
+            continue
+        if file.endswith(".vtm"):
+            number = file.removeprefix("frame_").removesuffix(".vtm")
+            for part in ("bodies", "interface"):
+                if (out / f"{part}_{number}.vtu").is_file():
+                    blocks[part] = pv.read(out / f"{part}_{number}.vtu")
+        else:
             blocks[name] = pv.read(out / file)
     return blocks
 

@@ -10,10 +10,11 @@ elements through the wall; the solver tests measure 4e-6 at that density, so 1e-
 room only for a real defect such as wrong loads or a wrong axisymmetric weighting); for the
 shrink fit, the contact pressure differs from delta / (C + 1/k_N) by more than 1e-3 (6
 elements through each wall; measured 6e-6 in the solver tests) or the interface arrays are
-incomplete.
+incomplete; or when pyvista does not show the bodies and contact pairs by name.
 """
 import csv
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -69,7 +70,7 @@ def check_shrink_fit(out: Path, history: list) -> None:
     e1, nu1 = e / (1 - nu**2), nu / (1 - nu)
     compliance = b * ((1 - nu1) / e1 + ((c * c + b * b) / (c * c - b * b) + nu1) / e1)
     exact = delta / (compliance + 1 / k_n)
-    grid = check_interface(sorted(out.glob("interface_*.vtu"))[-1])
+    grid = check_interface(whole(sorted(out.glob("interface_*.vtu")))[-1])
     p = np.asarray(grid.point_data["contact_pressure"])
     err = np.max(np.abs(p - exact)) / exact
     print(f"contact pressure {p.min():.5f}..{p.max():.5f} MPa, closed form {exact:.5f} MPa, relative error {err:.2e}")
@@ -82,6 +83,34 @@ def check_shrink_fit(out: Path, history: list) -> None:
         sys.exit("contact CSV missing")
 
 
+def whole(paths) -> list:
+    """The whole-model files among `paths` (`bodies_NNNN.vtu`, not a body's part `bodies_NNNN_K.vtu`)."""
+    return [p for p in paths if re.fullmatch(r"(bodies|interface)_\d+\.vtu", p.name)]
+
+
+def check_blocks(out: Path) -> None:
+    """`pyvista.read("results.pvd")` shows the parts by name: each frame's multiblock has the
+    block `bodies` with a dataset per body and `contacts` with one per pair, named as the
+    whole-model files' `body_names` and `pair_names`, each holding exactly its own cells."""
+    frame = pv.read(out / "results.pvd")[0]
+    first = whole(sorted(out.glob("bodies_*.vtu")))[0]
+    bodies = pv.read(first)
+    names = [str(n) for n in bodies.field_data["body_names"]]
+    if list(frame["bodies"].keys()) != names:
+        sys.exit(f"results.pvd: body blocks {frame['bodies'].keys()}, expected {names}")
+    for k, name in enumerate(names):
+        block = frame["bodies"][name]
+        own = np.count_nonzero(np.asarray(bodies.cell_data["body"]) == k)
+        if block.n_cells != own or np.any(np.asarray(block.cell_data["body"]) != k):
+            sys.exit(f"results.pvd: block '{name}' has {block.n_cells} cells, body {k} has {own}")
+    interface = first.with_name(first.name.replace("bodies_", "interface_"))
+    if interface.is_file():
+        pairs = [str(n) for n in pv.read(interface).field_data["pair_names"]]
+        if list(frame["contacts"].keys()) != pairs:
+            sys.exit(f"results.pvd: contact blocks {frame['contacts'].keys()}, expected {pairs}")
+    print(f"results.pvd: blocks by name: bodies {names}, contacts {list(frame.get('contacts', {}).keys())}")
+
+
 def main() -> None:
     out = Path(sys.argv[1])
     reader = pv.get_reader(out / "results.pvd")
@@ -90,9 +119,10 @@ def main() -> None:
         history = [row for row in csv.DictReader(f) if int(row["step"]) > 0]
     if len(reader.time_values) != len(history):
         sys.exit(f"results.pvd lists {len(reader.time_values)} steps, history.csv {len(history)}")
-    grids = [check_grid(p) for p in sorted(out.glob("bodies_*.vtu"))]
+    grids = [check_grid(p) for p in whole(sorted(out.glob("bodies_*.vtu")))]
     for p in sorted(out.glob("interface_*.vtu")):
         check_interface(p)
+    check_blocks(out)
     last = grids[-1]
     if "thick_cylinder" in str(out):
         a, b, p, e, nu = 10.0, 20.0, 100.0, 200000.0, 0.3

@@ -41,7 +41,7 @@ import pyvista as pv  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from asperity_tools import (  # noqa: E402
-    ROOT, phase_seconds, read_contact, read_history, run_cases, rust_exp, table, variant, write_report,
+    ROOT, phase_seconds, read_contact, read_history, read_step, run_cases, rust_exp, table, variant, write_report,
 )
 
 pv.OFF_SCREEN = True
@@ -174,9 +174,7 @@ def von_mises_figure(path: Path, out: Path, geometry: dict, p0: float) -> None:
     a, h = geometry["a"], geometry["h"]
     plotter = pv.Plotter(off_screen=True, shape=(1, 2), window_size=(1600, 800), border=False)
     for column, name in enumerate(MODELS):
-        reader = pv.get_reader(out / name / "results.pvd")
-        reader.set_active_time_value(reader.time_values[-1])
-        grid = reader.read()[0]
+        grid = read_step(out / name)["bodies"]
         for array in ("displacement", "von_mises"):
             if array not in grid.point_data:
                 fail(f"{out / name}: point array '{array}' missing in the last bodies VTU")

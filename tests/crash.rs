@@ -105,7 +105,7 @@ fn history_steps(history: &str) -> Vec<usize> {
         .collect()
 }
 
-/// The steps whose `bodies_NNNN.vtu` a series lists, each file present in `dir`.
+/// The steps whose `frame_NNNN.vtm` a series lists, each file present in `dir`.
 fn series_steps(pvd: &str, dir: &Path) -> Vec<usize> {
     let mut steps = Vec::new();
     for line in pvd.lines().filter(|l| l.contains("<DataSet")) {
@@ -117,8 +117,8 @@ fn series_steps(pvd: &str, dir: &Path) -> Vec<usize> {
             .next()
             .unwrap();
         assert!(dir.join(file).is_file(), "the series lists missing {file}");
-        if let Some(n) = file.strip_prefix("bodies_") {
-            steps.push(n.trim_end_matches(".vtu").parse().unwrap());
+        if let Some(n) = file.strip_prefix("frame_") {
+            steps.push(n.trim_end_matches(".vtm").parse().unwrap());
         }
     }
     steps

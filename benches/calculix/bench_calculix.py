@@ -563,7 +563,11 @@ def last_vtu(folder: Path) -> Path:
             if ds.get("part", "0") == "0":
                 files.append((float(ds.get("timestep", "0")), ds.get("file")))
     if files:
-        return folder / sorted(files)[-1][1]
+        last = sorted(files)[-1][1]
+        # results.pvd lists a frame_NNNN.vtm per step; its whole-model file is bodies_NNNN.vtu.
+        if last.endswith(".vtm"):
+            last = last.replace("frame_", "bodies_").replace(".vtm", ".vtu")
+        return folder / last
     vtus = sorted(folder.glob("bodies_*.vtu"))
     if not vtus:
         raise FileNotFoundError(f"no bodies_*.vtu in {folder}")

@@ -91,7 +91,7 @@ impl<'de> Visitor<'de> for LawVisitor {
                 match p.default {
                     ParameterDefault::Required => return Err(A::Error::missing_field(p.key)),
                     ParameterDefault::Value(v) => *value = Some(v),
-                    ParameterDefault::Optional => {}
+                    ParameterDefault::Optional | ParameterDefault::Penalty => {}
                 }
             }
         }
@@ -133,7 +133,9 @@ fn law_schema(law: &LawDescriptor) -> Value {
         match p.default {
             ParameterDefault::Required => required.push(p.key.into()),
             ParameterDefault::Value(v) => property["default"] = v.into(),
-            ParameterDefault::Optional => property["type"] = json!(["number", "null"]),
+            ParameterDefault::Optional | ParameterDefault::Penalty => {
+                property["type"] = json!(["number", "null"])
+            }
         }
         let ((lower, exclusive), upper) = p.bound.limits();
         let minimum = if exclusive {
@@ -200,10 +202,7 @@ mod tests {
                 "{ type = \"linear_coulomb\", normal_stiffness = 1, tangential_stiffness = 1, mu = 0.2 }",
                 "unknown field `mu`, expected one of `normal_stiffness`, `tangential_stiffness`, `friction`",
             ),
-            (
-                "{ type = \"linear_coulomb\", normal_stiffness = 1 }",
-                "missing field `tangential_stiffness`",
-            ),
+            ("{ type = \"rough_joint\", c_n = 1 }", "missing field `m`"),
             ("{ normal_stiffness = 1 }", "missing field `type`"),
             (
                 "{ type = \"coulomb\" }",

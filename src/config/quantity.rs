@@ -15,7 +15,7 @@ pub struct QuantitySpec {
     /// Name in tables and files: letters, digits, `_`, `-`, `.`.
     pub name: String,
     pub kind: QuantityKind,
-    /// `reaction`: the support (its group name, or `axis`).
+    /// `reaction`: the support (its `name`, its group when one support holds it, or `axis`).
     pub support: Option<String>,
     /// `displacement`: a physical point group (the mean over its nodes).
     pub point: Option<String>,
@@ -179,13 +179,9 @@ impl QuantitySpec {
         }
         if let Some(s) = &self.support {
             let axis = case.analysis.is_axisymmetric().then_some("axis");
-            let names: Vec<&str> = case
-                .supports
-                .iter()
-                .map(|s| s.group.as_str())
-                .chain(axis)
-                .collect();
-            if !names.contains(&s.as_str()) {
+            let names: Vec<&str> = case.supports.iter().map(|s| s.name()).chain(axis).collect();
+            let groups = case.supports.iter().filter(|g| &g.group == s).count();
+            if !names.contains(&s.as_str()) && groups != 1 {
                 return Err(format!(
                     "{head}: no support '{s}' (the case has: {})",
                     list(&names)

@@ -58,6 +58,10 @@ pub enum ParameterDefault {
     Value(f64),
     /// It may be left out (NaN among the values); the law says what that means.
     Optional,
+    /// A penalty stiffness (MPa/mm) that may be left out: model building then sets it from
+    /// the pair's bodies and mesh (`crate::model`'s penalty default, 10 E*/h), which a law at
+    /// a material point does not have. NaN among the values until then.
+    Penalty,
 }
 
 /// The values a parameter may take (all of them finite).
@@ -108,7 +112,7 @@ impl ParameterDescriptor {
         match self.default {
             ParameterDefault::Required => None,
             ParameterDefault::Value(v) => Some(v),
-            ParameterDefault::Optional => Some(f64::NAN),
+            ParameterDefault::Optional | ParameterDefault::Penalty => Some(f64::NAN),
         }
     }
 }
@@ -119,6 +123,35 @@ impl LawDescriptor {
     pub fn build(&self, values: &[f64]) -> Built {
         debug_assert_eq!(values.len(), self.parameters.len(), "{}", self.name);
         (self.build)(values)
+    }
+
+    /// Whether `values` leave a penalty stiffness to its default (NaN at a
+    /// [`ParameterDefault::Penalty`] parameter).
+    pub fn defaults_penalty(&self, values: &[f64]) -> bool {
+        self.parameters
+            .iter()
+            .zip(values)
+            .any(|(p, x)| p.default == ParameterDefault::Penalty && x.is_nan())
+    }
+
+    /// The keys of the penalty stiffnesses `values` leave to their default.
+    pub fn defaulted_penalties(&self, values: &[f64]) -> Vec<&'static str> {
+        let parameters = self.parameters.iter().zip(values);
+        parameters
+            .filter(|(p, x)| p.default == ParameterDefault::Penalty && x.is_nan())
+            .map(|(p, _)| p.key)
+            .collect()
+    }
+
+    /// `values` with every penalty stiffness left to its default set to `stiffness`.
+    pub fn with_penalty(&self, values: &[f64], stiffness: f64) -> Vec<f64> {
+        let parameters = self.parameters.iter().zip(values);
+        parameters
+            .map(|(p, &x)| match p.default {
+                ParameterDefault::Penalty if x.is_nan() => stiffness,
+                _ => x,
+            })
+            .collect()
     }
 
     /// The index of parameter `key`.

@@ -29,16 +29,20 @@ pub const LAW: LawDescriptor = LawDescriptor {
         ParameterDescriptor {
             key: "normal_stiffness",
             unit: "MPa/mm",
-            default: ParameterDefault::Required,
+            default: ParameterDefault::Penalty,
             bound: Bound::Positive,
-            doc: "k_N in MPa/mm.",
+            doc: "k_N in MPa/mm. Default: 10 E*/h, E* the surface modulus of the two bodies\n\
+                  (1/E* = (1 − ν_A²)/E_A + (1 − ν_B²)/E_B; E in plane stress) and h the pair's\n\
+                  mean interface element length, written to the log and run.json. The faces\n\
+                  then overlap by about p/k_N under contact pressure p (docs/guide/contact-defaults.md).",
         },
         ParameterDescriptor {
             key: "tangential_stiffness",
             unit: "MPa/mm",
-            default: ParameterDefault::Required,
+            default: ParameterDefault::Penalty,
             bound: Bound::Positive,
-            doc: "k_T in MPa/mm.",
+            doc: "k_T in MPa/mm. Default: the same 10 E*/h as `normal_stiffness`'s default; a\n\
+                  sticking point then slips elastically by p_T/k_T ≤ μ p/k_N.",
         },
         ParameterDescriptor {
             key: "friction",

@@ -203,20 +203,27 @@ impl Experiment {
 
     /// The simulated responses with `law` (a model test gets the law's table entry `kind` and
     /// parameter values `x`).
+    /// `law` is the law at `x`, given whenever some test is [at a point](Self::at_a_point).
     pub fn simulate(
         &self,
-        law: &dyn InterfaceLaw,
+        law: Option<&dyn InterfaceLaw>,
         kind: &LawDescriptor,
         x: &[f64],
     ) -> Result<Vec<f64>> {
+        let law = || law.expect("the caller builds the law for a test at a material point");
         Ok(match &self.kind {
-            Kind::Normal { closure } => normal(law, closure),
+            Kind::Normal { closure } => normal(law(), closure),
             Kind::Tangential {
                 pressure,
                 displacement,
-            } => tangential(law, *pressure, displacement),
+            } => tangential(law(), *pressure, displacement),
             Kind::Model(specimen) => specimen.simulate(x, kind)?,
         })
+    }
+
+    /// Whether the test evaluates the law at a material point (not through a model).
+    pub fn at_a_point(&self) -> bool {
+        !matches!(self.kind, Kind::Model(_))
     }
 }
 

@@ -258,6 +258,19 @@ impl Fit {
             .enumerate()
             .map(|(i, t)| Experiment::read(t, i, path))
             .collect::<Result<Vec<_>>>()?;
+        let at_a_point = experiments.iter().any(Experiment::at_a_point);
+        let defaulted = file.law.defaulted_penalties(&parameters.values);
+        if let (true, Some(key)) = (at_a_point, defaulted.first()) {
+            return Err(Error::InvalidParameter {
+                path: path.to_path_buf(),
+                key: format!("parameters.{key}"),
+                value: String::new(),
+                reason: "missing: a material-point [[test]] (normal, tangential) has no mesh to \
+                         default a penalty stiffness from (only a model test's case does, 10 E*/h): \
+                         give it fixed (`value`) or free (`initial`)"
+                    .into(),
+            });
+        }
         if experiments.iter().any(|e| e.stated) != experiments.iter().all(|e| e.stated) {
             return Err(Error::Case {
                 path: path.to_path_buf(),
@@ -297,10 +310,15 @@ impl Fit {
 
     /// The simulated responses of every test with parameter values `x`, one vector per test.
     pub fn simulate(&self, x: &[f64]) -> Result<Vec<Vec<f64>>> {
-        let law = self.parameters.build(x)?;
+        // Only the material-point tests evaluate the law here; a model test builds its own,
+        // whose penalty stiffnesses left out default to its mesh's.
+        let law = match self.experiments.iter().any(Experiment::at_a_point) {
+            true => Some(self.parameters.build(x)?),
+            false => None,
+        };
         self.experiments
             .iter()
-            .map(|e| e.simulate(law.as_ref(), self.parameters.law, x))
+            .map(|e| e.simulate(law.as_deref(), self.parameters.law, x))
             .collect()
     }
 

@@ -201,7 +201,9 @@ impl Parameters {
             free,
             path: path.to_path_buf(),
         };
-        p.build(&p.values)?; // the starting law must be valid
+        // The starting law must be valid; a penalty stiffness left to the specimen model's
+        // default is checked with a stand-in (it stays fixed at that default).
+        p.build(&law.with_penalty(&p.values, 1.0))?;
         Ok(p)
     }
 

@@ -10,9 +10,23 @@ use crate::{Error, Result};
 /// A named set of prescribed dofs whose reaction force is reported.
 #[derive(Clone, Debug)]
 pub struct Support {
+    /// The user's name (`name`, else the group).
     pub name: String,
+    /// The physical group it holds.
+    pub group: String,
     /// Global dofs (2·node + component) this support prescribes.
     pub dofs: Vec<usize>,
+    /// (u_x, u_y) at factor 1 (`None`: the component is free).
+    pub values: [Option<f64>; 2],
+    /// The amplitude in the model's schedule the values follow.
+    pub amplitude: usize,
+}
+
+impl Support {
+    /// Whether it prescribes a non-zero displacement (drives the model).
+    pub fn is_driven(&self) -> bool {
+        self.values.iter().flatten().any(|&v| v != 0.0)
+    }
 }
 
 /// Name of the automatic support of axisymmetric models.
@@ -72,8 +86,11 @@ pub(super) fn prescribe(
             }
         }
         supports.push(Support {
-            name: spec.group.clone(),
+            name: spec.name.clone(),
+            group: spec.group.clone(),
             dofs,
+            values: spec.values,
+            amplitude,
         });
     }
     if analysis.is_axisymmetric() {
@@ -157,6 +174,9 @@ fn axis_support(
     }
     Ok(Support {
         name: AXIS_SUPPORT.into(),
+        group: AXIS_SUPPORT.into(),
         dofs,
+        values: [Some(0.0), None],
+        amplitude: 0,
     })
 }

@@ -7,19 +7,22 @@
 
 mod constraints;
 mod loads;
+mod penalty;
 mod rigid;
 mod spec;
 pub mod timeline;
 
 pub use constraints::{AXIS_SUPPORT, Support};
 pub use loads::{History, Schedule, Table};
+pub use penalty::{PENALTY_FACTOR, PenaltyDefault};
 pub use rigid::Hold;
 pub use spec::{
-    ArcLength, Body, Contact, Control, LineLoad, Load, LoadKind, ModelSpec, Prescribed,
+    ArcLength, Body, Contact, Control, LineLoad, Load, LoadKind, ModelSpec, PairLaw, Prescribed,
     load_factors,
 };
 
 use crate::assembly::{Coloring, DofMap, SparsityPattern};
+use crate::contact::laws::{self, LawDescriptor};
 use crate::element::Analysis;
 use crate::element::continuum::min_jacobian;
 use crate::element::interface6::{
@@ -46,6 +49,8 @@ pub struct Model {
     /// Interface elements of the contact pairs.
     pub interface: InterfaceSet,
     pub interface_coloring: Coloring,
+    /// The penalty stiffnesses the contact pairs' laws got by default, pair by pair.
+    pub penalty_defaults: Vec<PenaltyDefault>,
     /// Supports in case-file order, then the automatic axis support ("axis": u_r = 0 on r = 0) in
     /// axisymmetry.
     pub supports: Vec<Support>,
@@ -86,7 +91,8 @@ impl Model {
             owners: &owners,
             continuum: &continuum,
         };
-        let interface = build_interface(&mesh, analysis, contacts, topologies, &surfaces, scale)?;
+        let (interface, penalty_defaults) =
+            build_interface(&mesh, analysis, contacts, topologies, &surfaces, scale)?;
         let Constraints {
             supports,
             prescribed,
@@ -107,6 +113,7 @@ impl Model {
             continuum_coloring,
             interface,
             interface_coloring,
+            penalty_defaults,
             supports,
             prescribed,
             nodal_loads,
@@ -261,9 +268,10 @@ fn build_interface(
     topologies: Vec<InterfaceTopology>,
     surfaces: &BodySurfaces,
     scale: f64,
-) -> Result<InterfaceSet> {
+) -> Result<(InterfaceSet, Vec<PenaltyDefault>)> {
     let mut elements = Vec::new();
     let mut pairs = Vec::new();
+    let mut defaults = Vec::new();
     for (p, (contact, topology)) in contacts.into_iter().zip(topologies).enumerate() {
         let Contact {
             name,
@@ -296,6 +304,23 @@ fn build_interface(
                 message: "no interface elements were found".into(),
             });
         }
+        let law = match law {
+            PairLaw::Built(law) => law,
+            PairLaw::Defaulted { law, values } => {
+                let default = penalty_default(&name, law, &values, &elements[start..], surfaces)?;
+                tracing::info!("{}", default.describe());
+                let built = law.build(&law.with_penalty(&values, default.stiffness));
+                defaults.push(default);
+                // Checked with a stand-in stiffness by `ModelSpec::new`; the default is in
+                // the same bound.
+                built.map_err(|e| Error::InvalidParameter {
+                    path: std::path::PathBuf::new(),
+                    key: format!("contact '{name}' law.{}", e.name),
+                    value: laws::shown(e.value),
+                    reason: e.reason,
+                })?
+            }
+        };
         let pair = ContactPair {
             name,
             law,
@@ -311,10 +336,33 @@ fn build_interface(
         );
         pairs.push(pair);
     }
-    Ok(InterfaceSet {
+    let set = InterfaceSet {
         analysis,
         elements,
         pairs,
+    };
+    Ok((set, defaults))
+}
+
+/// The default penalty stiffness of pair `name` (law `law` at `values`) on its `elements`.
+fn penalty_default(
+    name: &str,
+    law: &LawDescriptor,
+    values: &[f64],
+    elements: &[InterfaceElement],
+    surfaces: &BodySurfaces,
+) -> Result<PenaltyDefault> {
+    let moduli = elements.iter().map(|e| {
+        let sides = [surfaces.modulus(e.nodes[0]), surfaces.modulus(e.nodes[3])];
+        (sides, chord_length(&e.b_coords))
+    });
+    let parameters = law.defaulted_penalties(values);
+    PenaltyDefault::new(name, parameters, moduli).ok_or_else(|| Error::Topology {
+        pair: name.to_string(),
+        problem: TopologyProblem::NoOwner,
+        node: None,
+        element: None,
+        message: "no body behind either face to default the penalty stiffness from".into(),
     })
 }
 

@@ -97,6 +97,8 @@ pub struct Body {
 /// factor 1.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Prescribed {
+    /// The user's name (`name`, else the group): in history columns, summary keys, the log.
+    pub name: String,
     pub group: String,
     /// (u_x, u_y); `None` leaves the component free.
     pub values: [Option<f64>; 2],
@@ -141,8 +143,21 @@ pub struct Contact {
     pub pairing: Pairing,
     pub rule: InterfaceRule,
     pub interference: f64,
-    pub law: Box<dyn InterfaceLaw>,
+    pub law: PairLaw,
     pub wear: Option<WearModel>,
+}
+
+/// The interface law of a contact pair: built, or, when the case leaves a penalty stiffness
+/// to its default (which depends on the mesh), checked and built when the model is
+/// ([`super::penalty`]).
+#[derive(Debug)]
+pub enum PairLaw {
+    Built(Box<dyn InterfaceLaw>),
+    /// The law's table entry and its values, NaN at the penalty stiffnesses to default.
+    Defaulted {
+        law: &'static laws::LawDescriptor,
+        values: Vec<f64>,
+    },
 }
 
 impl ModelSpec {
@@ -217,6 +232,7 @@ impl ModelSpec {
             .supports
             .iter()
             .map(|s| Prescribed {
+                name: s.name().to_string(),
                 group: s.group.clone(),
                 values: [s.ux, s.uy],
                 factors: history(case, Role::Support, s.name(), s.factors.as_deref()),
@@ -350,7 +366,7 @@ fn arc_length(case: &Case, supports: &[Prescribed]) -> Result<Option<ArcLength>>
             format!(
                 "arc-length control drives forces and pressures only; support '{}' prescribes \
                  a non-zero displacement (use load control, or a force instead)",
-                s.group
+                s.name
             ),
         ));
     }
@@ -438,8 +454,10 @@ fn wear_model(spec: &WearSpec) -> WearModel {
 }
 
 /// The interface law of contact `i` of `case`, from the table of laws; a parameter given to
-/// no effect is a warning, a wrong one an [`Error::InvalidParameter`] naming its key.
-fn build_law(case: &Case, i: usize, contact: &ContactSpec) -> Result<Box<dyn InterfaceLaw>> {
+/// no effect is a warning, a wrong one an [`Error::InvalidParameter`] naming its key. A law
+/// whose penalty stiffnesses default is checked with a stand-in for them (any value in their
+/// bound) and built with the model.
+fn build_law(case: &Case, i: usize, contact: &ContactSpec) -> Result<PairLaw> {
     let (law, values) = (contact.law.law, contact.law.numbers());
     if let Some(note) = (law.unused)(&values) {
         tracing::warn!(
@@ -448,12 +466,23 @@ fn build_law(case: &Case, i: usize, contact: &ContactSpec) -> Result<Box<dyn Int
             contact.name()
         );
     }
-    law.build(&values).map_err(|e| {
+    let defaulted = law.defaults_penalty(&values);
+    let checked = if defaulted {
+        law.build(&law.with_penalty(&values, 1.0))
+    } else {
+        law.build(&values)
+    };
+    let built = checked.map_err(|e| {
         case.invalid(
             format!("contact[{i}].law.{}", e.name),
             laws::shown(e.value),
             format!("{} (contact '{}')", e.reason, contact.name()),
         )
+    })?;
+    Ok(if defaulted {
+        PairLaw::Defaulted { law, values }
+    } else {
+        PairLaw::Built(built)
     })
 }
 

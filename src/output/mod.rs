@@ -14,6 +14,7 @@ pub mod paths;
 pub mod pvd;
 pub mod restart;
 pub mod summary;
+pub mod vtm;
 pub mod vtu;
 pub mod writer;
 
@@ -119,6 +120,64 @@ impl Grid {
     /// Number of cells.
     pub fn cell_count(&self) -> usize {
         self.cell_types.len()
+    }
+
+    /// The grid of the cells `keep` selects (one flag per cell): their points renumbered in
+    /// order, the point and cell arrays restricted to them, the field data unchanged.
+    pub fn subset(&self, keep: &[bool]) -> Grid {
+        debug_assert_eq!(keep.len(), self.cell_count());
+        let mut new_index = vec![u64::MAX; self.points.len()];
+        let mut points = Vec::new();
+        let mut grid = Grid::default();
+        let mut start = 0;
+        for (c, &end) in self.offsets.iter().enumerate() {
+            let cell = &self.connectivity[start as usize..end as usize];
+            start = end;
+            if !keep[c] {
+                continue;
+            }
+            let renumbered: Vec<u64> = cell
+                .iter()
+                .map(|&p| {
+                    if new_index[p as usize] == u64::MAX {
+                        new_index[p as usize] = points.len() as u64;
+                        points.push(p as usize);
+                    }
+                    new_index[p as usize]
+                })
+                .collect();
+            grid.push_cell(self.cell_types[c], renumbered);
+        }
+        grid.points = points.iter().map(|&p| self.points[p]).collect();
+        let cells: Vec<usize> = (0..keep.len()).filter(|&c| keep[c]).collect();
+        grid.point_data = self.point_data.iter().map(|f| f.select(&points)).collect();
+        grid.cell_data = self.cell_data.iter().map(|f| f.select(&cells)).collect();
+        grid.field_data = self.field_data.clone();
+        grid
+    }
+}
+
+impl Field {
+    /// The field at the tuples `indices`, in that order.
+    fn select(&self, indices: &[usize]) -> Field {
+        let n = self.components;
+        fn pick<T: Clone>(values: &[T], indices: &[usize], n: usize) -> Vec<T> {
+            indices
+                .iter()
+                .flat_map(|&i| values[i * n..(i + 1) * n].iter().cloned())
+                .collect()
+        }
+        let values = match &self.values {
+            FieldValues::F64(v) => FieldValues::F64(pick(v, indices, n)),
+            FieldValues::I32(v) => FieldValues::I32(pick(v, indices, n)),
+            FieldValues::Str(v) => FieldValues::Str(pick(v, indices, n)),
+        };
+        Field {
+            name: self.name.clone(),
+            components: n,
+            component_names: self.component_names.clone(),
+            values,
+        }
     }
 }
 

@@ -94,8 +94,18 @@ pub struct StepSummary {
     pub residual: f64,
     /// Reaction of every support, by support name.
     pub reactions: Named<Force>,
+    /// Prescribed displacement (mm) of every driven support (one prescribing a non-zero
+    /// value), by support name; `null` for a component it leaves free.
+    pub displacements: Named<Displacement>,
     /// Resultants of every contact pair, by pair name.
     pub contact: Named<ContactResultant>,
+}
+
+/// A displacement in the analysis plane (mm); `None` for a free component.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Displacement {
+    pub x: Option<f64>,
+    pub y: Option<f64>,
 }
 
 /// A force in the analysis plane (in axisymmetry x is r, y is z, totals over the circle).
@@ -105,7 +115,7 @@ pub struct Force {
     pub y: f64,
 }
 
-/// The resultants of a contact pair (the `<pair>_*` columns of `history.csv`).
+/// The resultants and state of a contact pair (the `<pair>_*` columns of `history.csv`).
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct ContactResultant {
     /// ∫ p_N dA (negative in compression).
@@ -115,6 +125,14 @@ pub struct ContactResultant {
     /// The force body A exerts on body B.
     pub force_on_b_x: f64,
     pub force_on_b_y: f64,
+    /// Extent of the sticking, slipping and open parts: length along side B in mm in a plane
+    /// analysis, area in mm² in axisymmetry (`<pair>_stick_length` or `<pair>_stick_area`).
+    pub stick: f64,
+    pub slip: f64,
+    pub open: f64,
+    /// Friction dissipated on the pair since the start and since the previous step (N·mm).
+    pub dissipation: f64,
+    pub dissipation_increment: f64,
 }
 
 /// Counters of the whole run. For a failed run they count the converged steps, and the
@@ -322,11 +340,28 @@ impl EnergyReport {
         self.marks.last().map(|m| m.total).unwrap_or_default()
     }
 
-    fn json(&self) -> EnergyJson<'_> {
-        let mut steps: Vec<StepEnergy> = Vec::new();
-        let mut cycles = Vec::with_capacity(self.marks.len());
-        let (mut cycle_start, mut step_start) = (Energy::default(), Energy::default());
+    /// Per analysis step that reached the end of a cycle: its last mark and what changed
+    /// over it (work and dissipation done in it, change of the stored energies).
+    pub fn steps(&self) -> Vec<(&EnergyMark, Energy)> {
+        let mut steps = Vec::new();
+        let mut step_start = Energy::default();
         for (i, mark) in self.marks.iter().enumerate() {
+            let step_ends = self
+                .marks
+                .get(i + 1)
+                .is_none_or(|next| next.analysis_step != mark.analysis_step);
+            if step_ends {
+                steps.push((mark, mark.total - step_start));
+                step_start = mark.total;
+            }
+        }
+        steps
+    }
+
+    fn json(&self) -> EnergyJson<'_> {
+        let mut cycles = Vec::with_capacity(self.marks.len());
+        let mut cycle_start = Energy::default();
+        for mark in &self.marks {
             cycles.push(CycleEnergy {
                 analysis_step: mark.analysis_step,
                 cycle: mark.cycle,
@@ -334,23 +369,18 @@ impl EnergyReport {
                 terms: (mark.total - cycle_start).into(),
             });
             cycle_start = mark.total;
-            let step_ends = self
-                .marks
-                .get(i + 1)
-                .is_none_or(|next| next.analysis_step != mark.analysis_step);
-            if step_ends {
-                let name = self.step_names.get(mark.analysis_step.wrapping_sub(1));
-                steps.push(StepEnergy {
-                    name: name.unwrap_or(&mark.name),
-                    analysis_step: mark.analysis_step,
-                    terms: (mark.total - step_start).into(),
-                });
-                step_start = mark.total;
-            }
         }
+        let steps = self.steps().into_iter().map(|(mark, change)| {
+            let name = self.step_names.get(mark.analysis_step.wrapping_sub(1));
+            StepEnergy {
+                name: name.unwrap_or(&mark.name),
+                analysis_step: mark.analysis_step,
+                terms: change.into(),
+            }
+        });
         EnergyJson {
             total: self.total().into(),
-            steps,
+            steps: steps.collect(),
             cycles,
         }
     }
@@ -489,6 +519,7 @@ mod tests {
                 ("z_support".into(), Force { x: 1.0, y: -2.0 }),
                 ("a_support".into(), Force::default()),
             ]),
+            displacements: Named::default(),
             contact: Named::default(),
         });
         let dir = tempfile::tempdir().unwrap();

@@ -11,6 +11,7 @@ use super::atomic::write_bytes;
 use super::csv::{Cell, CsvTable, write_csv};
 use super::pvd::{PvdEntry, write_pvd};
 use super::restart::{OutputState, encode_record};
+use super::vtm::{VtmBlock, write_vtm};
 use super::vtu::write_vtu_with;
 use crate::solver::state::{LoopState, Progress, RunStatistics, Solution};
 use crate::{Error, Result};
@@ -23,6 +24,8 @@ pub enum Content {
     /// A table with text or empty cells.
     Table(CsvTable<Cell>),
     Pvd(Vec<PvdEntry>),
+    /// A multiblock file naming a frame's VTU files.
+    Vtm(Vec<VtmBlock>),
     /// A file's text, already formatted.
     Text(Vec<u8>),
     /// Rows to append to a growing file ([`super::append::AppendedFile`]).
@@ -39,6 +42,7 @@ impl Content {
             Content::Csv(table) => write_csv(path, table),
             Content::Table(table) => write_csv(path, table),
             Content::Pvd(entries) => write_pvd(path, entries),
+            Content::Vtm(blocks) => write_vtm(path, blocks),
             Content::Record(bytes) | Content::Text(bytes) => write_bytes(path, bytes),
             Content::Append(append) => append.write(path),
         }

@@ -6,7 +6,7 @@
 use crate::Error;
 use crate::Result;
 use crate::config::{Component, QuantityKind, QuantitySpec, Statistic};
-use crate::contact::InterfaceState;
+use crate::contact::{ContactStatus, InterfaceState};
 use crate::element::Analysis;
 use crate::element::interface6::interface_point;
 use crate::element::set::INTERFACE_POINTS;
@@ -36,10 +36,7 @@ pub fn evaluate(quantities: &[QuantitySpec], model: &Model, step: &StepResult) -
         let value = match q.kind {
             QuantityKind::Reaction => {
                 let name = q.support.as_deref().unwrap_or_default();
-                let i = model
-                    .supports
-                    .iter()
-                    .position(|s| s.name == name)
+                let i = support_index(model, name)
                     .ok_or_else(|| quantity_error(q, format!("no support '{name}'")))?;
                 reactions(model, step.internal_force, step.external_force)[i][comp(q)]
             }
@@ -167,6 +164,58 @@ pub fn evaluate(quantities: &[QuantitySpec], model: &Model, step: &StepResult) -
         values.push(value);
     }
     Ok(values)
+}
+
+/// What a contact pair does at a state: the extent of its sticking, slipping and open parts
+/// (lengths along side B in mm in a plane analysis, areas ∫ 2πr dl in mm² in axisymmetry: they
+/// add up to the pair's length or area) and the friction it dissipated since the start,
+/// ∫ D dA in N·mm (D the points' accumulated ∫ p_T du_Tᵖ, counting the cycles a wear jump
+/// stands for; per unit thickness as the forces are).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PairQuantities {
+    pub stick: f64,
+    pub slip: f64,
+    pub open: f64,
+    pub dissipation: f64,
+}
+
+/// The [`PairQuantities`] of every pair of `model` at interface `states`.
+pub fn pair_quantities(model: &Model, states: &[InterfaceState]) -> Vec<PairQuantities> {
+    // A unit thickness turns the area weight into the length weight, also on the axis.
+    let plane = Analysis::PlaneStrain { thickness: 1.0 };
+    let extent = if model.analysis.is_axisymmetric() {
+        &model.analysis
+    } else {
+        &plane
+    };
+    let mut out = vec![PairQuantities::default(); model.interface.pairs.len()];
+    for (e, element) in model.interface.elements.iter().enumerate() {
+        let q = &mut out[element.pair as usize];
+        for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
+            let state = &states[e * INTERFACE_POINTS + g];
+            let d = interface_point(extent, &element.b_coords, xi, w).da;
+            *match state.status {
+                ContactStatus::Stick => &mut q.stick,
+                ContactStatus::Slip => &mut q.slip,
+                ContactStatus::Open => &mut q.open,
+            } += d;
+            let da = interface_point(&model.analysis, &element.b_coords, xi, w).da;
+            q.dissipation += state.history.dissipation * da;
+        }
+    }
+    out
+}
+
+/// The support called `name`: by its name, else by its group when one support holds it.
+fn support_index(model: &Model, name: &str) -> Option<usize> {
+    let supports = &model.supports;
+    supports.iter().position(|s| s.name == name).or_else(|| {
+        let mut by_group = supports.iter().enumerate().filter(|(_, s)| s.group == name);
+        match (by_group.next(), by_group.next()) {
+            (Some((i, _)), None) => Some(i),
+            _ => None,
+        }
+    })
 }
 
 /// Calls `f(element, point, geometry)` for every integration point of pair `p`.

@@ -51,6 +51,14 @@ pub enum RunFile<'a> {
     Bodies(usize),
     /// `interface_NNNN.vtu` of an output frame.
     Interface(usize),
+    /// `frame_NNNN.vtm`, the multiblock file of an output frame that `results.pvd` lists:
+    /// its bodies and contact pairs by name.
+    Frame(usize),
+    /// `bodies_NNNN_K.vtu`: body K (1-based) of an output frame, in a model of several bodies.
+    Body(usize, usize),
+    /// `interface_NNNN_K.vtu`: contact pair K (1-based) of an output frame, in a model of
+    /// several pairs.
+    Pair(usize, usize),
     /// `contact_<pair>_NNNN.csv` of an output frame.
     Contact(&'a str, usize),
     /// The fretting tables (`hysteresis_<pair>.csv`, `point_loops_<pair>.csv`, `cycles.csv`,
@@ -77,6 +85,9 @@ impl RunFile<'_> {
         match *self {
             RunFile::Bodies(step) => format!("bodies_{step:04}.vtu"),
             RunFile::Interface(step) => format!("interface_{step:04}.vtu"),
+            RunFile::Frame(step) => format!("frame_{step:04}.vtm"),
+            RunFile::Body(step, k) => format!("bodies_{step:04}_{k}.vtu"),
+            RunFile::Pair(step, k) => format!("interface_{step:04}_{k}.vtu"),
             RunFile::Contact(pair, step) => format!("contact_{pair}_{step:04}.csv"),
             RunFile::Fretting(FrettingTable::Hysteresis(pair)) => format!("hysteresis_{pair}.csv"),
             RunFile::Fretting(FrettingTable::PointLoops(pair)) => {
@@ -92,18 +103,27 @@ impl RunFile<'_> {
     }
 }
 
-/// The output frame of a step file's name (`bodies_NNNN.vtu`, `interface_NNNN.vtu`,
+/// The output frame of a step file's name (`bodies_NNNN.vtu`, `interface_NNNN.vtu`, their
+/// parts `bodies_NNNN_K.vtu`, `interface_NNNN_K.vtu`, `frame_NNNN.vtm`,
 /// `contact_<pair>_NNNN.csv` for a pair that `is_pair` accepts; at least four digits).
 fn step_of_file(name: &str, is_pair: impl Fn(&str) -> bool) -> Option<usize> {
+    let is_number = |d: &str| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit());
     let digits = ["bodies_", "interface_"]
         .iter()
-        .find_map(|p| name.strip_prefix(p)?.strip_suffix(".vtu"))
+        .find_map(|p| {
+            let rest = name.strip_prefix(p)?.strip_suffix(".vtu")?;
+            match rest.split_once('_') {
+                Some((digits, part)) => is_number(part).then_some(digits),
+                None => Some(rest),
+            }
+        })
+        .or_else(|| name.strip_prefix("frame_")?.strip_suffix(".vtm"))
         .or_else(|| {
             let rest = name.strip_prefix("contact_")?.strip_suffix(".csv")?;
             let (pair, digits) = rest.rsplit_once('_')?;
             is_pair(pair).then_some(digits)
         })?;
-    if digits.len() >= 4 && digits.bytes().all(|b| b.is_ascii_digit()) {
+    if digits.len() >= 4 && is_number(digits) {
         digits.parse().ok()
     } else {
         None
@@ -472,6 +492,9 @@ mod tests {
         for name in [
             "bodies_0001.vtu",
             "interface_12345.vtu",
+            "bodies_0001_2.vtu",
+            "interface_0003_1.vtu",
+            "frame_0004.vtm",
             "contact_fit_0007.csv",
             "contact_a_b_0007.csv",
             "hysteresis_fit.csv",
@@ -487,6 +510,8 @@ mod tests {
             "contact_other_0001.csv",
             "bodies_01.vtu",
             "bodies_0001.vtu.bak",
+            "bodies_0001_x.vtu",
+            "frame_01.vtm",
             "notes.txt",
         ] {
             assert!(!is_run_file(name, &pairs), "{name}");
@@ -495,6 +520,8 @@ mod tests {
             step_of_file("contact_a_b_0012.csv", |p| pairs.iter().any(|q| q == p)),
             Some(12)
         );
+        assert_eq!(step_of_file("bodies_0012_3.vtu", |_| false), Some(12));
+        assert_eq!(step_of_file("frame_0012.vtm", |_| false), Some(12));
         assert_eq!(
             temporary_of(".bodies_0001.vtu.a1B2c3.tmp"),
             Some("bodies_0001.vtu")

@@ -1,13 +1,17 @@
 //! The columns of `history.csv`: one row per output frame with the load factors, the solver's
 //! counters, the reactions, the contact resultants, the requested quantities, where the frame
-//! lies in the load history and the energy balance.
+//! lies in the load history, the energy balance, the prescribed displacements of the driven
+//! supports and per contact pair its stick, slip and open extent and its dissipation. Supports,
+//! loads and pairs are named by the user's `name` (their group where they have none), as in
+//! `summary.json` and the log.
 
 use std::io::BufRead;
 use std::path::Path;
 
 use crate::config::Case;
-use crate::model::{Model, Schedule};
-use crate::output::summary::{ContactResultant, Force, Named, StepSummary};
+use crate::model::Model;
+use crate::output::summary::{ContactResultant, Displacement, Force, Named, StepSummary};
+use crate::post::quantities::PairQuantities;
 use crate::solver::state::StepResult;
 use crate::{Error, Result};
 
@@ -18,9 +22,25 @@ pub(super) struct HistoryLayout {
     load_factors: Vec<usize>,
     supports: usize,
     pairs: usize,
+    /// The prescribed components of the driven supports: (support, component).
+    driven: Vec<(usize, usize)>,
+    /// Index of the first per-pair quantity ([`PAIR_QUANTITIES`]).
+    pair_start: usize,
     /// Values of a row.
     columns: usize,
 }
+
+/// Trailing columns per contact pair, `<pair>_<quantity>`: the extent of its sticking,
+/// slipping and open parts (`_length` in mm along side B in a plane analysis, `_area` in mm²
+/// in axisymmetry), the friction it dissipated since the start and since the previous row
+/// (N·mm).
+const PAIR_QUANTITIES: [&str; 5] = [
+    "stick",
+    "slip",
+    "open",
+    "dissipation",
+    "dissipation_increment",
+];
 
 /// Leading columns: step, time, load_factor, then the per-load factors, then these.
 const COUNTERS: [&str; 4] = ["increments", "cutbacks", "iterations", "residual"];
@@ -62,10 +82,37 @@ impl HistoryLayout {
         columns.extend(case.history.iter().map(|q| q.name.clone()));
         columns.extend(FRAME_COLUMNS.map(String::from));
         columns.extend(ENERGY_COLUMNS.map(String::from));
+        let mut driven = Vec::new();
+        for (i, s) in model.supports.iter().enumerate() {
+            for (c, value) in s.values.iter().enumerate() {
+                if s.is_driven() && value.is_some() {
+                    columns.push(format!("displacement_{}_{}", s.name, ["x", "y"][c]));
+                    driven.push((i, c));
+                }
+            }
+        }
+        let pair_start = columns.len();
+        let extent = if model.analysis.is_axisymmetric() {
+            "area"
+        } else {
+            "length"
+        };
+        for p in &model.interface.pairs {
+            for quantity in PAIR_QUANTITIES {
+                let unit = if quantity.contains("dissipation") {
+                    String::new()
+                } else {
+                    format!("_{extent}")
+                };
+                columns.push(format!("{}_{quantity}{unit}", p.name));
+            }
+        }
         let layout = Self {
             load_factors,
             supports: model.supports.len(),
             pairs: model.interface.pairs.len(),
+            driven,
+            pair_start,
             columns: columns.len(),
         };
         (layout, columns)
@@ -76,14 +123,23 @@ impl HistoryLayout {
         self.columns
     }
 
-    /// The row of a state at pseudo-time `time`.
+    /// The friction pair `p` had dissipated at the row `row` (0 before the first row).
+    pub(super) fn dissipation(&self, row: &[f64], p: usize) -> f64 {
+        let column = self.pair_start + p * PAIR_QUANTITIES.len() + 3;
+        row.get(column).copied().unwrap_or(0.0)
+    }
+
+    /// The row of a state at pseudo-time `time`; `pairs` holds per contact pair its
+    /// [`PairQuantities`] and the friction dissipated since the previous row.
     pub(super) fn row(
         &self,
-        schedule: &Schedule,
+        model: &Model,
         step: &StepResult,
         time: f64,
         [reactions, resultants, requested]: [&[f64]; 3],
+        pairs: &[(PairQuantities, f64)],
     ) -> Vec<f64> {
+        let schedule = &model.schedule;
         let residual = *step.newton.residuals.last().unwrap_or(&0.0);
         let mut row = vec![step.step as f64, time, step.load_factor];
         row.extend(self.load_factors.iter().map(|&k| schedule.value(k, time)));
@@ -110,6 +166,13 @@ impl HistoryLayout {
             energy.dissipation(),
             energy.imbalance(),
         ]);
+        row.extend(self.driven.iter().map(|&(i, c)| {
+            let support = &model.supports[i];
+            support.values[c].unwrap_or_default() * schedule.value(support.amplitude, time)
+        }));
+        for (q, increment) in pairs {
+            row.extend([q.stick, q.slip, q.open, q.dissipation, *increment]);
+        }
         row
     }
 
@@ -120,6 +183,7 @@ impl HistoryLayout {
             std::array::from_fn(|i| row[counters + i]);
         let reactions = &row[counters + COUNTERS.len()..];
         let resultants = &reactions[2 * self.supports..2 * self.supports + 4 * self.pairs];
+        let states = &row[self.pair_start..];
         StepSummary {
             step: row[0] as usize,
             load_factor: row[2],
@@ -135,24 +199,48 @@ impl HistoryLayout {
                     .map(|(s, r)| (s.name.clone(), Force { x: r[0], y: r[1] }))
                     .collect(),
             ),
+            displacements: self.displacements(model, &row[self.pair_start - self.driven.len()..]),
             contact: Named(
                 model
                     .interface
                     .pairs
                     .iter()
                     .zip(resultants.chunks_exact(4))
-                    .map(|(p, r)| {
+                    .zip(states.chunks_exact(PAIR_QUANTITIES.len()))
+                    .map(|((p, r), q)| {
                         let resultant = ContactResultant {
                             normal_force: r[0],
                             tangential_force: r[1],
                             force_on_b_x: r[2],
                             force_on_b_y: r[3],
+                            stick: q[0],
+                            slip: q[1],
+                            open: q[2],
+                            dissipation: q[3],
+                            dissipation_increment: q[4],
                         };
                         (p.name.clone(), resultant)
                     })
                     .collect(),
             ),
         }
+    }
+}
+
+impl HistoryLayout {
+    /// The prescribed displacements of the driven supports, from their `values` in the
+    /// order of [`Self::driven`].
+    fn displacements(&self, model: &Model, values: &[f64]) -> Named<Displacement> {
+        let mut out: Vec<(String, Displacement)> = Vec::new();
+        for (&(i, c), &v) in self.driven.iter().zip(values) {
+            let name = &model.supports[i].name;
+            if out.last().is_none_or(|(last, _)| last != name) {
+                out.push((name.clone(), Displacement::default()));
+            }
+            let d = &mut out.last_mut().expect("pushed above").1;
+            *[&mut d.x, &mut d.y][c] = Some(v);
+        }
+        Named(out)
     }
 }
 

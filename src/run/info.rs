@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use super::RunOptions;
 use super::folder::{OutputFolder, OutputMode, RunFile};
 use crate::config::Case;
+use crate::model::PenaltyDefault;
 use crate::output::atomic::write_text;
 use crate::{Error, Result};
 
@@ -32,6 +33,9 @@ pub struct RunInfo {
     /// `running`, `converged`, `failed` or `interrupted`.
     pub status: &'static str,
     pub error: Option<String>,
+    /// The penalty stiffnesses the model building set for laws that leave them out, pair by
+    /// pair (empty until the model is built).
+    pub penalty_defaults: Vec<PenaltyDefault>,
 }
 
 impl RunInfo {
@@ -50,6 +54,7 @@ impl RunInfo {
             resumed: options.mode == OutputMode::Resume,
             status: "running",
             error: None,
+            penalty_defaults: Vec::new(),
         }
     }
 

@@ -223,8 +223,9 @@ pub fn run_with(
     let case_text = std::fs::read_to_string(&case.path).map_err(|e| Error::io(&case.path, e))?;
     let folder = OutputFolder::open(out_dir, options.mode, &folder_plan(case))?;
     folder_ready(&folder)?;
-    let mut info = RunInfo::new(case, &case_text, options);
+    let info = RunInfo::new(case, &case_text, options);
     info.write(&folder)?;
+    let info = std::cell::RefCell::new(info);
     let restart = Restart {
         case_text,
         resume: folder.resumable(),
@@ -234,9 +235,11 @@ pub fn run_with(
             folder: &folder,
             progress: options.progress,
             restart: Some(&restart),
+            info: Some(&info),
         };
         run_session(case, spec, mesh, mesh_seconds, &session, |_, _| Ok(()))
     });
+    let mut info = info.into_inner();
     info.finish(&result);
     if let Err(e) = info.write(&folder) {
         tracing::warn!("{e}");
@@ -294,16 +297,19 @@ pub fn run_model(
         folder,
         progress,
         restart: None,
+        info: None,
     };
     run_session(case, spec, mesh, mesh_seconds, &session, on_step)
 }
 
-/// Where and how a run writes: its folder, the progress bar, and the restart records (none
-/// for a study's levels).
+/// Where and how a run writes: its folder, the progress bar, the restart records (none
+/// for a study's levels) and `run.json` (none for a study's levels), which records what the
+/// model building chose.
 struct Session<'a> {
     folder: &'a OutputFolder,
     progress: bool,
     restart: Option<&'a Restart>,
+    info: Option<&'a std::cell::RefCell<RunInfo>>,
 }
 
 /// A run that keeps restart records: the case file's text they are checked against, and
@@ -365,6 +371,10 @@ fn solve(
         model.analysis.name()
     );
     describe_model(summary, &model, model_seconds);
+    if let Some(info) = session.info {
+        info.borrow_mut().penalty_defaults = model.penalty_defaults.clone();
+        info.borrow().write(folder)?;
+    }
     let record = match session.restart {
         Some(r) if r.resume => Some(resume_record(&model, folder, &r.case_text)?),
         _ => None,

@@ -6,7 +6,7 @@ use crate::Result;
 use crate::element::Analysis;
 use crate::model::{Model, Schedule};
 use crate::output::atomic::write_atomically;
-use crate::output::summary::{ModelSize, Status, Summary};
+use crate::output::summary::{ModelSize, Named, Status, Summary};
 
 /// Records the analysis and size of the built `model` in `summary`.
 pub(super) fn describe_model(summary: &mut Summary, model: &Model, model_seconds: f64) {
@@ -60,6 +60,44 @@ pub(super) struct AnalysisStepSummary {
     cycles: usize,
     simulated_cycles: usize,
     cycles_per_jump: usize,
+    /// Work of the loads and prescribed displacements done in the step (N·mm; `null` until
+    /// the step's first cycle ended), as `energy.steps`' `external_work`.
+    external_work: Option<f64>,
+    /// Physical dissipation in the step (plastic, friction and wear work; N·mm), as
+    /// `energy.steps`' terms.
+    dissipation: Option<f64>,
+    /// Friction dissipated on each contact pair in the step (N·mm; its frames'
+    /// `dissipation_increment` summed, counting the cycles a wear jump stands for), by pair
+    /// name, up to the step's last converged frame.
+    contact_dissipation: Named<f64>,
+}
+
+impl AnalysisStepSummary {
+    /// The step with what the converged frames and energy marks of `summary` say of it.
+    fn with_results(&self, index: usize, summary: &Summary) -> Self {
+        let mut step = self.clone();
+        let energy = summary.energy.steps();
+        if let Some((_, change)) = energy.iter().find(|(m, _)| m.analysis_step == index + 1) {
+            step.external_work = Some(change.external_work);
+            step.dissipation = Some(change.dissipation());
+        }
+        // The steps are in order of their frame: the last one before frame `k`.
+        let before = |k: usize| {
+            let i = summary.steps.partition_point(|s| s.step < k);
+            i.checked_sub(1).map(|i| &summary.steps[i])
+        };
+        let last = before(self.first_frame + self.frames).filter(|s| s.step >= self.first_frame);
+        if let Some(last) = last {
+            let before = before(self.first_frame);
+            let pairs = last.contact.0.iter().map(|(name, c)| {
+                let start = before.and_then(|b| b.contact.0.iter().find(|(n, _)| n == name));
+                let start = start.map_or(0.0, |(_, s)| s.dissipation);
+                (name.clone(), c.dissipation - start)
+            });
+            step.contact_dissipation = Named(pairs.collect());
+        }
+        step
+    }
 }
 
 /// The analysis steps of a schedule as `summary.json` lists them.
@@ -73,6 +111,9 @@ pub(super) fn analysis_steps(schedule: &Schedule) -> Vec<AnalysisStepSummary> {
             cycles: s.cycles,
             simulated_cycles: s.simulated(),
             cycles_per_jump: s.cycles_per_jump,
+            external_work: None,
+            dissipation: None,
+            contact_dissipation: Named::default(),
         })
         .collect()
 }
@@ -82,7 +123,7 @@ pub(super) fn analysis_steps(schedule: &Schedule) -> Vec<AnalysisStepSummary> {
 struct SummaryFile<'a> {
     #[serde(flatten)]
     summary: &'a Summary,
-    analysis_steps: &'a [AnalysisStepSummary],
+    analysis_steps: Vec<AnalysisStepSummary>,
 }
 
 /// Writes the folder's `summary.json` (atomically).
@@ -92,9 +133,12 @@ pub(super) fn write_summary(
     folder: &OutputFolder,
 ) -> Result<()> {
     let path = folder.path(RunFile::Summary)?;
+    let analysis_steps = analysis_steps.iter().enumerate();
     let file = SummaryFile {
         summary,
-        analysis_steps,
+        analysis_steps: analysis_steps
+            .map(|(i, step)| step.with_results(i, summary))
+            .collect(),
     };
     // Streamed into the file: a run of many frames lists them all (~600 bytes each).
     write_atomically(&path, |w| {

@@ -10,6 +10,7 @@ use super::history::{HistoryLayout, read_rows};
 use super::progress::{RunBar, progress_bar};
 use crate::config::{Case, CycleFrames};
 use crate::model::Model;
+use crate::output::Grid;
 use crate::output::append::{self, AppendedFile};
 use crate::output::csv::GrowingCsv;
 use crate::output::pvd::PvdEntry;
@@ -17,10 +18,11 @@ use crate::output::restart::{
     ENERGY_MARKS, OutputState, Record, encode_energy_mark, read_energy_marks,
 };
 use crate::output::summary::{EnergyMark, Summary};
+use crate::output::vtm::VtmBlock;
 use crate::output::writer::{Content, RecordWriter};
 use crate::post::fretting::{FrettingTables, TracedPoint, trace_point};
 use crate::post::interface::{InterfaceOutput, resultants};
-use crate::post::quantities::evaluate;
+use crate::post::quantities::{evaluate, pair_quantities};
 use crate::post::{BodyPoints, StepInfo, reactions, step_grids};
 use crate::solver::newton::NewtonLog;
 use crate::solver::state::{Observer, Progress, Resume, Solution, StepResult};
@@ -211,10 +213,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         let timeline = self.model.schedule.timeline();
         for step in 1..resume.state.step {
             if self.vtu && (self.all_frames || timeline.is_end_frame(step)) {
-                let entries = frame_entries(self.model, step, step as f64);
-                self.out
-                    .series
-                    .extend(entries.into_iter().map(|(_, entry)| entry));
+                self.out.series.push(frame_entry(step, step as f64));
             }
         }
         self.folder.remove_steps_from(resume.state.step)?;
@@ -352,16 +351,8 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
                 step_grids(self.model, &self.points, &self.interface, step, info);
             post += t.elapsed().as_secs_f64();
             let t = Instant::now();
-            let grids = [Some(bodies), interface].into_iter().flatten();
-            for ((file, entry), grid) in frame_entries(self.model, step.step, time)
-                .into_iter()
-                .zip(grids)
-            {
-                self.out
-                    .records
-                    .queue(self.folder.path(file)?, Content::Vtu(grid));
-                entries.push(entry);
-            }
+            self.queue_frame(step.step, bodies, interface)?;
+            entries.push(frame_entry(step.step, time));
             vtu += t.elapsed().as_secs_f64();
         }
         let tables = if fields {
@@ -390,6 +381,72 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         Ok(row)
     }
 
+    /// Queues the VTU files of output frame `step` (the grids of its `bodies` and of its
+    /// `interface`, if the model has one), each body's and each pair's part of them in a model
+    /// of several, and the frame's multiblock file naming them.
+    fn queue_frame(&mut self, step: usize, bodies: Grid, interface: Option<Grid>) -> Result<()> {
+        let model = self.model;
+        let cells: Vec<u32> = model.continuum.cells.iter().map(|c| c.body).collect();
+        let names = model.bodies.iter().map(String::as_str);
+        let body_block = self.queue_parts(
+            "bodies",
+            bodies,
+            &cells,
+            names,
+            RunFile::Bodies(step),
+            |k| RunFile::Body(step, k),
+        )?;
+        let mut blocks = vec![body_block];
+        if let Some(interface) = interface {
+            let cells: Vec<u32> = model.interface.elements.iter().map(|e| e.pair).collect();
+            let names = model.interface.pairs.iter().map(|p| p.name.as_str());
+            blocks.push(self.queue_parts(
+                "contacts",
+                interface,
+                &cells,
+                names,
+                RunFile::Interface(step),
+                |k| RunFile::Pair(step, k),
+            )?);
+        }
+        let path = self.folder.path(RunFile::Frame(step))?;
+        self.out.records.queue(path, Content::Vtm(blocks));
+        Ok(())
+    }
+
+    /// Queues `grid` as `whole` and, when its cells belong to several `parts` (`part[c]` of
+    /// cell c), each part's cells as `part_file(k)` (k 1-based); returns the block `name`
+    /// of the frame's multiblock file that lists the parts by name.
+    fn queue_parts<'n>(
+        &mut self,
+        name: &str,
+        grid: Grid,
+        part: &[u32],
+        parts: impl ExactSizeIterator<Item = &'n str>,
+        whole: RunFile,
+        part_file: impl Fn(usize) -> RunFile<'static>,
+    ) -> Result<VtmBlock> {
+        let mut datasets = Vec::new();
+        if parts.len() == 1 {
+            datasets.extend(parts.map(|n| (n.to_string(), whole.name().into())));
+        } else {
+            for (k, part_name) in parts.enumerate() {
+                let keep: Vec<bool> = part.iter().map(|&p| p as usize == k).collect();
+                let file = part_file(k + 1);
+                let content = Content::Vtu(grid.subset(&keep));
+                self.out.records.queue(self.folder.path(file)?, content);
+                datasets.push((part_name.to_string(), file.name().into()));
+            }
+        }
+        self.out
+            .records
+            .queue(self.folder.path(whole)?, Content::Vtu(grid));
+        Ok(VtmBlock {
+            name: name.into(),
+            datasets,
+        })
+    }
+
     /// The history row of a state at pseudo-time `time`.
     fn row(&self, step: &StepResult, time: f64) -> Result<Vec<f64>> {
         let model = self.model;
@@ -401,7 +458,16 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             resultants.as_flattened(),
             &requested,
         ];
-        Ok(self.layout.row(&model.schedule, step, time, values))
+        let pairs = pair_quantities(model, &step.solution.interface_committed);
+        let pairs: Vec<_> = pairs
+            .into_iter()
+            .enumerate()
+            .map(|(p, q)| {
+                let before = self.layout.dissipation(&self.last_row, p);
+                (q, q.dissipation - before)
+            })
+            .collect();
+        Ok(self.layout.row(model, step, time, values, &pairs))
     }
 
     /// Queues the restart record of a converged increment (when the run keeps them), after
@@ -554,27 +620,13 @@ impl Drop for Committer {
     }
 }
 
-/// The VTU files of output frame `step` and their entries in the series at pseudo-time
-/// `time`: the bodies, and the interface when the model has one.
-fn frame_entries(model: &Model, step: usize, time: f64) -> Vec<(RunFile<'static>, PvdEntry)> {
-    let parts = [
-        ("bodies", RunFile::Bodies(step), true),
-        (
-            "interface",
-            RunFile::Interface(step),
-            !model.interface.elements.is_empty(),
-        ),
-    ];
-    let written = parts.into_iter().enumerate().filter(|(_, (.., has))| *has);
-    written
-        .map(|(part, (name, file, _))| {
-            let entry = PvdEntry {
-                time,
-                part: part as u32,
-                name: name.into(),
-                file: file.name().into(),
-            };
-            (file, entry)
-        })
-        .collect()
+/// The entry of output frame `step` in the series at pseudo-time `time`: its multiblock
+/// file, which names the frame's bodies and contact pairs.
+fn frame_entry(step: usize, time: f64) -> PvdEntry {
+    PvdEntry {
+        time,
+        part: 0,
+        name: "model".into(),
+        file: RunFile::Frame(step).name().into(),
+    }
 }
