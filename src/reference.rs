@@ -253,6 +253,14 @@ impl Page {
             for (value, text) in choices {
                 let _ = write!(meaning, "<br>{value}: {}", cell(&text));
             }
+            // An array of tables (`kinematic = [{ C = .., gamma = .. }]`) documents its
+            // element's keys like a nested table.
+            let target = match target.get("items") {
+                Some(items) if primary_type(&target).as_deref() == Some("array") => {
+                    self.resolve(items)
+                }
+                _ => target,
+            };
             if target["properties"].is_object() || tagged_variants(&target).is_some() {
                 let child = format!("{path}.{key}");
                 let _ = write!(meaning, "<br>See `{child}` below.");
