@@ -82,15 +82,15 @@ prandtl: deps build
 	@echo "results: out/prandtl (results.pvd for ParaView, *.png, history.csv: mean pressure = -reaction_top_y / 10 mm)"
 
 shrink_fit: deps build
-	$(BIN) run pipelines/shrink_fit.toml --out out/shrink_fit --force
-	$(PYTHON) pipelines/plot_fields.py out/shrink_fit --case pipelines/shrink_fit.toml
+	$(BIN) run examples/shrink_fit/shrink_fit.toml --out out/shrink_fit --force
+	$(PYTHON) pipelines/plot_fields.py out/shrink_fit --case examples/shrink_fit/shrink_fit.toml
 	@echo "results: out/shrink_fit (results.pvd for ParaView, *.png, contact_fit_*.csv, history.csv)"
 
 # `make fretting`: the case meshes its own .geo ([mesh] geo), runs the press-in and the cyclic
 # step with wear, then report.py draws the figures (plot_hysteresis.py) and writes REPORT.md,
 # and check_fretting.py checks the files against each other. Your own joint:
 # make fretting FRETTING_CASE=my_case.toml [FRETTING_OUT=out/my_case]
-FRETTING_CASE ?= pipelines/fretting/tapered_fretting.toml
+FRETTING_CASE ?= examples/fretting/tapered_fretting.toml
 FRETTING_OUT  ?= out/fretting
 fretting: deps build
 	$(BIN) run $(FRETTING_CASE) --out $(FRETTING_OUT) --force
@@ -111,10 +111,11 @@ test: deps
 	    test -f $$d/results.pvd && { $(PYTHON) pipelines/check_output.py $$d >/dev/null || exit 1; }; \
 	  done; \
 	done
-	@for c in thick_cylinder shrink_fit shrink_fit_split; do \
-	  $(BIN) run pipelines/$$c.toml --out build/test/$$c --force >/dev/null && \
-	  $(PYTHON) pipelines/check_output.py build/test/$$c || exit 1; \
-	  $(PYTHON) pipelines/plot_fields.py build/test/$$c >/dev/null 2>&1 || { echo "plot_fields.py failed on $$c"; exit 1; }; \
+	@for c in pipelines/thick_cylinder examples/shrink_fit/shrink_fit examples/shrink_fit/shrink_fit_split; do \
+	  n=$$(basename $$c); \
+	  $(BIN) run $$c.toml --out build/test/$$n --force >/dev/null && \
+	  $(PYTHON) pipelines/check_output.py build/test/$$n || exit 1; \
+	  $(PYTHON) pipelines/plot_fields.py build/test/$$n >/dev/null 2>&1 || { echo "plot_fields.py failed on $$n"; exit 1; }; \
 	done
 	$(PYTHON) pipelines/fretting/selftest.py >/dev/null
 	$(PYTHON) pipelines/fretting/check_fretting.py --quick build/test/fretting >build/test/fretting.txt || { cat build/test/fretting.txt; exit 1; }
@@ -127,25 +128,25 @@ doc:
 	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --no-deps
 
 ## --- fitting and sweeps --------------------------------------------------------
-# `make fit-example`: the README's worked example (pipelines/fit/joint.toml) -> out/fit/joint.
+# `make fit-example`: the README's worked example (examples/fit/joint.toml) -> out/fit/joint.
 OUT_FIT ?= out/fit
 fit-example sweep-test: export ASPERITY_PIPELINES := $(CURDIR)/pipelines
 fit-example: venv build
-	$(BIN) fit pipelines/fit/joint.toml --out $(OUT_FIT)/joint
+	$(BIN) fit examples/fit/joint.toml --out $(OUT_FIT)/joint
 	@test -s $(OUT_FIT)/joint/fit.png && test -s $(OUT_FIT)/joint/residuals.png || { echo "fit-example: plots missing"; exit 1; }
 
 gnu-parallel:
 	@command -v parallel >/dev/null || { echo "installing parallel (apt-get)"; \
 	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq parallel >/dev/null; }
 
-# `make sweep-test`: the specimen sweep (pipelines/sweep/specimen.toml) run by the local pool and
+# `make sweep-test`: the specimen sweep (examples/sweep/specimen.toml) run by the local pool and
 # by GNU parallel from jobs.txt must give identical tables; array.sbatch is checked for its
 # array range, per-task command and resource lines.
 SWEEP_TEST := build/test/sweep
 sweep-test: gnu-parallel venv build
 	@rm -rf $(SWEEP_TEST) && mkdir -p $(SWEEP_TEST)
-	$(BIN) sweep plan pipelines/sweep/specimen.toml --out $(SWEEP_TEST)/local
-	$(BIN) sweep plan pipelines/sweep/specimen.toml --out $(SWEEP_TEST)/parallel
+	$(BIN) sweep plan examples/sweep/specimen.toml --out $(SWEEP_TEST)/local
+	$(BIN) sweep plan examples/sweep/specimen.toml --out $(SWEEP_TEST)/parallel
 	$(BIN) sweep run $(SWEEP_TEST)/local --jobs 2
 	parallel --will-cite --jobs 2 --halt now,fail=1 < $(SWEEP_TEST)/parallel/jobs.txt >/dev/null
 	$(BIN) sweep collect $(SWEEP_TEST)/local
@@ -194,7 +195,7 @@ convergence: deps build
 bench: gmsh venv build
 	$(CARGO) bench --bench elastic
 	$(CARGO) bench --bench contact
-	$(PYTHON) pipelines/compare_algorithms.py pipelines/tapered_joint/coulomb.toml pipelines/tapered_joint/compliant_1.toml pipelines/tapered_joint/compliant_2.toml
+	$(PYTHON) pipelines/compare_algorithms.py examples/tapered_joint/coulomb.toml examples/tapered_joint/compliant_1.toml examples/tapered_joint/compliant_2.toml
 	$(MAKE) bench-scale
 
 # ~1M-unknown frictional tapered press fit, 10 increments: breakdown + peak RSS -> BENCHMARKS.md
@@ -281,7 +282,7 @@ example-fit: fit-example
 SWEEP_OUT ?= out/sweep/specimen
 example-sweep: export ASPERITY_PIPELINES := $(CURDIR)/pipelines
 example-sweep: venv build
-	$(BIN) sweep plan pipelines/sweep/specimen.toml --out $(SWEEP_OUT)
+	$(BIN) sweep plan examples/sweep/specimen.toml --out $(SWEEP_OUT)
 	$(BIN) sweep run $(SWEEP_OUT)
 	$(BIN) sweep collect $(SWEEP_OUT)
 	@echo "results: $(SWEEP_OUT) (sweep.csv, force.png, iterations.png; runs/NNNN/ one folder per run)"

@@ -1,6 +1,6 @@
 // Benchmark against CalculiX (benches/calculix): shrink fit of a solid shaft (0 <= r <= b)
 // in a hub (b <= r <= c), axisymmetric slice of height L (x = r, y = z); the geometry of
-// geo/shrink_fit.geo (recipe 0: coincident but distinct nodes on r = b), kept separate so
+// examples/shrink_fit/shrink_fit.geo (recipe 0: coincident but distinct nodes on r = b), kept separate so
 // that the benchmark does not change when the example does.
 // Physical groups: surfaces "shaft", "hub"; curves "shaft_ends", "hub_ends", "hub_outer",
 // "shaft_outer" (contact side A), "hub_bore" (contact side B); point "probe" = (c, 0), where

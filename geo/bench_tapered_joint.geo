@@ -1,5 +1,5 @@
 // Benchmark against CalculiX (benches/calculix): tapered (conical) press fit, axisymmetric
-// (x = r, y = z); the geometry of geo/tapered_joint.geo (paper §4.2), kept separate so that
+// (x = r, y = z); the geometry of examples/tapered_joint/tapered_joint.geo (paper §4.2), kept separate so that
 // the benchmark does not change when the example does. The shaft is pushed into the sleeve by
 // a pressure on its top face; the sleeve rests on its bottom face.
 // Two bodies with coincident but distinct nodes on the cone (Geometry.AutoCoherence = 0).

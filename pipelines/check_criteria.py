@@ -15,7 +15,7 @@ an older binary on the default case to report its Newton iterations ("before").
     .venv/bin/python pipelines/check_criteria.py                 # all cases, table on stdout
     .venv/bin/python pipelines/check_criteria.py --only rigid_punch --markdown table.md
 
-Shipped cases: the TOML files under pipelines/ (examples, pipelines, convergence-study base
+Shipped cases: the TOML files under examples/ and pipelines/ (examples, pipelines, convergence-study base
 levels) and benches/calculix/cases/ (at the --bench-size mesh factor of
 benches/calculix/bench_calculix.py's quick sizes unless --full).
 """
@@ -41,7 +41,7 @@ TIGHT = {"force_tolerance": 1e-10, "displacement_tolerance": 1e-10}
 
 
 def shipped_cases() -> list[Path]:
-    pipelines = sorted((ROOT / "pipelines").rglob("*.toml"))
+    pipelines = sorted((ROOT / "pipelines").rglob("*.toml")) + sorted((ROOT / "examples").rglob("*.toml"))
     bench = sorted((ROOT / "benches" / "calculix" / "cases").glob("*.toml"))
     return pipelines + bench
 

@@ -6,7 +6,7 @@ slice model"), and the self-locking of the joint on unloading (tan gamma <= mu).
 
 Usage: tapered_joint.py [--out out/tapered_joint] [--size S] [--quick]
 
-Runs pipelines/tapered_joint/{coulomb,compliant_1,compliant_2}.toml, and the Coulomb case
+Runs examples/tapered_joint/{coulomb,compliant_1,compliant_2}.toml, and the Coulomb case
 with mu = 0.1 < tan gamma (not self-locking) for contrast, in parallel, and writes into the
 output folder: one run folder per case (VTU/PVD, CSV), force_displacement.png,
 contact_stress.png, the contour pictures of each run, and REPORT.md. Exits non-zero when a
@@ -33,12 +33,13 @@ from asperity_tools import ROOT, read_contact, read_history, run_cases, rust_exp
 
 RESIDUAL_TOLERANCE = 5e-4  # [solver] residual_tolerance default (README): equilibrium accuracy
 HERE = Path(__file__).resolve().parent
+CASES_DIR = HERE.parent / "examples" / "tapered_joint"
 CASES = {
     "coulomb": "Coulomb friction, no interface compliance",
     "compliant_1": "interface compliance, c_N = 5e-4 mm/MPa^0.5",
     "compliant_2": "interface compliance, c_N = 1e-3 mm/MPa^0.5",
 }
-# Geometry and material of the case files (geo/tapered_joint.geo parameters).
+# Geometry and material of the case files (examples/tapered_joint/tapered_joint.geo parameters).
 TAPER, L, R_M, R_O, E, NU, MU, P0 = 0.2, 40.0, 20.0, 40.0, 206000.0, 0.3, 0.2, 10.0
 R_TOP = R_M + 0.5 * L * TAPER
 
@@ -102,10 +103,10 @@ def main() -> None:
     args = parser.parse_args()
     size = 2.0 if args.quick and args.size is None else args.size
     out = args.out.resolve()
-    runs = [(variant(HERE / "tapered_joint" / f"{c}.toml", out / "cases" / f"{c}.toml", size=size), out / c) for c in CASES]
+    runs = [(variant(CASES_DIR / f"{c}.toml", out / "cases" / f"{c}.toml", size=size), out / c) for c in CASES]
     # Not self-locking: unloaded only to 10 % of the load, since at F = 0 the shaft would
     # slide out until it is loose and has no equilibrium position.
-    loose = variant(HERE / "tapered_joint" / "coulomb.toml", out / "cases" / "loose.toml",
+    loose = variant(CASES_DIR / "coulomb.toml", out / "cases" / "loose.toml",
                     {"contact[0].law.mu_m": 0.1, "steps.factors[-1]": 0.1}, size=size)
     all_summaries = run_cases(runs + [(loose, out / "loose")])
     summaries = dict(zip(CASES, all_summaries))
@@ -185,7 +186,7 @@ def main() -> None:
 
     stats = table(["case", "steps / iterations", "time"], [[name, *solver_statistics(summaries[name])] for name in CASES])
     write_report(out / "REPORT.md", "Tapered joint (paper §4.2)", [
-        ("Set-up", f"""Axisymmetric conical press fit, `geo/tapered_joint.geo`: taper 1:2.5 read as tan γ = {TAPER}
+        ("Set-up", f"""Axisymmetric conical press fit, `examples/tapered_joint/tapered_joint.geo`: taper 1:2.5 read as tan γ = {TAPER}
 (`docs/theory.md`, "The paper's examples: data and choices"), contact length L = {L} mm,
 mean contact radius r_m = {R_M} mm, sleeve outer radius
 R_o = {R_O} mm, solid shaft; E = {E:.0f} MPa, ν = {NU}; μ = {MU}. The shaft is pushed in by

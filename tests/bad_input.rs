@@ -831,10 +831,9 @@ fn shipped_case_files_pass_the_checks() {
         }
     }
     let mut found = Vec::new();
-    cases(
-        &Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines"),
-        &mut found,
-    );
+    for dir in ["pipelines", "examples"] {
+        cases(&Path::new(env!("CARGO_MANIFEST_DIR")).join(dir), &mut found);
+    }
     assert!(found.len() >= 10, "{found:?}");
     for path in found {
         // Fit and sweep files (`asperity fit`, `asperity sweep`) live beside the cases; a

@@ -3,7 +3,7 @@
 //! jump (about 20 simulated cycles), ends with the same wear-depth profile to 2 % of its
 //! largest depth, the same worn volume and the same dissipation in its last cycle to 2 %.
 //!
-//! The case is the shipped tapered fretting joint (`pipelines/fretting/tapered_fretting.toml`,
+//! The case is the shipped tapered fretting joint (`examples/fretting/tapered_fretting.toml`,
 //! with its 5 µm angular mismatch) on a coarse mesh with 200 service cycles of 4 increments
 //! and an Archard coefficient large enough (1e-4 mm²/N) that the wear of the 200 cycles,
 //! ~0.56 µm, is a sizeable part of the interface's elastic closure: the pressure, the slip
@@ -37,12 +37,15 @@ fn root() -> PathBuf {
 /// The fretting case, coarse and short, with `jump` as its service step's cycles_per_jump
 /// (the default when `None`).
 fn case_text(jump: Option<usize>) -> String {
-    let text = std::fs::read_to_string(root().join("pipelines/fretting/tapered_fretting.toml"))
+    let text = std::fs::read_to_string(root().join("examples/fretting/tapered_fretting.toml"))
         .expect("the shipped fretting case");
-    let geo = root().join("geo/tapered_joint.geo");
+    let geo = root().join("examples/tapered_joint/tapered_joint.geo");
     let jump_line = jump.map_or_else(String::new, |n| format!("cycles_per_jump = {n}"));
     let replaced = text
-        .replace("../../geo/tapered_joint.geo", &geo.display().to_string())
+        .replace(
+            "../tapered_joint/tapered_joint.geo",
+            &geo.display().to_string(),
+        )
         .replace("cycles = 1000000", "cycles = 200")
         .replace("increments = 10", "increments = 4")
         .replace("coefficient = 4e-7", "coefficient = 1e-4");

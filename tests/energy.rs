@@ -407,13 +407,14 @@ fn summary_and_history_report_the_balance() {
 
 /// A resumed run rebuilds `summary.json`'s energy from its restart record: resuming a
 /// finished run (the record of its last increment) reports the same energy entries. The
-/// shrink fit of `pipelines/shrink_fit.toml`: its interference stores energy in the bodies
+/// shrink fit of `examples/shrink_fit/shrink_fit.toml`: its interference stores energy in the bodies
 /// without external work, which the interface energy balances.
 #[test]
 fn resume_keeps_the_energy_report() {
     use asperity::run::folder::OutputMode;
     use asperity::run::{RunOptions, run_with};
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/shrink_fit.toml");
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples/shrink_fit/shrink_fit.toml");
     let case = Case::from_file(&path).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let energy = |mode| {

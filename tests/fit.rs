@@ -272,7 +272,7 @@ fn r_and_s_from_one_pressure_are_not_identifiable() {
 /// law's closed forms (independently of asperity), with 1 % + 0.005 MPa noise.
 #[test]
 fn shipped_example_brackets_its_generating_parameters() {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("pipelines/fit/joint.toml");
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("examples/fit/joint.toml");
     let r = Fit::from_file(&path).unwrap().run().unwrap();
     let truth = [
         ("c_n", 2e-3),
@@ -305,7 +305,7 @@ fn shipped_example_brackets_its_generating_parameters() {
 fn full_model_fit_recovers_its_generating_parameters() {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let dir = tempfile::tempdir().unwrap();
-    let case = root.join("pipelines/fit/specimen/specimen.toml");
+    let case = root.join("examples/fit/specimen/specimen.toml");
     let data = dir.path().join("reaction.csv");
     std::fs::write(
         &data,
@@ -467,7 +467,7 @@ fn beta_reaches_the_ends_of_its_range() {
 /// warning that the fit file's start did not.
 #[test]
 fn other_starts_find_the_minimum_from_starting_values_three_times_off() {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("pipelines/fit");
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("examples/fit");
     let good = Fit::from_file(&root.join("joint.toml"))
         .unwrap()
         .run()

@@ -420,10 +420,12 @@ fn csv_rejects_ragged_rows_and_non_finite_values() {
     assert!(dir_names(dir.path()).is_empty());
 }
 
-/// The shrink fit of `pipelines/shrink_fit.toml` (axisymmetric, one contact pair, one step).
+/// The shrink fit of `examples/shrink_fit/shrink_fit.toml` (axisymmetric, one contact pair, one step).
 fn shrink_fit() -> Case {
-    Case::from_file(&Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/shrink_fit.toml"))
-        .unwrap()
+    Case::from_file(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/shrink_fit/shrink_fit.toml"),
+    )
+    .unwrap()
 }
 
 fn read_json(path: &Path) -> serde_json::Value {

@@ -18,8 +18,8 @@ fn exe() -> PathBuf {
 
 /// The shipped example with its base path made absolute, written into `dir` with `edit`.
 fn sweep_file(dir: &Path, edit: impl Fn(String) -> String) -> PathBuf {
-    let text = std::fs::read_to_string(root().join("pipelines/sweep/specimen.toml")).unwrap();
-    let base = root().join("pipelines/fit/specimen/specimen.toml");
+    let text = std::fs::read_to_string(root().join("examples/sweep/specimen.toml")).unwrap();
+    let base = root().join("examples/fit/specimen/specimen.toml");
     let text = text.replace(
         "\"../fit/specimen/specimen.toml\"",
         &format!("{:?}", base.display().to_string()),

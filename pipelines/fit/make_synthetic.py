@@ -8,7 +8,7 @@ Eqs. 1-5), written out here independently of asperity's implementation:
   then slip with p_T = mu_F(us) p, mu_F = mu_m [1 - (1 - beta) exp(-n us)], us = u - p_T / k_T.
 Measured values get 1 % Gaussian noise plus 0.005 MPa (seeded), the errors the fit file states.
 
-    .venv/bin/python pipelines/fit/make_synthetic.py   # rewrites the CSV files beside it
+    .venv/bin/python pipelines/fit/make_synthetic.py   # rewrites examples/fit/*.csv
 """
 import pathlib
 
@@ -16,7 +16,7 @@ import numpy as np
 
 TRUE = dict(c_n=2e-3, m=0.5, unloading_c_n=4e-4, unloading_m=0.8, R=2e-3, S=0.5,
             mu_m=0.3, beta=0.6, n=50.0, starting_pressure=0.1)
-HERE = pathlib.Path(__file__).parent
+DATA_DIR = pathlib.Path(__file__).resolve().parent.parent.parent / "examples" / "fit"  # the worked example's data
 RNG = np.random.default_rng(20260415)
 
 
@@ -57,7 +57,7 @@ def shear_curve(p):
 
 
 def write(name, header, rows):
-    with open(HERE / name, "w") as f:
+    with open(DATA_DIR / name, "w") as f:
         f.write(header)
         for r in rows:
             f.write(",".join(f"{v:.9g}" for v in r) + "\n")
