@@ -304,7 +304,8 @@ examples-test: deps build
 ## --- cyclic plasticity (issue 27) ------------------------------------------------
 # `make cyclic_press_fit`: the press fit under cyclic external pressure with isotropic and
 # with kinematic hardening side by side -> out/cyclic_press_fit (REPORT.md, loops.png,
-# cycles.png, one run folder per hardening). Its quick form is tests/cyclic_press_fit.rs.
+# local_loops.png, cycles.png, one run folder per hardening). Its quick form is
+# tests/cyclic_press_fit.rs.
 .PHONY: cyclic_press_fit
 CYCLIC_OUT ?= out/cyclic_press_fit
 cyclic_press_fit: deps build
@@ -312,4 +313,4 @@ cyclic_press_fit: deps build
 	  $(BIN) run pipelines/cyclic_press_fit/$$h.toml --out $(CYCLIC_OUT)/$$h --force || exit 1; \
 	done
 	$(PYTHON) pipelines/cyclic_press_fit/report.py $(CYCLIC_OUT)
-	@echo "results: $(CYCLIC_OUT) (REPORT.md, loops.png, cycles.png, results.pvd per run for ParaView)"
+	@echo "results: $(CYCLIC_OUT) (REPORT.md, loops.png, local_loops.png, cycles.png, results.pvd per run for ParaView)"

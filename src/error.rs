@@ -261,6 +261,24 @@ pub enum Error {
         jump_cycles: f64,
         reason: String,
     },
+    /// A cycle jump over `jump_cycles` cycles after a simulated cycle in which body `body`
+    /// ratcheted (its net plastic strain change `ratchet_strain` above `threshold` and
+    /// `ratchet_share` of the cycle's `plastic_strain_increment`): the jump would carry its
+    /// plastic state unchanged through cycles that each add to it (see
+    /// `crate::solver::shakedown`). `step_index` as for [`Error::WearJump`].
+    #[error(
+        "body '{body}' is still ratcheting: over the last simulated cycle its plastic strain changed by {ratchet_strain:.3e} net at a point (more than {threshold:e} and {ratchet_share} of the {plastic_strain_increment:.3e} it flowed), and a jump over {jump_cycles} cycles would carry its plastic strains and backstresses unchanged through cycles that each add to them; set {} = 1 (simulate every cycle), or simulate the cycles up to shakedown in a cyclic step of their own before the step that jumps (the results up to this cycle are kept)",
+        step_key(*step_index, "cycles_per_jump")
+    )]
+    RatchetingJump {
+        body: String,
+        step_index: Option<usize>,
+        jump_cycles: usize,
+        ratchet_strain: f64,
+        plastic_strain_increment: f64,
+        threshold: f64,
+        ratchet_share: f64,
+    },
     /// The total wear depth h_A + h_B of a point of contact `contact` (`contact[contact_index]`
     /// in the case) would exceed the pair's `max_depth`: the interface is worn through.
     #[error(
@@ -390,7 +408,8 @@ impl Error {
             | Error::WornThrough { .. }
             | Error::WornBeyondBody { .. }
             | Error::WearEnergy { .. }
-            | Error::JumpSettling { .. } => 1,
+            | Error::JumpSettling { .. }
+            | Error::RatchetingJump { .. } => 1,
             Error::TooManySolves { planned, .. } => {
                 if *planned {
                     3
@@ -431,7 +450,8 @@ impl Error {
         | Error::WornThrough { step_index, .. }
         | Error::WornBeyondBody { step_index, .. }
         | Error::WearEnergy { step_index, .. }
-        | Error::JumpSettling { step_index, .. } = &mut self
+        | Error::JumpSettling { step_index, .. }
+        | Error::RatchetingJump { step_index, .. } = &mut self
         {
             *step_index = Some(index);
         }

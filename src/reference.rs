@@ -253,20 +253,24 @@ impl Page {
             for (value, text) in choices {
                 let _ = write!(meaning, "<br>{value}: {}", cell(&text));
             }
-            // An array of tables (`kinematic = [{ C = .., gamma = .. }]`) documents its
-            // element's keys like a nested table.
-            let target = match target.get("items") {
-                Some(items) if primary_type(&target).as_deref() == Some("array") => {
-                    self.resolve(items)
-                }
-                _ => target,
+            // A table, or an array of tables (`kinematic = [{ C, gamma }, ...]`): its keys in
+            // a section of their own.
+            let table_like =
+                |t: &Value| t["properties"].is_object() || tagged_variants(t).is_some();
+            let items = self.resolve(&target["items"]);
+            let section = if table_like(&target) {
+                Some(target)
+            } else if primary_type(&target).as_deref() == Some("array") && table_like(&items) {
+                Some(items)
+            } else {
+                None
             };
-            if target["properties"].is_object() || tagged_variants(&target).is_some() {
+            if let Some(schema) = section {
                 let child = format!("{path}.{key}");
                 let _ = write!(meaning, "<br>See `{child}` below.");
                 nested.push(Nested {
                     path: child,
-                    schema: target,
+                    schema,
                 });
             }
             let _ = writeln!(

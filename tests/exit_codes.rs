@@ -170,6 +170,18 @@ fn representatives() -> Vec<(Error, &'static str)> {
             "breaking the energy balance",
         ),
         (
+            Error::RatchetingJump {
+                body: "hub".into(),
+                step_index: Some(1),
+                jump_cycles: 10,
+                ratchet_strain: 1e-4,
+                plastic_strain_increment: 5e-4,
+                threshold: 1e-6,
+                ratchet_share: 0.1,
+            },
+            "a body still ratcheting",
+        ),
+        (
             collapse(Mechanism::PlasticCollapse {
                 indicator: "stiffness".into(),
             }),

@@ -47,8 +47,8 @@ pub struct Summary {
     /// The energy balance: totals, per analysis step and per load cycle.
     pub energy: EnergyReport,
     /// Per cyclic step and body, its shakedown verdict ("elastic shakedown", "plastic
-    /// shakedown" or "ratcheting") with the threshold and the last simulated cycle's
-    /// values it is made from ([`crate::solver::shakedown`]); absent without cyclic steps.
+    /// shakedown", "ratcheting" or "not settled") with the thresholds and the last simulated
+    /// cycles it is made from ([`crate::solver::shakedown`]); absent without cyclic steps.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub shakedown: Vec<ShakedownVerdict>,
 }

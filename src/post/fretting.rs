@@ -145,13 +145,15 @@ pub const CYCLES: [&str; 9] = [
 /// The columns `cycles.csv` adds per body when some body can flow plastically
 /// ([`crate::solver::shakedown::BodyCycle`]): `<body>_plastic_dissipation` (N·mm),
 /// `<body>_ratchet_strain` (the largest net equivalent plastic strain change of the cycle
-/// at a point) and `<body>_plastic_strain_increment` (the largest increase of ε̄ᵖ over the
-/// cycle at a point). A model without contact pairs has one row per cycle, with the
-/// `contact` columns empty.
-pub const BODY_CYCLE_COLUMNS: [&str; 3] = [
+/// at a point), `<body>_plastic_strain_increment` (the largest increase of ε̄ᵖ over the
+/// cycle at a point) and, in a cyclic step, `<body>_verdict` (the shakedown verdict the
+/// step would get if it ended with this cycle, [`crate::solver::shakedown::Readings`]). A
+/// model without contact pairs has one row per cycle, with the `contact` columns empty.
+pub const BODY_CYCLE_COLUMNS: [&str; 4] = [
     "plastic_dissipation",
     "ratchet_strain",
     "plastic_strain_increment",
+    "verdict",
 ];
 
 /// Columns of `wear_<pair>.csv`: the profile along side A at each cycle end.
@@ -292,16 +294,26 @@ impl FrettingTables {
             return Ok(());
         }
         let body_cells: Vec<Cell> = if self.bodies {
-            let last = &step.solution.internal.cycles.last;
-            last.iter()
-                .flat_map(|c| {
+            let cycles = &step.solution.internal.cycles;
+            let timeline = model.schedule.timeline();
+            let plan = timeline.steps().get(frame.analysis_step.wrapping_sub(1));
+            let cyclic = plan.is_some_and(|p| p.is_cyclic());
+            cycles
+                .last
+                .iter()
+                .zip(&cycles.readings)
+                .flat_map(|(c, readings)| {
                     [
-                        c.plastic_dissipation,
-                        c.ratchet_strain,
-                        c.plastic_strain_increment,
+                        Cell::Number(c.plastic_dissipation),
+                        Cell::Number(c.ratchet_strain),
+                        Cell::Number(c.plastic_strain_increment),
+                        if cyclic {
+                            Cell::Text(readings.verdict().into())
+                        } else {
+                            Cell::Empty
+                        },
                     ]
                 })
-                .map(Cell::Number)
                 .collect()
         } else {
             Vec::new()

@@ -210,6 +210,11 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
                 reason: "its energy marks have the wrong length".into(),
             })?;
         }
+        // The verdicts of the cyclic steps already finished travel in the record (a run
+        // resumed after its last step writes no step that would bring them).
+        self.summary
+            .shakedown
+            .clone_from(&resume.solution.internal.cycles.verdicts);
         let timeline = self.model.schedule.timeline();
         for step in 1..resume.state.step {
             if self.vtu && (self.all_frames || timeline.is_end_frame(step)) {

@@ -140,8 +140,13 @@ impl Solution {
     /// Ends a simulated load cycle that stands for `jump_cycles` cycles
     /// ([`cycles::end_cycle`]: its wear is extrapolated, the jump's wear work recorded in the
     /// ledger, [`Self::jump_use`] set); the trial states follow. Errs, leaving the solution
-    /// unchanged, when the jump is refused. Returns whether the jump added wear.
+    /// unchanged, when the jump is refused: by the wear's stability limit, or because a body
+    /// ratcheted in the cycle ([`BodyCycles::check_jump`]; call [`Self::end_body_cycle`]
+    /// first). Returns whether the jump added wear.
     pub fn end_cycle(&mut self, model: &Model, jump_cycles: f64) -> Result<bool> {
+        self.internal
+            .cycles
+            .check_jump(model, jump_cycles as usize)?;
         let end = cycles::end_cycle(
             model,
             &mut self.interface_committed,
