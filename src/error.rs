@@ -121,6 +121,10 @@ pub enum Error {
     /// The linear solver failed (e.g. the stiffness matrix is singular: a body without supports).
     #[error("linear solver: {0}")]
     Linear(String),
+    /// The steady heat conduction cannot be solved (a conducting body whose temperature
+    /// nothing fixes, a joint that stopped conducting).
+    #[error("heat conduction: {0}")]
+    Conduction(String),
     /// A load step did not converge, even after cutting it back.
     #[error("{0}")]
     NoConvergence(Box<NoConvergence>),
@@ -386,6 +390,7 @@ impl Error {
             | Error::ArcLengthNoLoad
             | Error::ArcLengthStart(_)
             | Error::Linear(_)
+            | Error::Conduction(_)
             | Error::WearJump { .. }
             | Error::WornThrough { .. }
             | Error::WornBeyondBody { .. }

@@ -25,6 +25,7 @@ mod quantity;
 mod solver;
 mod step_checks;
 mod steps;
+pub mod thermal;
 pub mod wear;
 
 pub use check::{MAX_CUTBACKS, MAX_ITERATIONS, MAX_STEPS, MAX_TOLERANCE};
@@ -33,6 +34,9 @@ pub use names::{MAX_NAME_LEN, check_name};
 pub use quantity::{Component, QuantityKind, QuantitySpec, Statistic, parse_quantity};
 pub use solver::{ContactAlgorithmKind, LinearSolverKind, SolverSpec};
 pub use steps::{AmplitudeSpec, InlineAmplitude, Leg, Motion, Role, StepSpec, Target};
+pub use thermal::{
+    Conductance, ConductanceSpec, FilmSpec, HeatSourceSpec, TemperatureSpec, ThermalSupportSpec,
+};
 
 /// A parsed case file.
 #[derive(Clone, Debug, Deserialize, JsonSchema)]
@@ -50,6 +54,15 @@ pub struct Case {
     /// Contact pairs carried by interface elements.
     #[serde(default, rename = "contact")]
     pub contacts: Vec<ContactSpec>,
+    /// Uniform temperature changes of bodies (`[[temperature]]`, [`thermal`]).
+    #[serde(default, rename = "temperature")]
+    pub temperatures: Vec<TemperatureSpec>,
+    /// Boundary conditions of the heat conduction (`[[thermal_support]]`, [`thermal`]).
+    #[serde(default, rename = "thermal_support")]
+    pub thermal_supports: Vec<ThermalSupportSpec>,
+    /// Volumetric heat sources (`[[heat_source]]`, [`thermal`]).
+    #[serde(default, rename = "heat_source")]
+    pub heat_sources: Vec<HeatSourceSpec>,
     /// The simple load schedule (exclusive with `[[step]]`).
     #[serde(default)]
     pub steps: Steps,
@@ -130,6 +143,10 @@ pub struct BodySpec {
     /// bodies and for ν ≥ 0.45 in plane strain and axisymmetry, full otherwise (see
     /// [`Formulation::for_body`](crate::element::continuum::Formulation::for_body)).
     pub formulation: Option<FormulationKind>,
+    /// Thermal conductivity k in W/(mm·K): the body takes part in the steady heat
+    /// conduction, whose temperature drives its thermal strain (exclusive with a
+    /// `[[temperature]]` entry for it).
+    pub conductivity: Option<f64>,
 }
 
 /// The element formulation of a body (`[[body]] formulation`).
@@ -159,6 +176,10 @@ pub struct MaterialSpec {
     /// Fig. 11, is this H.
     /// Default 0 (perfectly plastic).
     pub hardening: Option<f64>,
+    /// Linear thermal expansion coefficient α in 1/K (default 0): the thermal strain
+    /// α ΔT in every direction, ΔT from `[[temperature]]` or the heat conduction. Plastic
+    /// strain and the other properties do not depend on the temperature.
+    pub expansion: Option<f64>,
 }
 
 /// Prescribed displacement components on the nodes of a physical curve or point. Values are
@@ -253,6 +274,10 @@ pub struct ContactSpec {
     pub law: LawSpec,
     /// Wear of the pair's surfaces (default: none).
     pub wear: Option<wear::WearSpec>,
+    /// Joint conductance for the heat conduction: h in W/(mm²·K), or `{ h0, exponent }` for
+    /// h = h0 (|p|/1 MPa)^exponent, optionally with `gap` for open points (default: no heat
+    /// crosses an open point). See [`thermal::ConductanceSpec`].
+    pub conductance: Option<ConductanceSpec>,
     /// Points (x, y in mm, on the contact) whose local loops p_T against u_T are written to
     /// `point_loops_<name>.csv` at every frame (default: none).
     #[serde(default)]

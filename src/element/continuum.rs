@@ -201,17 +201,51 @@ pub fn min_jacobian(kind: CellKind, coords: &[[f64; 2]; 8]) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
+/// The thermal eigenstrain of a cell: its body's linear expansion coefficient α (1/K) and
+/// the temperature change from the stress-free reference at its nodes (node order of the
+/// cell; a uniform change has the same value at every node).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CellTemperature {
+    pub expansion: f64,
+    pub nodal: [f64; 8],
+}
+
+/// The components of the isotropic unit strain m = (1, 1, 0, 1) (xx, yy, zz; rr, zz, θθ):
+/// the directions a thermal strain α ΔT m stretches.
+pub const NORMAL_COMPONENTS: [usize; 3] = [0, 1, ZZ];
+
+/// The thermal strain magnitude α ΔT at every point of `kind`'s rule, ΔT interpolated from
+/// the nodal values with the cell's shape functions.
+fn thermal_strains(kind: CellKind, t: &CellTemperature) -> [f64; MAX_CELL_POINTS] {
+    let mut out = [0.0; MAX_CELL_POINTS];
+    for (e, p) in out.iter_mut().zip(cell_rule(kind)) {
+        let s = cell_shape(kind, p.xi, p.eta);
+        let dt: f64 = (0..kind.node_count()).map(|i| s.n[i] * t.nodal[i]).sum();
+        *e = t.expansion * dt;
+    }
+    out
+}
+
 /// Tangent stiffness and internal force of one continuum cell for element displacements `u`.
 ///
 /// Each integration point's material is updated from `committed[g]` into `trial[g]`. The
 /// tangent is accumulated into `k` only when `k` is given (residual-only evaluations skip it).
 /// Cells must have passed [`min_jacobian`] at model set-up.
+///
+/// With a `temperature`, the material sees the mechanical strain ε − α ΔT m (the thermal
+/// strain is a kinematic eigenstrain, as Abaqus' *EXPANSION); the state keeps the total
+/// strain (in plane stress the material's out-of-plane ε_zz plus α ΔT). The tangent does
+/// not depend on the temperature.
+// The cell's geometry, its body's formulation, material and temperature, and the
+// evaluation's input and output: a struct would only rename the list.
+#[allow(clippy::too_many_arguments)]
 pub fn evaluate_cell(
     analysis: &Analysis,
     kind: CellKind,
     coords: &[[f64; 2]; 8],
     formulation: Formulation,
     material: &dyn Material,
+    temperature: Option<&CellTemperature>,
     input: &ElementInput<PointState>,
     output: ElementOutput<PointState>,
 ) {
@@ -223,9 +257,21 @@ pub fn evaluate_cell(
         OutOfPlane::StrainGiven
     };
     let points = cell_kinematics(analysis, kind, coords, formulation);
+    let thermal = temperature
+        .filter(|t| t.expansion != 0.0)
+        .map(|t| thermal_strains(kind, t));
     for (g, pk) in points.iter().enumerate() {
-        let strain: Voigt = pk.b * u;
-        let (state, d) = material.update(&strain, &committed[g], out_of_plane);
+        let mut strain: Voigt = pk.b * u;
+        let eigen = thermal.map(|t| t[g]);
+        for c in NORMAL_COMPONENTS {
+            strain[c] -= eigen.unwrap_or_default();
+        }
+        let (mut state, d) = material.update(&strain, &committed[g], out_of_plane);
+        if let Some(eigen) = eigen {
+            for c in NORMAL_COMPONENTS {
+                state.strain[c] += eigen;
+            }
+        }
         f.gemv_tr(pk.dvol, &pk.b, &state.stress, 1.0);
         if let Some(k) = k.as_deref_mut() {
             let db = d * pk.b;
@@ -370,6 +416,7 @@ mod tests {
             &cell(kind),
             formulation,
             material,
+            None,
             &ElementInput {
                 u,
                 committed,

@@ -1,7 +1,7 @@
 //! Element sets: the [`ElementSet`] trait the assembler is generic over, and the model's two
 //! sets, the continuum cells of the bodies and the interface elements of the contact pairs.
 
-use super::continuum::{Formulation, evaluate_cell};
+use super::continuum::{CellTemperature, Formulation, evaluate_cell};
 use super::interface6::{InterfaceElement, evaluate_interface};
 use super::quadrature::MAX_CELL_POINTS;
 use super::{Analysis, ElementInput, ElementMatrix, ElementOutput, ElementVector};
@@ -76,6 +76,8 @@ pub struct ContinuumSet {
     pub materials: Vec<Box<dyn Material>>,
     /// Element formulation of each body.
     pub formulations: Vec<Formulation>,
+    /// Linear thermal expansion coefficient α (1/K) of each body (0: no thermal strain).
+    pub expansions: Vec<f64>,
 }
 
 impl ElementSet for ContinuumSet {
@@ -110,6 +112,7 @@ impl ElementSet for ContinuumSet {
             &c.coords,
             formulation,
             material,
+            None,
             input,
             output,
         );
@@ -144,6 +147,92 @@ impl ContinuumSet {
     /// (small strains) and its internal force is K_c · u.
     pub fn is_linear(&self) -> bool {
         self.materials.iter().all(|m| m.is_linear())
+    }
+}
+
+/// The temperature change from the stress-free reference that drives the thermal strains:
+/// per body a uniform change, or the nodal field (of the conduction solve).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TemperatureField {
+    /// Per body: its uniform change, or `None` where it follows [`Self::nodal`]. Empty: no
+    /// temperature anywhere.
+    pub bodies: Vec<Option<f64>>,
+    /// Per mesh node (read only for the bodies that follow it).
+    pub nodal: Vec<f64>,
+}
+
+impl TemperatureField {
+    /// The temperature change of cell `cell`'s nodes (its body's uniform value, or the nodal
+    /// field), or `None` when there is no temperature.
+    pub fn cell(&self, cell: &ContinuumCell) -> Option<[f64; 8]> {
+        match self.bodies.get(cell.body as usize)? {
+            Some(uniform) => Some([*uniform; 8]),
+            None => {
+                let mut t = [0.0; 8];
+                for (t, &n) in t.iter_mut().zip(&cell.nodes[..cell.kind.node_count()]) {
+                    *t = self.nodal.get(n as usize).copied().unwrap_or(0.0);
+                }
+                Some(t)
+            }
+        }
+    }
+}
+
+/// The continuum cells under a temperature field: their thermal strains are eigenstrains
+/// ([`evaluate_cell`]). Tangents equal the set's own, so the reference matrices are the
+/// set's.
+#[derive(Clone, Copy, Debug)]
+pub struct HeatedContinuum<'a> {
+    pub set: &'a ContinuumSet,
+    pub field: &'a TemperatureField,
+}
+
+impl ElementSet for HeatedContinuum<'_> {
+    type State = PointState;
+
+    fn len(&self) -> usize {
+        self.set.len()
+    }
+
+    fn nodes(&self, e: usize) -> &[u32] {
+        self.set.nodes(e)
+    }
+
+    fn points_per_element(&self) -> usize {
+        MAX_CELL_POINTS
+    }
+
+    fn evaluate(
+        &self,
+        e: usize,
+        input: &ElementInput<PointState>,
+        output: ElementOutput<PointState>,
+    ) {
+        let set = self.set;
+        let c = &set.cells[e];
+        let body = c.body as usize;
+        let temperature = self.field.cell(c).map(|nodal| CellTemperature {
+            expansion: set.expansions[body],
+            nodal,
+        });
+        evaluate_cell(
+            &set.analysis,
+            c.kind,
+            &c.coords,
+            set.formulations[body],
+            set.materials[body].as_ref(),
+            temperature.as_ref(),
+            input,
+            output,
+        );
+    }
+
+    fn tangent_is_reference(&self, trial: &[PointState]) -> bool {
+        self.set.tangent_is_reference(trial)
+    }
+
+    fn reference_tangent(&self, e: usize, k: &mut ElementMatrix) {
+        self.set.reference_tangent(e, k);
     }
 }
 

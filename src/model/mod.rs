@@ -9,15 +9,17 @@ mod constraints;
 mod loads;
 mod rigid;
 mod spec;
+mod thermal;
 pub mod timeline;
 
 pub use constraints::{AXIS_SUPPORT, Support};
 pub use loads::{History, Schedule, Table};
 pub use rigid::Hold;
 pub use spec::{
-    ArcLength, Body, Contact, Control, LineLoad, Load, LoadKind, ModelSpec, Prescribed,
-    load_factors,
+    ArcLength, Body, BodyHeatSource, BodyTemperature, Contact, Control, LineLoad, Load, LoadKind,
+    ModelSpec, Prescribed, ThermalBoundary, ThermalSpec, load_factors,
 };
+pub use thermal::{Thermal, UniformTemperature};
 
 use crate::assembly::{Coloring, DofMap, SparsityPattern};
 use crate::element::Analysis;
@@ -57,6 +59,8 @@ pub struct Model {
     pub schedule: Schedule,
     /// How the steps are driven and checked.
     pub control: Control,
+    /// Uniform body temperatures and the heat conduction.
+    pub thermal: Thermal,
     /// Size of the model (bounding-box diagonal) in mm.
     pub size: f64,
     pub dofs: DofMap,
@@ -75,7 +79,10 @@ impl Model {
             contacts,
             mut schedule,
             control,
+            thermal,
         } = spec;
+        let conductivity: Vec<Option<f64>> = bodies.iter().map(|b| b.conductivity).collect();
+        let joints = contacts.iter().map(|c| c.conductance).collect();
         // Interfaces first: splitting a conforming curve re-points body B's cells.
         let topologies = insert_interfaces(&mut mesh, &bodies, &contacts)?;
         let (bodies, continuum) = build_continuum(&mesh, analysis, bodies)?;
@@ -93,6 +100,15 @@ impl Model {
         } = prescribe(&mesh, analysis, &supports, &in_body, scale, &mut schedule)?;
         let nodal_loads =
             nodal_loads(&mesh, analysis, &continuum, &loads, &in_body, &mut schedule)?;
+        let inputs = thermal::ThermalInputs {
+            mesh: &mesh,
+            bodies: &bodies,
+            continuum: &continuum,
+            interface: &interface,
+            conductivity,
+            joints,
+        };
+        let thermal = thermal::build(inputs, thermal, &mut schedule)?;
         let Numbering {
             dofs,
             pattern,
@@ -112,6 +128,7 @@ impl Model {
             nodal_loads,
             schedule,
             control,
+            thermal,
             size: scale,
             dofs,
             pattern,
@@ -346,6 +363,7 @@ fn build_continuum(
     let mut names: Vec<String> = Vec::new();
     let mut materials = Vec::new();
     let mut formulations = Vec::new();
+    let mut expansions = Vec::new();
     let mut cells = Vec::new();
     for (
         b,
@@ -353,6 +371,8 @@ fn build_continuum(
             group: name,
             material,
             formulation,
+            expansion,
+            ..
         },
     ) in bodies.into_iter().enumerate()
     {
@@ -402,6 +422,7 @@ fn build_continuum(
         names.push(name);
         materials.push(material);
         formulations.push(formulation);
+        expansions.push(expansion);
     }
     for g in mesh
         .groups
@@ -420,6 +441,7 @@ fn build_continuum(
             cells,
             materials,
             formulations,
+            expansions,
         },
     ))
 }

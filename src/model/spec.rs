@@ -21,6 +21,7 @@ use crate::material::Material;
 use crate::material::elastic::LinearElastic;
 use crate::material::j2::J2Plasticity;
 use crate::mesh::interface::Pairing;
+use crate::thermal::{JointConductance, ThermalCondition};
 use crate::{Error, Result};
 
 /// The bodies, supports, loads and contact pairs of a case, with built materials and laws.
@@ -37,6 +38,8 @@ pub struct ModelSpec {
     pub schedule: Schedule,
     /// How the steps are controlled and when a converged increment is implausible.
     pub control: Control,
+    /// Uniform body temperatures, thermal supports and heat sources.
+    pub thermal: ThermalSpec,
 }
 
 /// How the load steps are driven and checked (`[steps]` and the bounds of `[solver]`).
@@ -90,6 +93,44 @@ pub struct Body {
     pub group: String,
     pub material: Box<dyn Material>,
     pub formulation: Formulation,
+    /// Linear thermal expansion coefficient α (1/K).
+    pub expansion: f64,
+    /// Thermal conductivity (W/(mm·K)); `None`: the body does not conduct.
+    pub conductivity: Option<f64>,
+}
+
+/// A uniform temperature change of a body at multiplier 1 (`[[temperature]]`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodyTemperature {
+    pub group: String,
+    pub change: f64,
+    pub factors: History,
+}
+
+/// A thermal support on a curve (`[[thermal_support]]`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ThermalBoundary {
+    pub name: String,
+    pub group: String,
+    pub condition: ThermalCondition,
+    pub factors: History,
+}
+
+/// A heat source in a body (`[[heat_source]]`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodyHeatSource {
+    pub name: String,
+    pub group: String,
+    pub power: f64,
+    pub factors: History,
+}
+
+/// The thermal entries of a case.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ThermalSpec {
+    pub temperatures: Vec<BodyTemperature>,
+    pub supports: Vec<ThermalBoundary>,
+    pub sources: Vec<BodyHeatSource>,
 }
 
 /// Prescribed displacement components on the nodes of a physical curve or point, at load
@@ -142,6 +183,8 @@ pub struct Contact {
     pub interference: f64,
     pub law: Box<dyn InterfaceLaw>,
     pub wear: Option<WearModel>,
+    /// The joint's heat conductance (`None`: no heat crosses it).
+    pub conductance: Option<JointConductance>,
 }
 
 impl ModelSpec {
@@ -188,6 +231,8 @@ impl ModelSpec {
                         group: b.group.clone(),
                         material,
                         formulation,
+                        expansion: b.material.expansion.unwrap_or(0.0),
+                        conductivity: b.conductivity,
                     })
                 })
                 .collect::<Result<_>>()?;
@@ -209,6 +254,13 @@ impl ModelSpec {
                     interference: c.interference,
                     law,
                     wear: c.wear.as_ref().map(wear_model),
+                    conductance: c.conductance.and_then(|h| h.conductance().ok()).map(|h| {
+                        JointConductance {
+                            h0: h.h0,
+                            exponent: h.exponent,
+                            gap: h.gap,
+                        }
+                    }),
                 })
             })
             .collect::<Result<_>>()?;
@@ -279,7 +331,53 @@ impl ModelSpec {
             contacts,
             schedule: schedule(case),
             control,
+            thermal: thermal(case),
         })
+    }
+}
+
+/// The thermal entries of `case` with their histories (`[[step]] thermal`, or the global
+/// load factor).
+fn thermal(case: &Case) -> ThermalSpec {
+    let factors = |name: &str| history(case, Role::Thermal, name, None);
+    ThermalSpec {
+        temperatures: case
+            .temperatures
+            .iter()
+            .map(|t| BodyTemperature {
+                group: t.group.clone(),
+                change: t.change,
+                factors: factors(t.name()),
+            })
+            .collect(),
+        supports: case
+            .thermal_supports
+            .iter()
+            .map(|s| ThermalBoundary {
+                name: s.name().to_string(),
+                group: s.group.clone(),
+                condition: match (s.temperature, s.flux, s.film) {
+                    (Some(t), _, _) => ThermalCondition::Temperature(t),
+                    (None, Some(q), _) => ThermalCondition::Flux(q),
+                    (None, None, Some(f)) => ThermalCondition::Film {
+                        h: f.h,
+                        ambient: f.ambient,
+                    },
+                    (None, None, None) => ThermalCondition::Flux(0.0),
+                },
+                factors: factors(s.name()),
+            })
+            .collect(),
+        sources: case
+            .heat_sources
+            .iter()
+            .map(|h| BodyHeatSource {
+                name: h.name().to_string(),
+                group: h.group.clone(),
+                power: h.power,
+                factors: factors(h.name()),
+            })
+            .collect(),
     }
 }
 

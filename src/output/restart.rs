@@ -230,6 +230,8 @@ impl Body<'_> {
             energy: self.energy.into_owned(),
             // Output of the last cycle end only, not a state to continue from.
             jump_use: template.jump_use.clone(),
+            // Recomputed from the model at the record's time when the run continues.
+            thermal: Default::default(),
         };
         Record {
             resume: Resume {
@@ -256,6 +258,7 @@ mod tests {
             interface_trial: vec![InterfaceState::default()],
             energy: EnergyLedger::default(),
             jump_use: vec![],
+            thermal: Default::default(),
         }
     }
 

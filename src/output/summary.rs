@@ -169,7 +169,7 @@ pub struct EnergyMark {
 }
 
 /// Number of values of [`EnergyMark::to_row`].
-const MARK_VALUES: usize = 10;
+const MARK_VALUES: usize = 11;
 
 impl EnergyMark {
     /// The mark of an output frame with the run's energy `total`, if the frame ends a
@@ -208,6 +208,7 @@ impl EnergyMark {
             t.friction_dissipation,
             t.wear_work,
             t.numerical_dissipation,
+            t.thermal_work,
         ]
     }
 
@@ -228,6 +229,7 @@ impl EnergyMark {
                 friction_dissipation: v[7],
                 wear_work: v[8],
                 numerical_dissipation: v[9],
+                thermal_work: v[10],
             },
         })
     }
@@ -261,6 +263,7 @@ struct Terms {
     friction_dissipation: f64,
     wear_work: f64,
     numerical_dissipation: f64,
+    thermal_work: f64,
     imbalance: f64,
     relative_imbalance: Option<f64>,
 }
@@ -275,6 +278,7 @@ impl From<Energy> for Terms {
             friction_dissipation: e.friction_dissipation,
             wear_work: e.wear_work,
             numerical_dissipation: e.numerical_dissipation,
+            thermal_work: e.thermal_work,
             imbalance: e.imbalance(),
             relative_imbalance: e.relative_imbalance(),
         }

@@ -9,7 +9,9 @@ use crate::assembly::{
 };
 use crate::contact::{ContactAlgorithm, InterfaceState};
 use crate::element::interface6::evaluate_interface;
-use crate::element::set::{ElementSet, INTERFACE_POINTS, InterfaceSet};
+use crate::element::set::{
+    ElementSet, HeatedContinuum, INTERFACE_POINTS, InterfaceSet, TemperatureField,
+};
 use crate::element::{ElementInput, ElementMatrix, ElementOutput, ElementVector};
 use crate::material::PointState;
 use crate::model::Model;
@@ -90,6 +92,8 @@ pub struct Mechanics<'a> {
     /// Interface states committed at the last converged increment, and of this iteration.
     pub interface_committed: &'a [InterfaceState],
     pub interface_trial: &'a mut [InterfaceState],
+    /// The temperature change driving the bodies' thermal strains.
+    pub temperature: &'a TemperatureField,
 }
 
 impl Problem for Mechanics<'_> {
@@ -145,10 +149,14 @@ impl Problem for Mechanics<'_> {
     fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) {
         let m = self.model;
         let (cc, ct) = (self.committed, &mut *self.trial);
+        let bodies = HeatedContinuum {
+            set: &m.continuum,
+            field: self.temperature,
+        };
         if m.continuum.is_linear() {
-            system.assemble(input, &m.continuum, &m.continuum_coloring, cc, ct);
+            system.assemble(input, &bodies, &m.continuum_coloring, cc, ct);
         } else {
-            system.assemble_reusing(input, &m.continuum, &m.continuum_coloring, cc, ct);
+            system.assemble_reusing(input, &bodies, &m.continuum_coloring, cc, ct);
         }
     }
 

@@ -20,6 +20,7 @@ use crate::solver::cycles;
 use crate::solver::energy::{EnergyLedger, Increment};
 use crate::solver::mechanics::Mechanics;
 use crate::solver::newton::{ForceAverage, NewtonLog};
+use crate::thermal::ThermalState;
 
 /// The evolving solution: displacements and integration-point states.
 #[derive(Clone, Debug)]
@@ -41,6 +42,9 @@ pub struct Solution {
     /// [`Solution::end_cycle`] for the cycle-end output; not part of the state a run
     /// continues from.
     pub jump_use: Vec<f64>,
+    /// The temperatures of the current increment (not part of a restart record: they follow
+    /// from the model, the time and the interface states).
+    pub thermal: ThermalState,
 }
 
 impl Solution {
@@ -56,6 +60,7 @@ impl Solution {
             interface_trial: vec![InterfaceState::default(); interface],
             energy: EnergyLedger::default(),
             jump_use: vec![0.0; model.interface.pairs.len()],
+            thermal: ThermalState::default(),
         }
     }
 
@@ -83,6 +88,7 @@ impl Solution {
             trial: &mut self.trial,
             interface_committed: &self.interface_committed,
             interface_trial: &mut self.interface_trial,
+            temperature: &self.thermal.field,
         };
         (&mut self.u, problem)
     }
