@@ -1,0 +1,271 @@
+//! Steady heat conduction against closed forms: radial conduction through a hollow cylinder
+//! (T(r), the heat flow and its thermal stresses, Timoshenko & Goodier §150), the heat
+//! balance with a source and a film, two concentric cylinders joined by a conductance h
+//! (jump = flux / h), and a two-block stack whose joint follows h0 (p/1 MPa)^n.
+mod common;
+
+use asperity::mesh::Mesh;
+use common::*;
+use std::f64::consts::PI;
+
+const A: f64 = 10.0;
+const B: f64 = 20.0;
+const H: f64 = 2.0;
+const K: f64 = 0.05;
+const E: f64 = 200_000.0;
+const NU: f64 = 0.3;
+const ALPHA: f64 = 1.2e-5;
+const TA: f64 = 100.0;
+
+fn fixed(group: &str, t: f64) -> toml::Table {
+    table(&[("group", group.into()), ("temperature", t.into())])
+}
+
+/// An axisymmetric slice a ≤ r ≤ b, 0 ≤ z ≤ H held axially (plane strain), conducting.
+fn slice(n: usize) -> Mesh {
+    structured(n, 2, 0.0, false, move |s, t| [A + s * (B - A), t * H])
+}
+
+fn conducting(material: toml::Table) -> toml::Table {
+    table(&[
+        ("group", "body".into()),
+        ("material", material.into()),
+        ("conductivity", K.into()),
+    ])
+}
+
+#[test]
+fn radial_conduction_through_a_hollow_cylinder_and_its_thermal_stresses() {
+    let material = with_keys(elastic(E, NU), &[("expansion", ALPHA)]);
+    let case = CaseBuilder::axisymmetric()
+        .push("body", conducting(material))
+        .support("t0", &[("uz", 0.0)])
+        .support("t1", &[("uz", 0.0)])
+        .push("thermal_support", fixed("s0", TA))
+        .push("thermal_support", fixed("s1", 0.0));
+    let (model, solution) = solve(slice(16), &case.case());
+    let heat = solution.thermal.heat.as_ref().expect("conduction solved");
+    let ln = (B / A).ln();
+    // T(r) = T_a ln(b/r) / ln(b/a): quadratic elements, 16 through the wall.
+    for (n, x) in model.mesh.nodes.iter().enumerate() {
+        let exact = TA * (B / x[0]).ln() / ln;
+        assert!(
+            (heat.nodal[n] - exact).abs() < 2e-4 * TA,
+            "T({}) = {}",
+            x[0],
+            heat.nodal[n]
+        );
+    }
+    // Heat flow 2π k H (T_a − T_b) / ln(b/a) in at the bore, out at the outside.
+    let q = 2.0 * PI * K * H * TA / ln;
+    assert!(
+        (heat.supports[0] - q).abs() < 1e-4 * q,
+        "{:?} vs {q}",
+        heat.supports
+    );
+    assert!((heat.supports[0] + heat.supports[1]).abs() < 1e-10 * q);
+    // Long hollow cylinder, plane strain (Timoshenko & Goodier, §150, T_b = 0).
+    let c = ALPHA * E * TA / (2.0 * (1.0 - NU) * ln);
+    let k = A * A / (B * B - A * A);
+    let radial = |r: f64| c * (-(B / r).ln() - k * (1.0 - B * B / (r * r)) * ln);
+    let hoop = |r: f64| c * (1.0 - (B / r).ln() - k * (1.0 + B * B / (r * r)) * ln);
+    let scale = hoop(A).abs();
+    let mut worst: f64 = 0.0;
+    for (e, cell) in model.continuum.cells.iter().enumerate() {
+        for (g, p) in asperity::element::quadrature::cell_rule(cell.kind)
+            .iter()
+            .enumerate()
+        {
+            let x = asperity::element::continuum::point_kinematics(
+                &model.analysis,
+                cell.kind,
+                &cell.coords,
+                p,
+            )
+            .unwrap()
+            .x;
+            let s = solution.committed[e * 9 + g].stress;
+            worst = worst
+                .max((s[0] - radial(x[0])).abs())
+                .max((s[3] - hoop(x[0])).abs());
+        }
+    }
+    println!(
+        "thermal stress error {:.2e} of the bore's hoop stress",
+        worst / scale
+    );
+    // Pointwise stresses converge as h² (measured: 7.0e-3 at 8 cells through the wall,
+    // 2.0e-3 at 16).
+    assert!(worst < 3e-3 * scale, "stress error {worst} of {scale}");
+}
+
+#[test]
+fn heat_in_equals_heat_out_with_a_source_and_a_film() {
+    let film = table(&[
+        ("group", "s1".into()),
+        (
+            "film",
+            table(&[("h", 2e-3.into()), ("ambient", 20.0.into())]).into(),
+        ),
+    ]);
+    let flux = table(&[("group", "t1".into()), ("flux", 5e-3.into())]);
+    let source = table(&[("group", "body".into()), ("power", 1e-3.into())]);
+    let case = CaseBuilder::plane_strain()
+        .push("body", conducting(elastic(E, NU)))
+        .support("s0", &[("ux", 0.0)])
+        .support("t0", &[("uy", 0.0)])
+        .push("thermal_support", fixed("s0", 0.0))
+        .push("thermal_support", film)
+        .push("thermal_support", flux)
+        .push("heat_source", source);
+    let (_, solution) = solve(rectangle(10.0, 4.0, 5, 3, 0.3, true), &case.case());
+    let heat = solution.thermal.heat.as_ref().unwrap();
+    let generated = 1e-3 * 10.0 * 4.0;
+    assert!((heat.sources[0] - generated).abs() < 1e-12 * generated);
+    assert!((heat.supports[2] - 5e-3 * 10.0).abs() < 1e-12);
+    let balance: f64 = heat.supports.iter().sum::<f64>() + heat.sources[0];
+    assert!(balance.abs() < 1e-10 * generated, "{heat:?}");
+    // The fixed side takes heat out.
+    assert!(heat.supports[0] < 0.0, "{:?}", heat.supports);
+}
+
+/// Renames a structured mesh's groups: the surface becomes `name`, a curve "s0" "<name>_s0".
+fn named(mut mesh: Mesh, name: &str) -> Mesh {
+    for g in &mut mesh.groups {
+        g.name = if g.dim == 2 {
+            name.into()
+        } else {
+            format!("{name}_{}", g.name)
+        };
+    }
+    mesh
+}
+
+fn body(name: &str) -> toml::Table {
+    table(&[
+        ("group", name.into()),
+        ("material", elastic(E, NU).into()),
+        ("conductivity", K.into()),
+    ])
+}
+
+#[test]
+fn a_joint_conductance_makes_the_temperature_jump_flux_over_h() {
+    // Two concentric cylinders a ≤ r ≤ m ≤ r ≤ b pressed together by an interference,
+    // joined by h: in series, Q = 2π H (T_a − T_b) / (ln(m/a)/k + ln(b/m)/k + 1/(h m)).
+    let m = 15.0;
+    let h = 4e-3;
+    let mesh = merge(
+        named(
+            structured(6, 2, 0.0, false, move |s, t| [A + s * (m - A), t * H]),
+            "inner",
+        ),
+        named(
+            structured(6, 2, 0.0, false, move |s, t| [m + s * (B - m), t * H]),
+            "outer",
+        ),
+        false,
+    );
+    let case = CaseBuilder::axisymmetric()
+        .push("body", body("inner"))
+        .push("body", body("outer"))
+        .support("inner_t0", &[("uz", 0.0)])
+        .support("outer_t0", &[("uz", 0.0)])
+        .contact(
+            &[
+                ("side_a", "inner_s1".into()),
+                ("side_b", "outer_s0".into()),
+                ("interference", 0.01.into()),
+                ("conductance", h.into()),
+            ],
+            linear_coulomb(1e7, 1e3, 0.0),
+        )
+        .push("thermal_support", fixed("inner_s0", TA))
+        .push("thermal_support", fixed("outer_s1", 0.0));
+    let (model, solution) = solve(mesh, &case.case());
+    let heat = solution.thermal.heat.as_ref().unwrap();
+    let resistance = ((m / A).ln() / K + (B / m).ln() / K + 1.0 / (h * m)) / (2.0 * PI * H);
+    let q = TA / resistance;
+    assert!(
+        (heat.joints[0] - q).abs() < 1e-4 * q,
+        "{} vs {q}",
+        heat.joints[0]
+    );
+    assert!((heat.supports[0] - q).abs() < 1e-4 * q);
+    // The jump at r = m is the flux over h.
+    let flux = q / (2.0 * PI * m * H);
+    let side = |r: f64, body: &str| {
+        let cells = model.continuum.cells.iter();
+        let b = model.bodies.iter().position(|n| n == body).unwrap() as u32;
+        let nodes: Vec<u32> = cells
+            .filter(|c| c.body == b)
+            .flat_map(|c| c.nodes[..8].to_vec())
+            .filter(|&n| (model.mesh.nodes[n as usize][0] - r).abs() < 1e-9)
+            .collect();
+        heat.nodal[nodes[0] as usize]
+    };
+    let jump = side(m, "inner") - side(m, "outer");
+    assert!(
+        (jump - flux / h).abs() < 1e-4 * flux / h,
+        "jump {jump} vs {}",
+        flux / h
+    );
+}
+
+/// A block pressed by `p` on a base of the same size, the bottom at 0 and the top at T_a,
+/// the joint conducting with h0 (p/1 MPa)^n: (jump, flux through the joint, exchanges).
+fn stack(p: f64, h0: f64, n: f64) -> (f64, f64, usize) {
+    let (w, t) = (4.0, 2.0);
+    let mesh = merge(
+        named(rectangle(w, t, 4, 2, 0.0, false), "base"),
+        named(
+            structured(4, 2, 0.0, false, move |s, r| [s * w, t + r * t]),
+            "block",
+        ),
+        false,
+    );
+    let conductance = table(&[("h0", h0.into()), ("exponent", n.into())]);
+    let case = CaseBuilder::plane_strain()
+        .push("body", body("base"))
+        .push("body", body("block"))
+        .support("base_t0", &[("uy", 0.0)])
+        .support("base_s0", &[("ux", 0.0)])
+        .support("block_s0", &[("ux", 0.0)])
+        .pressure("block_t1", p)
+        .contact(
+            &[
+                ("side_a", "base_t1".into()),
+                ("side_b", "block_t0".into()),
+                ("conductance", conductance.into()),
+            ],
+            linear_coulomb(1e6, 1e3, 0.0),
+        )
+        .push("thermal_support", fixed("base_t0", 0.0))
+        .push("thermal_support", fixed("block_t1", TA));
+    let (_, solution) = solve(mesh, &case.case());
+    let heat = solution.thermal.heat.as_ref().unwrap();
+    // One-dimensional: q = T_a / (2t/k + 1/h) per area, the jump q / h.
+    let flux = -heat.joints[0] / w;
+    (TA - flux * 2.0 * t / K, flux, solution.thermal.exchanges)
+}
+
+#[test]
+fn a_pressed_stack_follows_the_rough_joints_conductance() {
+    let (h0, n) = (1e-3, 0.8);
+    for p in [2.0_f64, 20.0, 200.0] {
+        let h = h0 * p.powf(n);
+        let expected_flux = TA / (2.0 * 2.0 / K + 1.0 / h);
+        let (jump, flux, exchanges) = stack(p, h0, n);
+        assert!(
+            (flux - expected_flux).abs() < 1e-6 * expected_flux,
+            "p = {p}: flux {flux} vs {expected_flux}"
+        );
+        assert!(
+            (jump - flux / h).abs() < 1e-5 * jump,
+            "p = {p}: jump {jump}"
+        );
+        // The pressure does not depend on the temperature here: the second exchange
+        // confirms the first.
+        assert!((1..=3).contains(&exchanges), "{exchanges} exchanges");
+    }
+}
