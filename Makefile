@@ -218,3 +218,11 @@ fuzz: gmsh
 
 clean:
 	rm -rf target build out $(VENV)
+
+## --- temperature (issue 26) -----------------------------------------------------
+.PHONY: joint_thermal
+
+#   make joint_thermal           slideway joint with a heat source: pressure-dependent joint conductance -> out/joint_thermal
+joint_thermal: deps build
+	$(BIN) run pipelines/joint_thermal/case.toml --out out/joint_thermal --force
+	@echo "results: out/joint_thermal (results.pvd: temperature, heat_flux; interface: joint_heat_flux, temperature_jump; history.csv: heat_flow_*)"
