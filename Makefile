@@ -220,7 +220,12 @@ clean:
 	rm -rf target build out $(VENV)
 
 ## --- temperature (issue 26) -----------------------------------------------------
-.PHONY: joint_thermal
+.PHONY: joint_thermal shrink_fit_thermal
+
+#   make shrink_fit_thermal      hub heated to clear the shaft, then cooled onto it -> out/shrink_fit_thermal
+shrink_fit_thermal: deps build
+	$(BIN) run pipelines/shrink_fit_thermal/case.toml --out out/shrink_fit_thermal --force
+	@echo "results: out/shrink_fit_thermal (contact_fit_*.csv: open while hot, the cold fit's Lamé pressure at the end)"
 
 #   make joint_thermal           slideway joint with a heat source: pressure-dependent joint conductance -> out/joint_thermal
 joint_thermal: deps build
