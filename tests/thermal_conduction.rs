@@ -269,3 +269,37 @@ fn a_pressed_stack_follows_the_rough_joints_conductance() {
         assert!((1..=3).contains(&exchanges), "{exchanges} exchanges");
     }
 }
+
+#[test]
+fn bad_thermal_input_is_refused_with_a_clear_message() {
+    let base = || {
+        CaseBuilder::plane_strain()
+            .push("body", conducting(elastic(E, NU)))
+            .support("s0", &[("ux", 0.0)])
+            .support("t0", &[("uy", 0.0)])
+    };
+    let message = |case: CaseBuilder, mut mesh: Mesh| {
+        add_point_group(&mut mesh, "corner", [0.0, 0.0]);
+        let case = case.case();
+        let run = model(mesh, &case).and_then(|m| {
+            asperity::solver::stepping::run_steps(&m, &settings(&case), |_| Ok(0.0)).map(|_| ())
+        });
+        run.expect_err("bad thermal input").to_string()
+    };
+    let mesh = || rectangle(4.0, 2.0, 2, 1, 0.0, false);
+    // A thermal support on a point, and on a name that is no curve.
+    let m = message(base().push("thermal_support", fixed("corner", 1.0)), mesh());
+    assert!(m.contains("corner") && m.contains("curve"), "{m}");
+    let m = message(
+        base().push("thermal_support", fixed("nowhere", 1.0)),
+        mesh(),
+    );
+    assert!(m.contains("nowhere"), "{m}");
+    // Only a flux: nothing fixes the temperature.
+    let flux = table(&[("group", "s1".into()), ("flux", 1e-3.into())]);
+    let m = message(base().push("thermal_support", flux), mesh());
+    assert!(
+        m.contains("nothing fixes the temperature of body 'body'"),
+        "{m}"
+    );
+}
