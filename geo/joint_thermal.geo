@@ -6,7 +6,10 @@
 DefineConstant[ w = {60, Name "width [mm]"} ];
 DefineConstant[ hg = {30, Name "guide height [mm]"} ];
 DefineConstant[ hc = {20, Name "carriage height [mm]"} ];
-DefineConstant[ n = {24, Name "elements across the width"} ];
+DefineConstant[ n = {24, Name "elements across the width (size factor 1)"} ];
+// The mesh size factor ([mesh] size, gmsh -clscale) divides the element counts.
+nx = Ceil(n / Mesh.MeshSizeFactor);
+Mesh.MeshSizeFactor = 1;
 Point(1) = {0, -hg, 0};
 Point(2) = {w, -hg, 0};
 Point(3) = {w, 0, 0};
@@ -27,9 +30,9 @@ Curve Loop(1) = {1, 2, 3, 4};
 Plane Surface(1) = {1};
 Curve Loop(2) = {5, 6, 7, 8};
 Plane Surface(2) = {2};
-Transfinite Curve{1, 3, 5, 7} = n + 1;
-Transfinite Curve{2, 4} = Round(n * hg / w) + 1;
-Transfinite Curve{6, 8} = Round(n * hc / w) + 1;
+Transfinite Curve{1, 3, 5, 7} = nx + 1;
+Transfinite Curve{2, 4} = Round(nx * hg / w) + 1;
+Transfinite Curve{6, 8} = Round(nx * hc / w) + 1;
 Transfinite Surface{1};
 Transfinite Surface{2};
 Recombine Surface{1, 2};
