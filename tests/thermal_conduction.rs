@@ -149,23 +149,27 @@ fn body(name: &str) -> toml::Table {
     ])
 }
 
-#[test]
-fn a_joint_conductance_makes_the_temperature_jump_flux_over_h() {
-    // Two concentric cylinders a ≤ r ≤ m ≤ r ≤ b pressed together by an interference,
-    // joined by h: in series, Q = 2π H (T_a − T_b) / (ln(m/a)/k + ln(b/m)/k + 1/(h m)).
-    let m = 15.0;
-    let h = 4e-3;
+/// Radius of the joint of [`concentric`].
+const M: f64 = 15.0;
+/// Conductance of the joint of [`concentric`].
+const H_JOINT: f64 = 4e-3;
+
+/// Two concentric cylinders a ≤ r ≤ m ≤ r ≤ b pressed together by an interference, joined
+/// by the conductance h (pair "fit"), the bore at T_a (support "bore"), the outside at 0.
+fn concentric() -> (Mesh, CaseBuilder) {
     let mesh = merge(
         named(
-            structured(6, 2, 0.0, false, move |s, t| [A + s * (m - A), t * H]),
+            structured(6, 2, 0.0, false, move |s, t| [A + s * (M - A), t * H]),
             "inner",
         ),
         named(
-            structured(6, 2, 0.0, false, move |s, t| [m + s * (B - m), t * H]),
+            structured(6, 2, 0.0, false, move |s, t| [M + s * (B - M), t * H]),
             "outer",
         ),
         false,
     );
+    let mut bore = fixed("inner_s0", TA);
+    bore.insert("name".into(), "bore".into());
     let case = CaseBuilder::axisymmetric()
         .push("body", body("inner"))
         .push("body", body("outer"))
@@ -173,19 +177,31 @@ fn a_joint_conductance_makes_the_temperature_jump_flux_over_h() {
         .support("outer_t0", &[("uz", 0.0)])
         .contact(
             &[
+                ("name", "fit".into()),
                 ("side_a", "inner_s1".into()),
                 ("side_b", "outer_s0".into()),
                 ("interference", 0.01.into()),
-                ("conductance", h.into()),
+                ("conductance", H_JOINT.into()),
             ],
             linear_coulomb(1e7, 1e3, 0.0),
         )
-        .push("thermal_support", fixed("inner_s0", TA))
+        .push("thermal_support", bore)
         .push("thermal_support", fixed("outer_s1", 0.0));
+    (mesh, case)
+}
+
+/// The heat flow of [`concentric`] in series, Q = 2π H T_a / (ln(m/a)/k + ln(b/m)/k + 1/(h m)).
+fn concentric_heat_flow() -> f64 {
+    TA / (((M / A).ln() / K + (B / M).ln() / K + 1.0 / (H_JOINT * M)) / (2.0 * PI * H))
+}
+
+#[test]
+fn a_joint_conductance_makes_the_temperature_jump_flux_over_h() {
+    let (m, h) = (M, H_JOINT);
+    let (mesh, case) = concentric();
     let (model, solution) = solve(mesh, &case.case());
     let heat = solution.thermal.heat.as_ref().unwrap();
-    let resistance = ((m / A).ln() / K + (B / m).ln() / K + 1.0 / (h * m)) / (2.0 * PI * H);
-    let q = TA / resistance;
+    let q = concentric_heat_flow();
     assert!(
         (heat.joints[0] - q).abs() < 1e-4 * q,
         "{} vs {q}",
@@ -210,6 +226,59 @@ fn a_joint_conductance_makes_the_temperature_jump_flux_over_h() {
         "jump {jump} vs {}",
         flux / h
     );
+}
+
+/// `summary.json` lists every step's heat flows (W, totals over 2π) by the entries' names:
+/// the thermal supports', the sources' and the conducting pairs', the same numbers as the
+/// `heat_flow_*` columns of `history.csv`, and the series flow of the closed form.
+#[test]
+fn summary_json_lists_the_heat_flows_by_name() {
+    let (mesh, case) = concentric();
+    let dir = tempfile::tempdir().unwrap();
+    let folder = asperity::run::folder::OutputFolder::scratch(dir.path()).unwrap();
+    asperity::run::run_mesh(&case.case(), mesh, 0.0, &folder, false, |_, _| Ok(())).unwrap();
+    let text = std::fs::read_to_string(dir.path().join("summary.json")).unwrap();
+    let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let heat = &summary["steps"].as_array().unwrap().last().unwrap()["heat"];
+    let history = std::fs::read_to_string(dir.path().join("history.csv")).unwrap();
+    let header: Vec<&str> = history.lines().next().unwrap().split(',').collect();
+    let last: Vec<f64> = history
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let column = |name: &str| last[header.iter().position(|h| *h == name).expect(name)];
+    let q = concentric_heat_flow();
+    for (group, name, column_name, expected) in [
+        ("supports", "bore", "heat_flow_bore", q),
+        ("supports", "outer_s1", "heat_flow_outer_s1", -q),
+        ("contacts", "fit", "heat_flow_fit", q),
+    ] {
+        let value = heat[group][name]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{group}.{name}: {heat}"));
+        assert_eq!(value, column(column_name), "{group}.{name}");
+        assert!(
+            (value - expected).abs() < 1e-4 * q,
+            "{group}.{name}: {value} vs {expected}"
+        );
+    }
+    assert_eq!(heat["sources"], serde_json::json!({}));
+    // A run without conduction has no `heat` record.
+    let plain = CaseBuilder::plane_strain()
+        .body("body", elastic(E, NU))
+        .support("s0", &[("ux", 0.0)])
+        .support("t0", &[("uy", 0.0)])
+        .traction("s1", [1.0, 0.0]);
+    let dir = tempfile::tempdir().unwrap();
+    let folder = asperity::run::folder::OutputFolder::scratch(dir.path()).unwrap();
+    let mesh = rectangle(4.0, 2.0, 2, 1, 0.0, false);
+    asperity::run::run_mesh(&plain.case(), mesh, 0.0, &folder, false, |_, _| Ok(())).unwrap();
+    let text = std::fs::read_to_string(dir.path().join("summary.json")).unwrap();
+    let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert!(summary["steps"][0].get("heat").is_none(), "{text}");
 }
 
 /// A block pressed by `p` on a base of the same size, the bottom at 0 and the top at T_a,

@@ -9,7 +9,7 @@ use std::path::Path;
 
 use crate::config::Case;
 use crate::model::{Model, Schedule};
-use crate::output::summary::{ContactResultant, Force, Named, StepSummary};
+use crate::output::summary::{ContactResultant, Force, HeatFlows, Named, StepSummary};
 use crate::solver::state::StepResult;
 use crate::{Error, Result};
 
@@ -22,8 +22,9 @@ pub(super) struct HistoryLayout {
     pairs: usize,
     /// The contact pairs that conduct heat (their heat flow columns).
     conducting_pairs: Vec<usize>,
-    /// Heat flow columns (0 without conduction).
+    /// Heat flow columns (0 without conduction), from column `heat_start` of a row.
     heat_columns: usize,
+    heat_start: usize,
     /// Values of a row.
     columns: usize,
 }
@@ -94,6 +95,7 @@ impl HistoryLayout {
             pairs: model.interface.pairs.len(),
             conducting_pairs,
             heat_columns,
+            heat_start: before_heat,
             columns: columns.len(),
         };
         (layout, columns)
@@ -188,7 +190,34 @@ impl HistoryLayout {
                     })
                     .collect(),
             ),
+            heat: self.heat_flows(model, &row[self.heat_start..]),
         }
+    }
+
+    /// The heat flows of a row from its heat columns `values` (supports, sources, conducting
+    /// pairs), when some body conducts.
+    fn heat_flows(&self, model: &Model, values: &[f64]) -> Option<HeatFlows> {
+        let c = model.thermal.conduction.as_ref()?;
+        let (supports, rest) = values.split_at(c.supports.len());
+        let (sources, pairs) = rest.split_at(c.sources.len());
+        let named = |names: Vec<&String>, values: &[f64]| {
+            Named(
+                names
+                    .into_iter()
+                    .cloned()
+                    .zip(values.iter().copied())
+                    .collect(),
+            )
+        };
+        let pair_names = self
+            .conducting_pairs
+            .iter()
+            .map(|&p| &model.interface.pairs[p].name);
+        Some(HeatFlows {
+            supports: named(c.supports.iter().map(|s| &s.name).collect(), supports),
+            sources: named(c.sources.iter().map(|s| &s.name).collect(), sources),
+            contacts: named(pair_names.collect(), pairs),
+        })
     }
 }
 
