@@ -155,6 +155,72 @@ fn a_temperature_follows_its_step_history() {
     assert!(stress < 1e-9 * E * e);
 }
 
+/// With `[steps]`, a `[[temperature]]` follows its own `factors` (one per step) as a load
+/// does, or the global load factor without them; with `[[step]]` its `factors` are refused,
+/// naming the key, as are factors of the wrong length.
+#[test]
+fn a_temperature_follows_its_own_steps_factors() {
+    let global = [0.5, 1.0, 0.25];
+    let own = [1.0, -0.5, 0.5];
+    let free = |t: toml::Table| {
+        CaseBuilder::plane_stress(1.0)
+            .body("body", steel())
+            .support("s0", &[("ux", 0.0)])
+            .support("t0", &[("uy", 0.0)])
+            .push("temperature", t)
+    };
+    for (factors, expected) in [(Some(own), own), (None, global)] {
+        let mut t = temperature("body", DT);
+        if let Some(f) = factors {
+            t.insert("factors".into(), list(&f));
+        }
+        let case = free(t).step_factors(&global).case();
+        let model = model(rectangle(10.0, 4.0, 3, 2, 0.0, false), &case).unwrap();
+        let corner = model
+            .mesh
+            .nodes
+            .iter()
+            .position(|x| x[0] == 10.0 && x[1] == 4.0)
+            .unwrap();
+        let mut seen = Vec::new();
+        asperity::solver::stepping::run_steps(&model, &settings(&case), |step| {
+            seen.push(displacement(step.solution, corner));
+            Ok(0.0)
+        })
+        .unwrap();
+        assert_eq!(seen.len(), 3);
+        for (u, f) in seen.iter().zip(expected) {
+            // u = α ΔT f x at the corner (10, 4).
+            let e = ALPHA * DT * f;
+            assert!(
+                (u[0] - 10.0 * e).abs() < 1e-9 * ALPHA * DT * 10.0,
+                "{u:?} vs {f}"
+            );
+            assert!(
+                (u[1] - 4.0 * e).abs() < 1e-9 * ALPHA * DT * 10.0,
+                "{u:?} vs {f}"
+            );
+        }
+    }
+    let refused = |case: CaseBuilder| match case.try_case() {
+        Err(e @ asperity::Error::InvalidParameter { .. }) => e.to_string(),
+        other => panic!("expected an invalid parameter, got {other:?}"),
+    };
+    let mut t = temperature("body", DT);
+    t.insert("factors".into(), list(&[1.0, 0.5]));
+    let m = refused(free(t.clone()).step_factors(&global));
+    assert!(
+        m.contains("temperature[0].factors") && m.contains("one finite value per step (3)"),
+        "{m}"
+    );
+    let step = table(&[("thermal", table(&[("body", 1.0.into())]).into())]);
+    let m = refused(free(t).push("step", step));
+    assert!(
+        m.contains("temperature[0].factors") && m.contains("[[step]]"),
+        "{m}"
+    );
+}
+
 /// Renames a structured mesh's groups: the surface "body" becomes `name`, a curve "s0"
 /// becomes "<name>_s0".
 fn named(mut mesh: Mesh, name: &str) -> Mesh {

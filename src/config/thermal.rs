@@ -8,7 +8,8 @@
 //! Every entry has a `name` (default: its group) that `[[step]]` tables name in `thermal`
 //! (`thermal = { hub = 1.0 }`): its value (ΔT, the support's temperature, flux or ambient
 //! temperature, the source's power) scales with that history like a load's magnitude; with
-//! `[steps]` it follows the global load factor. A film's h never scales.
+//! `[steps]` it follows the global load factor, or its own `factors` (one per step) as a
+//! load's. A film's h never scales.
 
 use schemars::JsonSchema;
 use serde::Deserialize;
@@ -27,6 +28,9 @@ pub struct TemperatureSpec {
     pub group: String,
     /// Temperature change ΔT in K (or °C).
     pub change: f64,
+    /// This entry's own history with `[steps]`: one factor per step (default: the `[steps]`
+    /// factors), as a load's `factors`. With `[[step]]` name it in the steps' `thermal`.
+    pub factors: Option<Vec<f64>>,
 }
 
 /// A boundary condition of the heat conduction on a physical curve (`[[thermal_support]]`):
@@ -45,6 +49,9 @@ pub struct ThermalSupportSpec {
     pub flux: Option<f64>,
     /// Convection to an ambient temperature: q = h (T_ambient − T) into the body.
     pub film: Option<FilmSpec>,
+    /// This entry's own history with `[steps]`: one factor per step (default: the `[steps]`
+    /// factors), as a load's `factors`. With `[[step]]` name it in the steps' `thermal`.
+    pub factors: Option<Vec<f64>>,
 }
 
 /// A film condition: film coefficient and ambient (sink) temperature.
@@ -69,6 +76,9 @@ pub struct HeatSourceSpec {
     pub group: String,
     /// Power per volume in W/mm³.
     pub power: f64,
+    /// This entry's own history with `[steps]`: one factor per step (default: the `[steps]`
+    /// factors), as a load's `factors`. With `[[step]]` name it in the steps' `thermal`.
+    pub factors: Option<Vec<f64>>,
 }
 
 /// The joint conductance of a contact pair (`[[contact]] conductance`): a number h in
@@ -182,6 +192,43 @@ impl Case {
         t.chain(s).chain(h)
     }
 
+    /// The thermal entries' own `[steps]` factors with their case-file keys, in the order of
+    /// [`Case::thermal_names`].
+    fn thermal_factors(&self) -> impl Iterator<Item = (String, Option<&Vec<f64>>)> {
+        let t = self.temperatures.iter().enumerate();
+        let t = t.map(|(i, t)| (format!("temperature[{i}].factors"), t.factors.as_ref()));
+        let s = self.thermal_supports.iter().enumerate();
+        let s = s.map(|(i, s)| (format!("thermal_support[{i}].factors"), s.factors.as_ref()));
+        let h = self.heat_sources.iter().enumerate();
+        let h = h.map(|(i, h)| (format!("heat_source[{i}].factors"), h.factors.as_ref()));
+        t.chain(s).chain(h)
+    }
+
+    /// Own `factors` of the thermal entries: one finite value per `[steps]` step, and none
+    /// with `[[step]]` (whose `thermal` tables give the histories).
+    fn check_thermal_factors(&self) -> Result<()> {
+        let steps = self.steps.len();
+        for (key, factors) in self.thermal_factors() {
+            let Some(f) = factors else { continue };
+            if self.has_analysis_steps() {
+                return Err(self.invalid(
+                    key,
+                    format!("{f:?}"),
+                    "per-entry factors belong to [steps]; with [[step]] give the history in \
+                     the steps' `thermal` tables",
+                ));
+            }
+            if f.len() != steps || f.iter().any(|x| !x.is_finite()) {
+                return Err(self.invalid(
+                    key,
+                    format!("{f:?}"),
+                    format!("needs one finite value per step ({steps}), got {}", f.len()),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// Whether some body conducts heat (`conductivity`).
     pub fn has_conduction(&self) -> bool {
         self.bodies.iter().any(|b| b.conductivity.is_some())
@@ -192,6 +239,7 @@ impl Case {
     /// exactly one condition per thermal support, and no body both given a uniform temperature
     /// and conducting.
     pub(super) fn check_thermal(&self) -> Result<()> {
+        self.check_thermal_factors()?;
         for (i, b) in self.bodies.iter().enumerate() {
             if let Some(a) = b.material.expansion.filter(|a| !a.is_finite()) {
                 return Err(self.invalid(

@@ -339,7 +339,8 @@ impl ModelSpec {
 /// The thermal entries of `case` with their histories (`[[step]] thermal`, or the global
 /// load factor).
 fn thermal(case: &Case) -> ThermalSpec {
-    let factors = |name: &str| history(case, Role::Thermal, name, None);
+    let factors =
+        |name: &str, own: &Option<Vec<f64>>| history(case, Role::Thermal, name, own.as_deref());
     ThermalSpec {
         temperatures: case
             .temperatures
@@ -347,7 +348,7 @@ fn thermal(case: &Case) -> ThermalSpec {
             .map(|t| BodyTemperature {
                 group: t.group.clone(),
                 change: t.change,
-                factors: factors(t.name()),
+                factors: factors(t.name(), &t.factors),
             })
             .collect(),
         supports: case
@@ -365,7 +366,7 @@ fn thermal(case: &Case) -> ThermalSpec {
                     },
                     (None, None, None) => ThermalCondition::Flux(0.0),
                 },
-                factors: factors(s.name()),
+                factors: factors(s.name(), &s.factors),
             })
             .collect(),
         sources: case
@@ -375,7 +376,7 @@ fn thermal(case: &Case) -> ThermalSpec {
                 name: h.name().to_string(),
                 group: h.group.clone(),
                 power: h.power,
-                factors: factors(h.name()),
+                factors: factors(h.name(), &h.factors),
             })
             .collect(),
     }
