@@ -364,11 +364,48 @@ fn bad_thermal_input_is_refused_with_a_clear_message() {
         mesh(),
     );
     assert!(m.contains("nowhere"), "{m}");
-    // Only a flux: nothing fixes the temperature.
+}
+
+/// A conducting body whose temperature nothing fixes is refused when the model is built
+/// (before any solve, so no cut-backs), naming the body: one with only a flux, and one held
+/// only through a contact pair without `conductance`; the same pair with a conductance
+/// holds it.
+#[test]
+fn a_body_whose_temperature_nothing_fixes_is_refused_before_the_run() {
+    let unfixed = |mesh: Mesh, case: CaseBuilder| match model(mesh, &case.case()) {
+        Err(asperity::Error::UnfixedTemperature { body, .. }) => body,
+        Err(e) => panic!("expected UnfixedTemperature, got {e}"),
+        Ok(_) => panic!("expected UnfixedTemperature, the model built"),
+    };
     let flux = table(&[("group", "s1".into()), ("flux", 1e-3.into())]);
-    let m = message(base().push("thermal_support", flux), mesh());
-    assert!(
-        m.contains("nothing fixes the temperature of body 'body'"),
-        "{m}"
+    let case = CaseBuilder::plane_strain()
+        .push("body", conducting(elastic(E, NU)))
+        .support("s0", &[("ux", 0.0)])
+        .support("t0", &[("uy", 0.0)])
+        .push("thermal_support", flux);
+    assert_eq!(
+        unfixed(rectangle(4.0, 2.0, 2, 1, 0.0, false), case.clone()),
+        "body"
     );
+    let error = model(rectangle(4.0, 2.0, 2, 1, 0.0, false), &case.case()).unwrap_err();
+    assert_eq!(error.exit_code(), 3, "{error}");
+    let message = error.to_string();
+    assert!(
+        message.contains("[[thermal_support]]") && message.contains("conductance"),
+        "{message}"
+    );
+    // The outer cylinder of the concentric pair is held only across the joint.
+    let (mesh, case) = concentric();
+    let mut through_joint = case.case();
+    through_joint.thermal_supports.pop();
+    assert!(model(mesh.clone(), &through_joint).is_ok());
+    let mut cut_off = through_joint.clone();
+    cut_off.contacts[0].conductance = None;
+    match model(mesh, &cut_off) {
+        Err(asperity::Error::UnfixedTemperature { body, .. }) => assert_eq!(body, "outer"),
+        other => panic!(
+            "expected UnfixedTemperature for 'outer', got {:?}",
+            other.err()
+        ),
+    }
 }

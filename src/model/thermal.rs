@@ -100,6 +100,7 @@ pub(super) fn build(
         joints,
     );
     check_on_conducting(&conduction, interface)?;
+    conduction.check_held(continuum, interface)?;
     Ok(Thermal {
         uniform,
         conduction: Some(conduction),
@@ -138,7 +139,7 @@ fn support(mesh: &Mesh, s: ThermalBoundary, schedule: &mut Schedule) -> Result<T
 fn check_on_conducting(conduction: &Conduction, interface: &InterfaceSet) -> Result<()> {
     for s in &conduction.supports {
         if let Some(&n) = s.lines.iter().flatten().find(|&&n| !conduction.conducts(n)) {
-            return Err(Error::Conduction(format!(
+            return Err(Error::ThermalModel(format!(
                 "thermal support '{}': node {} is on no body with `conductivity` (a thermal \
                  support needs a curve on the boundary of a conducting body)",
                 s.name,
@@ -151,7 +152,7 @@ fn check_on_conducting(conduction: &Conduction, interface: &InterfaceSet) -> Res
             && e.nodes.iter().any(|&n| !conduction.conducts(n))
         {
             let pair = &interface.pairs[e.pair as usize].name;
-            return Err(Error::Conduction(format!(
+            return Err(Error::ThermalModel(format!(
                 "contact '{pair}' has a `conductance`, but a body on one of its sides has no \
                  `conductivity`: heat can cross a joint only between conducting bodies"
             )));
