@@ -285,14 +285,7 @@ fn summary_json_lists_the_heat_flows_by_name() {
 /// the joint conducting with h0 (p/1 MPa)^n: (jump, flux through the joint, exchanges).
 fn stack(p: f64, h0: f64, n: f64) -> (f64, f64, usize) {
     let (w, t) = (4.0, 2.0);
-    let mesh = merge(
-        named(rectangle(w, t, 4, 2, 0.0, false), "base"),
-        named(
-            structured(4, 2, 0.0, false, move |s, r| [s * w, t + r * t]),
-            "block",
-        ),
-        false,
-    );
+    let mesh = stack_mesh(w, t);
     let conductance = table(&[("h0", h0.into()), ("exponent", n.into())]);
     let case = CaseBuilder::plane_strain()
         .push("body", body("base"))
@@ -316,6 +309,198 @@ fn stack(p: f64, h0: f64, n: f64) -> (f64, f64, usize) {
     // One-dimensional: q = T_a / (2t/k + 1/h) per area, the jump q / h.
     let flux = -heat.joints[0] / w;
     (TA - flux * 2.0 * t / K, flux, solution.thermal.exchanges)
+}
+
+/// A block (w × t) on a base of the same size, their faces joined at y = t.
+fn stack_mesh(w: f64, t: f64) -> Mesh {
+    merge(
+        named(rectangle(w, t, 4, 2, 0.0, false), "base"),
+        named(
+            structured(4, 2, 0.0, false, move |s, r| [s * w, t + r * t]),
+            "block",
+        ),
+        false,
+    )
+}
+
+/// Every frame of a run (the bits of the displacements, interface stresses, temperatures
+/// and energy ledger) and the state to resume from after each.
+#[derive(Default)]
+struct Frames {
+    frames: Vec<Vec<u64>>,
+    resumes: Vec<asperity::solver::state::Resume>,
+}
+
+impl asperity::solver::state::Observer for Frames {
+    fn step(
+        &mut self,
+        step: &asperity::solver::state::StepResult,
+        progress: &asperity::solver::state::Progress,
+    ) -> asperity::Result<f64> {
+        let s = step.solution;
+        let heat = s.thermal.heat.as_ref().expect("conduction solved");
+        let e = &s.energy.total;
+        let values =
+            s.u.iter()
+                .chain(s.interface_committed.iter().flat_map(|p| &p.stress));
+        let values = values
+            .chain(&heat.nodal)
+            .chain(&heat.supports)
+            .chain(&heat.joints);
+        let energy = [
+            e.external_work,
+            e.elastic_energy,
+            e.thermal_work,
+            e.friction_dissipation,
+        ];
+        self.frames
+            .push(values.chain(&energy).map(|v| v.to_bits()).collect());
+        self.resumes.push(asperity::solver::state::Resume {
+            state: progress.state.clone(),
+            stats: progress.stats.clone(),
+            solution: progress.solution.clone(),
+        });
+        Ok(0.0)
+    }
+}
+
+/// A thermal run continued from its restart record after any frame (as `--resume` reads
+/// it) repeats the uninterrupted run bit for bit: displacements, contact stresses,
+/// temperatures, heat flows and energy. The case couples both ways: a pressed block with a
+/// heat source and thermal strain, held at its sides, on a base through a pressure-dependent
+/// conductance, with the source's own `[steps]` factors.
+#[test]
+fn a_coupled_thermal_run_resumed_from_any_frame_is_bit_identical() {
+    use asperity::output::restart::{OutputState, read_record};
+    use asperity::output::writer::RecordWriter;
+    use asperity::solver::state::Solution;
+    use asperity::solver::stepping::run_steps_from;
+    let material = || with_keys(elastic(E, NU), &[("expansion", ALPHA)]);
+    let part = |name: &str| {
+        table(&[
+            ("group", name.into()),
+            ("material", material().into()),
+            ("conductivity", K.into()),
+        ])
+    };
+    let conductance = table(&[("h0", 1e-3.into()), ("exponent", 0.7.into())]);
+    let source = table(&[
+        ("group", "block".into()),
+        ("power", 5e-2.into()),
+        ("factors", list(&[0.0, 0.5, 1.0, 1.0, 0.25])),
+    ]);
+    let builder = CaseBuilder::plane_strain()
+        .push("body", part("base"))
+        .push("body", part("block"))
+        .support("base_t0", &[("uy", 0.0)])
+        .support("base_s0", &[("ux", 0.0)])
+        .support("block_s0", &[("ux", 0.0)])
+        .support("block_s1", &[("ux", 0.0)])
+        .pressure("block_t1", 5.0)
+        .contact(
+            &[
+                ("side_a", "base_t1".into()),
+                ("side_b", "block_t0".into()),
+                ("conductance", conductance.into()),
+            ],
+            linear_coulomb(1e5, 1e5, 0.2),
+        )
+        .push("heat_source", source)
+        .push("thermal_support", fixed("base_t0", 0.0))
+        .step_factors(&[1.0, 1.0, 1.0, 2.0, 2.0]);
+    let (case, text) = (builder.case(), builder.text());
+    let model = model(stack_mesh(4.0, 2.0), &case).unwrap();
+    assert!(model.is_thermally_coupled());
+    let mut reference = Frames::default();
+    run_steps_from(&model, &settings(&case), None, &mut reference).unwrap();
+    assert_eq!(reference.frames.len(), 5);
+    let exchanges = reference.resumes[2].solution.thermal.exchanges;
+    assert!(
+        exchanges > 1,
+        "the case must exchange to test the coupling: {exchanges}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("restart.bin");
+    for (k, resume) in reference.resumes.iter().enumerate() {
+        let mut writer = RecordWriter::default();
+        let (state, stats, solution) = (&resume.state, &resume.stats, &resume.solution);
+        writer
+            .write(
+                &path,
+                &text,
+                state,
+                stats,
+                solution,
+                &OutputState::default(),
+            )
+            .unwrap();
+        writer.finish().unwrap();
+        let record = read_record(&path, &text, &Solution::new(&model)).unwrap();
+        let mut resumed = Frames::default();
+        run_steps_from(&model, &settings(&case), Some(record.resume), &mut resumed).unwrap();
+        assert!(
+            resumed.frames == reference.frames[k + 1..],
+            "resumed after frame {} differs",
+            k + 1
+        );
+    }
+}
+
+/// A block held only across a joint that is open (before it is pressed) keeps the reference
+/// temperature while no heat enters it, and is refused once its source heats it.
+#[test]
+fn a_block_cut_off_by_an_open_joint_keeps_the_reference_or_is_refused() {
+    let stack = |source_factor: f64| {
+        let source = table(&[
+            ("group", "block".into()),
+            ("power", 1e-2.into()),
+            ("factors", list(&[source_factor])),
+        ]);
+        let case = CaseBuilder::plane_strain()
+            .push("body", body("base"))
+            .push("body", body("block"))
+            .support("base_t0", &[("uy", 0.0)])
+            .support("base_s0", &[("ux", 0.0)])
+            .support("block_s0", &[("ux", 0.0)])
+            .contact(
+                &[
+                    ("side_a", "base_t1".into()),
+                    ("side_b", "block_t0".into()),
+                    ("conductance", 1e-3.into()),
+                ],
+                linear_coulomb(1e5, 1e5, 0.0),
+            )
+            .push("heat_source", source)
+            .push("thermal_support", fixed("base_t0", 10.0))
+            .step_factors(&[1.0])
+            .case();
+        model(stack_mesh(4.0, 2.0), &case).unwrap()
+    };
+    let model = stack(0.0);
+    let open =
+        vec![asperity::contact::InterfaceState::default(); model.interface.elements.len() * 3];
+    assert_eq!(open[0].status, asperity::contact::ContactStatus::Open);
+    let heat = model.heat(1.0, &open).unwrap().unwrap();
+    let block = model.bodies.iter().position(|b| b == "block").unwrap() as u32;
+    for c in model.continuum.cells.iter().filter(|c| c.body == block) {
+        for &n in &c.nodes[..c.kind.node_count()] {
+            assert!(
+                heat.nodal[n as usize].abs() < 1e-12,
+                "{}",
+                heat.nodal[n as usize]
+            );
+        }
+    }
+    assert!(
+        (heat.nodal[0] - 10.0).abs() < 1e-12,
+        "the base stays at its support's value"
+    );
+    match stack(1.0).heat(1.0, &open) {
+        Err(asperity::Error::Conduction(m)) => {
+            assert!(m.contains("body 'block'") && m.contains("gap"), "{m}")
+        }
+        other => panic!("expected a conduction error, got {other:?}"),
+    }
 }
 
 #[test]

@@ -33,8 +33,9 @@ use crate::solver::state::{LoopState, Progress, Resume, RunStatistics, Solution}
 use crate::{Error, Result};
 
 /// First bytes of a record; the trailing digit is the format version (3: `postcard`; 4: the
-/// growing files' lengths and checksums instead of their rows).
-const MAGIC: &[u8; 16] = b"asperity-rst-v4\n";
+/// growing files' lengths and checksums instead of their rows; 5: the energy ledger's thermal
+/// work).
+const MAGIC: &[u8; 16] = b"asperity-rst-v5\n";
 /// Bytes of [`MAGIC`] before the format version.
 const MAGIC_NAME: usize = 14;
 
@@ -300,8 +301,10 @@ mod tests {
 
         assert_eq!(refusal(b"x,y\n1,2\n"), "not an asperity restart record");
         let mut older = good.clone();
-        older[14] = b'2';
-        assert!(refusal(&older).contains("another format"));
+        for version in [b'2', b'4'] {
+            older[14] = version;
+            assert!(refusal(&older).contains("another format"));
+        }
         for cut in [0, 10, MAGIC.len(), good.len() / 2, good.len() - 1] {
             assert_eq!(
                 refusal(&good[..cut]),

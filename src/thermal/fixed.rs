@@ -2,8 +2,9 @@
 //! and joints form regions, and each needs a temperature support or a film somewhere, else
 //! its temperature is defined only up to a constant (the conductivity matrix is singular).
 //! Checked when the model is built, with every joint that has a conductance counted as
-//! conducting, and again at each solve, where a joint conducts only at the points its
-//! contact states let heat across.
+//! conducting. At a solve a joint conducts only at the points its contact states let heat
+//! across, so open joints may cut a region off (before a pressed joint has closed, say): it
+//! keeps the reference temperature if no heat enters it, and is refused otherwise.
 
 use super::assembly::System;
 use super::{Conduction, ThermalCondition};
@@ -32,24 +33,50 @@ impl Conduction {
         }
     }
 
-    /// Refuses an assembled `system` with a region whose temperature nothing fixes: with a
-    /// model that passed [`Self::check_held`], one that open contact pairs cut off from
-    /// every held body in this increment.
-    pub(super) fn check_held_at_solve(
+    /// Settles the regions of an assembled `system` that open contact pairs cut off from
+    /// every held body in this increment (with a model that passed [`Self::check_held`]):
+    /// one into which no heat flows has no steady temperature of its own and keeps the
+    /// reference (one node is tied to 0 by a conductance the size of the system's largest,
+    /// which carries no heat since none enters); one that receives heat has no steady state
+    /// and is refused ([`Error::Conduction`]).
+    pub(super) fn hold_cut_off_regions(
         &self,
         continuum: &ContinuumSet,
-        system: &System,
+        system: &mut System,
     ) -> Result<()> {
         let links = system.entries.iter().map(|&(i, j, _)| (i, j));
-        let Some(c) = self.unheld_cell(continuum, links) else {
-            return Ok(());
-        };
-        Err(Error::Conduction(format!(
-            "nothing fixes the temperature of body '{}' near ({:.4}, {:.4}) in this increment: \
-             the contact pairs that join it to a held body carry no heat where they are open \
-             (give their `conductance` a `gap` to conduct across an open joint)",
-            self.body_names[c.body as usize], c.coords[0][0], c.coords[0][1]
-        )))
+        let (mut regions, held) = self.regions(links);
+        let mut heat: Vec<(f64, f64)> = vec![(0.0, 0.0); self.nodes.len()];
+        for (i, f) in system.f.iter().enumerate() {
+            let h = &mut heat[regions.root(i as u32) as usize];
+            *h = (h.0 + f, h.1 + f.abs());
+        }
+        let largest = system.entries.iter().fold(0.0_f64, |m, e| m.max(e.2.abs()));
+        for i in 0..self.nodes.len() as u32 {
+            let root = regions.root(i);
+            if i != root || held[root as usize] {
+                continue;
+            }
+            let (net, gross) = heat[root as usize];
+            if net.abs() > 1e-12 * gross.max(f64::MIN_POSITIVE) {
+                let c = continuum.cells.iter().find(|c| {
+                    self.conductivity[c.body as usize].is_some()
+                        && self.index[c.nodes[0] as usize].is_some_and(|n| regions.root(n) == root)
+                });
+                let (body, near) = c.map_or(("?", [0.0; 2]), |c| {
+                    (self.body_names[c.body as usize].as_str(), c.coords[0])
+                });
+                return Err(Error::Conduction(format!(
+                    "{net:.4e} W flow into body '{body}' near ({:.4}, {:.4}), which the open \
+                     contact pairs cut off from every held body in this increment: it has no \
+                     steady temperature (give their `conductance` a `gap` to conduct across \
+                     an open joint)",
+                    near[0], near[1]
+                )));
+            }
+            system.add(root as usize, root as usize, largest.max(1.0));
+        }
+        Ok(())
     }
 
     /// The links (conduction indices) of every conducting cell's nodes to its first node.
@@ -75,6 +102,18 @@ impl Conduction {
         continuum: &'a ContinuumSet,
         links: impl Iterator<Item = (u32, u32)>,
     ) -> Option<&'a ContinuumCell> {
+        let (mut regions, held) = self.regions(links);
+        continuum.cells.iter().find(|c| {
+            self.conductivity[c.body as usize].is_some() && {
+                let first = self.index[c.nodes[0] as usize].expect("conducting node");
+                !held[regions.root(first) as usize]
+            }
+        })
+    }
+
+    /// The regions of nodes joined by `links`, and per region root whether a prescribed
+    /// temperature or a film holds it.
+    fn regions(&self, links: impl Iterator<Item = (u32, u32)>) -> (Regions, Vec<bool>) {
         let mut regions = Regions::new(self.nodes.len());
         for (i, j) in links {
             regions.join(i, j);
@@ -90,12 +129,7 @@ impl Conduction {
         for i in films.chain(fixed) {
             held[regions.root(i) as usize] = true;
         }
-        continuum.cells.iter().find(|c| {
-            self.conductivity[c.body as usize].is_some() && {
-                let first = self.index[c.nodes[0] as usize].expect("conducting node");
-                !held[regions.root(first) as usize]
-            }
-        })
+        (regions, held)
     }
 }
 

@@ -25,7 +25,7 @@ impl Conduction {
         self.add_cells(continuum, &multiplier, &mut system);
         self.add_supports(&multiplier, &mut system);
         self.add_joints(interface, states, &mut system);
-        self.check_held_at_solve(continuum, &system)?;
+        self.hold_cut_off_regions(continuum, &mut system)?;
         let mut t = vec![0.0; self.nodes.len()];
         for (i, f) in self.fixed.iter().enumerate() {
             if let Some(s) = f {
