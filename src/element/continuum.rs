@@ -226,6 +226,15 @@ fn thermal_strains(kind: CellKind, t: &CellTemperature) -> [f64; MAX_CELL_POINTS
     out
 }
 
+/// What a cell takes from its body: the element formulation, the material and, when the
+/// model has temperatures, the cell's thermal eigenstrain.
+#[derive(Clone, Copy)]
+pub struct CellBody<'a> {
+    pub formulation: Formulation,
+    pub material: &'a dyn Material,
+    pub temperature: Option<&'a CellTemperature>,
+}
+
 /// Tangent stiffness and internal force of one continuum cell for element displacements `u`.
 ///
 /// Each integration point's material is updated from `committed[g]` into `trial[g]`. The
@@ -236,19 +245,19 @@ fn thermal_strains(kind: CellKind, t: &CellTemperature) -> [f64; MAX_CELL_POINTS
 /// strain is a kinematic eigenstrain, as Abaqus' *EXPANSION); the state keeps the total
 /// strain (in plane stress the material's out-of-plane ε_zz plus α ΔT). The tangent does
 /// not depend on the temperature.
-// The cell's geometry, its body's formulation, material and temperature, and the
-// evaluation's input and output: a struct would only rename the list.
-#[allow(clippy::too_many_arguments)]
 pub fn evaluate_cell(
     analysis: &Analysis,
     kind: CellKind,
     coords: &[[f64; 2]; 8],
-    formulation: Formulation,
-    material: &dyn Material,
-    temperature: Option<&CellTemperature>,
+    body: CellBody,
     input: &ElementInput<PointState>,
     output: ElementOutput<PointState>,
 ) {
+    let CellBody {
+        formulation,
+        material,
+        temperature,
+    } = body;
     let ElementInput { u, committed, .. } = *input;
     let ElementOutput { trial, mut k, f } = output;
     let out_of_plane = if analysis.is_plane_stress() {
@@ -414,9 +423,11 @@ mod tests {
             analysis,
             kind,
             &cell(kind),
-            formulation,
-            material,
-            None,
+            CellBody {
+                formulation,
+                material,
+                temperature: None,
+            },
             &ElementInput {
                 u,
                 committed,

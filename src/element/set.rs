@@ -1,7 +1,7 @@
 //! Element sets: the [`ElementSet`] trait the assembler is generic over, and the model's two
 //! sets, the continuum cells of the bodies and the interface elements of the contact pairs.
 
-use super::continuum::{CellTemperature, Formulation, evaluate_cell};
+use super::continuum::{CellBody, CellTemperature, Formulation, evaluate_cell};
 use super::interface6::{InterfaceElement, evaluate_interface};
 use super::quadrature::MAX_CELL_POINTS;
 use super::{Analysis, ElementInput, ElementMatrix, ElementOutput, ElementVector};
@@ -110,9 +110,11 @@ impl ElementSet for ContinuumSet {
             &self.analysis,
             c.kind,
             &c.coords,
-            formulation,
-            material,
-            None,
+            CellBody {
+                formulation,
+                material,
+                temperature: None,
+            },
             input,
             output,
         );
@@ -219,9 +221,11 @@ impl ElementSet for HeatedContinuum<'_> {
             &set.analysis,
             c.kind,
             &c.coords,
-            set.formulations[body],
-            set.materials[body].as_ref(),
-            temperature.as_ref(),
+            CellBody {
+                formulation: set.formulations[body],
+                material: set.materials[body].as_ref(),
+                temperature: temperature.as_ref(),
+            },
             input,
             output,
         );
