@@ -10,16 +10,18 @@ mod loads;
 mod rigid;
 mod spec;
 mod thermal;
+mod thermal_spec;
 pub mod timeline;
 
 pub use constraints::{AXIS_SUPPORT, Support};
 pub use loads::{History, Schedule, Table};
 pub use rigid::Hold;
 pub use spec::{
-    ArcLength, Body, BodyHeatSource, BodyTemperature, Contact, Control, LineLoad, Load, LoadKind,
-    ModelSpec, Prescribed, ThermalBoundary, ThermalSpec, load_factors,
+    ArcLength, Body, Contact, Control, LineLoad, Load, LoadKind, ModelSpec, Prescribed,
+    load_factors,
 };
 pub use thermal::{Thermal, UniformTemperature};
+pub use thermal_spec::{BodyHeatSource, BodyTemperature, ThermalBoundary, ThermalSpec};
 
 use crate::assembly::{Coloring, DofMap, SparsityPattern};
 use crate::element::Analysis;

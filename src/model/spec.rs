@@ -4,6 +4,7 @@
 //! checked before any mesh exists; [`Model::build`](super::Model::build) consumes the spec.
 
 use super::loads::{History, Schedule, Table, factors_history};
+use super::thermal_spec::{ThermalSpec, thermal};
 use super::timeline::{StepPlan, Timeline};
 use crate::config::wear::{WearLawKind, WearSpec};
 use crate::config::{
@@ -21,7 +22,7 @@ use crate::material::Material;
 use crate::material::elastic::LinearElastic;
 use crate::material::j2::J2Plasticity;
 use crate::mesh::interface::Pairing;
-use crate::thermal::{JointConductance, ThermalCondition};
+use crate::thermal::JointConductance;
 use crate::{Error, Result};
 
 /// The bodies, supports, loads and contact pairs of a case, with built materials and laws.
@@ -97,40 +98,6 @@ pub struct Body {
     pub expansion: f64,
     /// Thermal conductivity (W/(mm·K)); `None`: the body does not conduct.
     pub conductivity: Option<f64>,
-}
-
-/// A uniform temperature change of a body at multiplier 1 (`[[temperature]]`).
-#[derive(Clone, Debug, PartialEq)]
-pub struct BodyTemperature {
-    pub group: String,
-    pub change: f64,
-    pub factors: History,
-}
-
-/// A thermal support on a curve (`[[thermal_support]]`).
-#[derive(Clone, Debug, PartialEq)]
-pub struct ThermalBoundary {
-    pub name: String,
-    pub group: String,
-    pub condition: ThermalCondition,
-    pub factors: History,
-}
-
-/// A heat source in a body (`[[heat_source]]`).
-#[derive(Clone, Debug, PartialEq)]
-pub struct BodyHeatSource {
-    pub name: String,
-    pub group: String,
-    pub power: f64,
-    pub factors: History,
-}
-
-/// The thermal entries of a case.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct ThermalSpec {
-    pub temperatures: Vec<BodyTemperature>,
-    pub supports: Vec<ThermalBoundary>,
-    pub sources: Vec<BodyHeatSource>,
 }
 
 /// Prescribed displacement components on the nodes of a physical curve or point, at load
@@ -336,52 +303,6 @@ impl ModelSpec {
     }
 }
 
-/// The thermal entries of `case` with their histories (`[[step]] thermal`, or the global
-/// load factor).
-fn thermal(case: &Case) -> ThermalSpec {
-    let factors =
-        |name: &str, own: &Option<Vec<f64>>| history(case, Role::Thermal, name, own.as_deref());
-    ThermalSpec {
-        temperatures: case
-            .temperatures
-            .iter()
-            .map(|t| BodyTemperature {
-                group: t.group.clone(),
-                change: t.change,
-                factors: factors(t.name(), &t.factors),
-            })
-            .collect(),
-        supports: case
-            .thermal_supports
-            .iter()
-            .map(|s| ThermalBoundary {
-                name: s.name().to_string(),
-                group: s.group.clone(),
-                condition: match (s.temperature, s.flux, s.film) {
-                    (Some(t), _, _) => ThermalCondition::Temperature(t),
-                    (None, Some(q), _) => ThermalCondition::Flux(q),
-                    (None, None, Some(f)) => ThermalCondition::Film {
-                        h: f.h,
-                        ambient: f.ambient,
-                    },
-                    (None, None, None) => ThermalCondition::Flux(0.0),
-                },
-                factors: factors(s.name(), &s.factors),
-            })
-            .collect(),
-        sources: case
-            .heat_sources
-            .iter()
-            .map(|h| BodyHeatSource {
-                name: h.name().to_string(),
-                group: h.group.clone(),
-                power: h.power,
-                factors: factors(h.name(), &h.factors),
-            })
-            .collect(),
-    }
-}
-
 /// The analysis steps of `case` with the global load factor: the `[steps]` factors, or the
 /// `[[step]]` steps (cycles per jump defaulting by whether a contact wears).
 fn schedule(case: &Case) -> Schedule {
@@ -399,7 +320,7 @@ fn schedule(case: &Case) -> Schedule {
 /// The history of the support or load `name`: its own `[steps]` factors if given, else the
 /// global factor; with `[[step]]` a table per step, from its motions through the steps (the
 /// global, zero, amplitude for a support that no step names: it holds its zero value).
-fn history(case: &Case, role: Role, name: &str, factors: Option<&[f64]>) -> History {
+pub(super) fn history(case: &Case, role: Role, name: &str, factors: Option<&[f64]>) -> History {
     let column = format!("factor_{}_{name}", role.name());
     if !case.has_analysis_steps() {
         return factors.map_or(History::Global, |f| factors_history(column, f));

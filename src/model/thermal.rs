@@ -3,7 +3,7 @@
 //! joints, built from a [`ThermalSpec`]; and the temperature field at a pseudo-time that
 //! drives the bodies' thermal strains.
 
-use super::spec::{BodyHeatSource, ThermalBoundary, ThermalSpec};
+use super::thermal_spec::{BodyHeatSource, ThermalBoundary, ThermalSpec};
 use super::{Model, Schedule};
 use crate::contact::InterfaceState;
 use crate::element::set::{ContinuumSet, InterfaceSet, TemperatureField};

@@ -5,6 +5,7 @@
 //! A joint node shows its paired nodes' temperatures and the conductance of the integration
 //! point nearest to it (for the default Newton-Cotes rule the point at the node).
 
+use crate::element::set::INTERFACE_POINTS;
 use crate::model::Model;
 use crate::output::{Field, Grid};
 use crate::post::BodyPoints;
@@ -60,9 +61,9 @@ pub fn joint_values(model: &Model, solution: &Solution) -> Option<JointValues> {
         &solution.interface_committed,
         &heat.nodal,
         |at| {
-            let element = &model.interface.elements[at.slot / 3];
+            let element = &model.interface.elements[at.slot / INTERFACE_POINTS];
             let points = element.rule.points();
-            let g = at.slot % 3;
+            let g = at.slot % INTERFACE_POINTS;
             // The node this point is nearest to (b0, b1, mid at ξ = −1, 1, 0).
             let i = [-1.0, 1.0, 0.0]
                 .iter()
