@@ -8,6 +8,7 @@
 #   make prandtl                 Prandtl's punch on a perfectly plastic half-space (B-bar element)
 #   make shrink_fit              shrink-fit contact example
 #   make fretting                tapered joint pressed in, then 10^6 load cycles with wear -> out/fretting
+#   make shrink_fit_thermal      shrink fit by heating the hub; make joint_thermal: heat through a joint
 #   make test                    all tests (Rust unit/integration tests + output checks)
 #   make convergence             mesh-convergence verification studies -> out/convergence
 #   make mesh GEO=geo/X.geo SIZE=0.5   mesh a .geo script into build/mesh/
@@ -121,7 +122,7 @@ test: deps
 	$(PYTHON) pipelines/fretting/check_fretting.py --quick build/test/fretting >build/test/fretting.txt || { cat build/test/fretting.txt; exit 1; }
 	$(call convergence_studies,3,3,build/test/convergence,$(CONVERGENCE_SUMMARY))
 	@$(MAKE) --no-print-directory sweep-test fit-example OUT_FIT=build/test/fit
-	@$(MAKE) --no-print-directory examples-test install-test
+	@$(MAKE) --no-print-directory examples-test install-test thermal-test
 
 # `make doc`: the library's API documentation (target/doc/asperity), failing on a broken link.
 doc:
@@ -314,3 +315,22 @@ cyclic_press_fit: deps build
 	done
 	$(PYTHON) pipelines/cyclic_press_fit/report.py $(CYCLIC_OUT)
 	@echo "results: $(CYCLIC_OUT) (REPORT.md, loops.png, local_loops.png, cycles.png, results.pvd per run for ParaView)"
+
+## --- temperature (issue 26) -----------------------------------------------------
+# Each example runs its case (pipelines/<name>/case.toml) in variants, checks it against closed
+# forms and writes REPORT.md with the figures; the target fails when a check fails.
+# `make thermal-test` runs their quick forms (coarse meshes) for `make test`.
+.PHONY: joint_thermal shrink_fit_thermal thermal-test
+
+#   make shrink_fit_thermal      hub heated to clear the shaft, then cooled onto it (Lamé) -> out/shrink_fit_thermal
+#   make joint_thermal           slideway joint with a heat source: pressure-dependent joint conductance -> out/joint_thermal
+shrink_fit_thermal joint_thermal: deps build
+	$(PYTHON) pipelines/$@.py --out out/$@
+	@echo "results: out/$@ (REPORT.md, figures, one folder per run with results.pvd for ParaView)"
+
+thermal-test: deps build
+	@mkdir -p build/test
+	@for e in shrink_fit_thermal joint_thermal; do \
+	  echo "example $$e (coarse)"; \
+	  $(PYTHON) pipelines/$$e.py --quick --out build/test/$$e >build/test/$$e.txt 2>&1 || { cat build/test/$$e.txt; exit 1; }; \
+	done

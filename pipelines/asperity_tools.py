@@ -191,6 +191,53 @@ def read_step(out: Path, step: int | None = None):
     return blocks
 
 
+def solver_statistics(summary: dict) -> list[str]:
+    """A run's counters and phase times (from its summary.json), worded as `asperity run`
+    prints them."""
+    t, s = summary["totals"], summary["seconds"]
+    steps = (f"{t['steps']} converged in {t['increments']} increments ({t['cutbacks']} cut-backs), "
+             f"{t['iterations']} Newton iterations ({t['unsymmetric_solves']} unsymmetric solves, "
+             f"{t['krylov_iterations']} BiCGSTAB iterations); final relative residual "
+             f"{rust_exp(summary['final_residual'])}")
+    times = (f"mesh {s['mesh']:.3f}, model {s['model']:.3f}, ordering+symbolic {s['symbolic']:.3f}, "
+             f"assembly {s['assembly']:.3f}, factorisation {s['factorisation']:.3f}, solve {s['solve']:.3f}, "
+             f"output {s['output']:.3f}")
+    return [steps, times]
+
+
+class Checks:
+    """The checks of a report: each is recorded as a line `PASS|FAIL what` (what carries the
+    numbers compared and the tolerance); `failures` lists the failed ones, and `markdown` the
+    lines as a list for REPORT.md."""
+
+    def __init__(self) -> None:
+        self.lines: list[str] = []
+        self.failures: list[str] = []
+
+    def __call__(self, ok: bool, what: str) -> bool:
+        ok = bool(ok)
+        self.lines.append(f"{'PASS' if ok else '**FAIL**'} {what}")
+        if not ok:
+            self.failures.append(what)
+        return ok
+
+    def markdown(self) -> str:
+        return "\n".join(f"- {line}" for line in self.lines)
+
+    def exit_on_failure(self, name: str) -> None:
+        """Exits non-zero, naming the failed checks, if one failed."""
+        if self.failures:
+            sys.exit(f"{name}: checks failed:\n  " + "\n  ".join(self.failures))
+
+
+def body_points(grid, body: str) -> np.ndarray:
+    """The point ids of body `body` (a `[[body]]` group) in a bodies grid of `read_step`
+    (its cells' points; a body's points are its own, also where it touches another)."""
+    index = list(grid.field_data["body_names"]).index(body)
+    cells = np.flatnonzero(np.asarray(grid.cell_data["body"]) == index)
+    return np.unique(grid.extract_cells(cells).point_data["vtkOriginalPointIds"])
+
+
 def write_report(path: Path, title: str, sections: list[tuple[str, str]]) -> None:
     """REPORT.md with a title and (heading, markdown) sections."""
     parts = [f"# {title}\n"] + [f"## {h}\n\n{body.strip()}\n" for h, body in sections]

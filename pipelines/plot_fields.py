@@ -23,8 +23,11 @@ from asperity_tools import read_step  # noqa: E402
 pv.OFF_SCREEN = True
 
 
-def von_mises_picture(out: Path, scale: float | None) -> Path:
-    blocks = read_step(out)
+def field_picture(out: Path, scalars: str, title: str, name: str, step: int | None = None,
+                  scale: float | None = None) -> Path:
+    """The bodies' point field `scalars` on the deformed shape of step `step` (default: the
+    last) as OUT/<name>.png."""
+    blocks = read_step(out, step)
     grid = blocks["bodies"]
     u = np.asarray(grid.point_data["displacement"])
     size = max(grid.bounds[1] - grid.bounds[0], grid.bounds[3] - grid.bounds[2])
@@ -32,15 +35,19 @@ def von_mises_picture(out: Path, scale: float | None) -> Path:
     factor = scale if scale is not None else (0.05 * size / umax if umax > 0 else 0.0)
     warped = grid.warp_by_vector("displacement", factor=factor)
     plotter = pv.Plotter(off_screen=True, window_size=(1200, 900))
-    plotter.add_mesh(warped.extract_surface(nonlinear_subdivision=3, algorithm='dataset_surface'), scalars="von_mises", cmap="viridis",
-                     scalar_bar_args={"title": "von Mises stress [MPa]"})
+    plotter.add_mesh(warped.extract_surface(nonlinear_subdivision=3, algorithm='dataset_surface'), scalars=scalars, cmap="viridis",
+                     scalar_bar_args={"title": title})
     plotter.add_mesh(grid.extract_feature_edges(), color="gray", opacity=0.4)
     plotter.add_text(f"step {int(blocks.field_data['step'][0])}, deformation x {factor:.3g}", font_size=10)
     plotter.view_xy()
-    path = out / "von_mises.png"
+    path = out / f"{name}.png"
     plotter.screenshot(path)
     plotter.close()
     return path
+
+
+def von_mises_picture(out: Path, scale: float | None) -> Path:
+    return field_picture(out, "von_mises", "von Mises stress [MPa]", "von_mises", scale=scale)
 
 
 def reaction_plot(out: Path) -> Path:

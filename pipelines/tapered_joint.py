@@ -29,7 +29,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from asperity_tools import ROOT, read_contact, read_history, run_cases, rust_exp, table, variant, write_report  # noqa: E402
+from asperity_tools import (ROOT, read_contact, read_history, run_cases, solver_statistics, table, variant,  # noqa: E402
+                            write_report)  # noqa: E402
 
 RESIDUAL_TOLERANCE = 5e-4  # [solver] residual_tolerance default (README): equilibrium accuracy
 HERE = Path(__file__).resolve().parent
@@ -73,20 +74,6 @@ def curve(out: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
     u_a = np.array([axial_displacement(read_contact(out, "cone", s)) for s in steps])
     force = history["load_factor"] * P0 * np.pi * R_TOP**2
     return history["load_factor"], force, u_a, history
-
-
-def solver_statistics(summary: dict) -> list[str]:
-    """A run's counters and phase times (from its summary.json), worded as `asperity run`
-    prints them."""
-    t, s = summary["totals"], summary["seconds"]
-    steps = (f"{t['steps']} converged in {t['increments']} increments ({t['cutbacks']} cut-backs), "
-             f"{t['iterations']} Newton iterations ({t['unsymmetric_solves']} unsymmetric solves, "
-             f"{t['krylov_iterations']} BiCGSTAB iterations); final relative residual "
-             f"{rust_exp(summary['final_residual'])}")
-    times = (f"mesh {s['mesh']:.3f}, model {s['model']:.3f}, ordering+symbolic {s['symbolic']:.3f}, "
-             f"assembly {s['assembly']:.3f}, factorisation {s['factorisation']:.3f}, solve {s['solve']:.3f}, "
-             f"output {s['output']:.3f}")
-    return [steps, times]
 
 
 def check(condition: bool, message: str, failures: list[str]) -> str:

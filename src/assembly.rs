@@ -783,6 +783,7 @@ mod tests {
             cells,
             materials: vec![Box::new(J2Plasticity::new(elastic, 1.0, 50.0).unwrap())],
             formulations: vec![Formulation::Full],
+            expansions: vec![0.0],
         };
         (set, node_count, fixed)
     }

@@ -121,6 +121,25 @@ pub enum Error {
     /// The linear solver failed (e.g. the stiffness matrix is singular: a body without supports).
     #[error("linear solver: {0}")]
     Linear(String),
+    /// The steady heat conduction cannot be solved in an increment (open joints cut a body
+    /// off from every held temperature, a singular conductivity matrix).
+    #[error("heat conduction: {0}")]
+    Conduction(String),
+    /// A conducting body whose temperature nothing fixes: no temperature support or film on
+    /// it or on a body joined to it by a conducting contact pair (the conduction would be
+    /// singular): found before anything is solved.
+    #[error(
+        "model: nothing fixes the temperature of body '{body}' (near ({:.4}, {:.4})): give it a \
+         [[thermal_support]] with `temperature` or `film`, or join it through a [[contact]] \
+         `conductance` to a body that has one",
+        near[0],
+        near[1]
+    )]
+    UnfixedTemperature { body: String, near: [f64; 2] },
+    /// A thermal entry the mesh cannot carry (a thermal support or a conducting joint on a
+    /// node of no conducting body).
+    #[error("model: {0}")]
+    ThermalModel(String),
     /// A load step did not converge, even after cutting it back.
     #[error("{0}")]
     NoConvergence(Box<NoConvergence>),
@@ -404,6 +423,7 @@ impl Error {
             | Error::ArcLengthNoLoad
             | Error::ArcLengthStart(_)
             | Error::Linear(_)
+            | Error::Conduction(_)
             | Error::WearJump { .. }
             | Error::WornThrough { .. }
             | Error::WornBeyondBody { .. }
@@ -435,7 +455,9 @@ impl Error {
             | Error::Quantity { .. }
             | Error::External(_)
             | Error::Restart { .. }
-            | Error::RigidBodyMotion { .. } => 3,
+            | Error::RigidBodyMotion { .. }
+            | Error::UnfixedTemperature { .. }
+            | Error::ThermalModel(_) => 3,
             Error::Io { .. } => 4,
             Error::Collapse { .. } => 5,
             Error::StudyLevel { source, .. } => source.exit_code(),

@@ -41,5 +41,6 @@ pub mod run;
 pub mod solver;
 pub mod study;
 pub mod sweep;
+pub mod thermal;
 
 pub use error::{Error, Result};

@@ -258,12 +258,20 @@ impl Page {
             let table_like =
                 |t: &Value| t["properties"].is_object() || tagged_variants(t).is_some();
             let items = self.resolve(&target["items"]);
+            // A value that is a number or a table (`conductance = h` or `{ h0, exponent }`):
+            // the table form's keys in a section of their own too.
+            let table_form = target["anyOf"].as_array().and_then(|forms| {
+                forms
+                    .iter()
+                    .map(|f| self.resolve(f))
+                    .find(|f| table_like(f))
+            });
             let section = if table_like(&target) {
                 Some(target)
             } else if primary_type(&target).as_deref() == Some("array") && table_like(&items) {
                 Some(items)
             } else {
-                None
+                table_form
             };
             if let Some(schema) = section {
                 let child = format!("{path}.{key}");

@@ -20,10 +20,7 @@ fn case(hardening: &str, steps: &str) -> String {
     let text = std::fs::read_to_string(source.join(format!("{hardening}.toml")))
         .unwrap()
         .replace("vtu = true", "vtu = false")
-        .replace(
-            "../../geo/",
-            &format!("{}/geo/", env!("CARGO_MANIFEST_DIR")),
-        );
+        .replace("\"../../", &format!("\"{}/", env!("CARGO_MANIFEST_DIR")));
     let cycling = text.find("[[step]]\nname = \"cycling\"").unwrap();
     let output = text.find("[output]").unwrap();
     format!("{}{steps}\n{}", &text[..cycling], &text[output..])

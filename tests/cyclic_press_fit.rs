@@ -16,10 +16,7 @@ fn verdicts(case: &str) -> (Vec<(String, String)>, String) {
     let text = std::fs::read_to_string(source.join(format!("{case}.toml")))
         .unwrap()
         .replace("vtu = true", "vtu = false")
-        .replace(
-            "../../geo/",
-            &format!("{}/geo/", env!("CARGO_MANIFEST_DIR")),
-        );
+        .replace("\"../../", &format!("\"{}/", env!("CARGO_MANIFEST_DIR")));
     let path = dir.path().join("case.toml");
     std::fs::write(&path, text).unwrap();
     let out = dir.path().join("out");

@@ -84,12 +84,15 @@ fn solution() -> Solution {
                 friction_dissipation: awkward(34),
                 wear_work: awkward(35),
                 numerical_dissipation: awkward(36),
+                thermal_work: awkward(37),
             },
             previous_force: (40..50).map(awkward).collect(),
             weights: Default::default(),
         },
         // Output of the last cycle end only: not part of the record.
         jump_use: vec![0.25],
+        // Recomputed from the model when a run continues: not part of the record.
+        thermal: Default::default(),
     }
 }
 
@@ -154,6 +157,7 @@ fn a_record_gives_back_every_bit() {
         internal: Default::default(),
         energy: EnergyLedger::default(),
         jump_use: vec![0.0],
+        thermal: Default::default(),
     };
     let record = read_record(&path, "case text", &template).unwrap();
     let resume = &record.resume;

@@ -50,3 +50,6 @@ Physical Surface("hub") = {2};
 Physical Curve("shaft_ends") = {1, 3};
 Physical Curve("hub_ends") = {hub_ends[]};
 Physical Curve("hub_outer") = {hub_outer};
+// The bottom end planes alone (z = 0), for a slice free to expand axially.
+Physical Curve("shaft_bottom") = {1};
+Physical Curve("hub_bottom") = {5};

@@ -44,6 +44,7 @@ impl Case {
         self.check_laws()?;
         self.check_hysteresis_points()?;
         self.check_wear()?;
+        self.check_thermal()?;
         self.check_quantities()
     }
 

@@ -26,6 +26,7 @@ mod quantity;
 mod solver;
 mod step_checks;
 mod steps;
+pub mod thermal;
 pub mod wear;
 
 pub use check::{MAX_CUTBACKS, MAX_ITERATIONS, MAX_STEPS, MAX_TOLERANCE};
@@ -34,6 +35,9 @@ pub use names::{MAX_NAME_LEN, check_name};
 pub use quantity::{Component, QuantityKind, QuantitySpec, Statistic, parse_quantity};
 pub use solver::{ContactAlgorithmKind, LinearSolverKind, SolverSpec};
 pub use steps::{AmplitudeSpec, InlineAmplitude, Leg, Motion, Role, StepSpec, Target};
+pub use thermal::{
+    Conductance, ConductanceSpec, FilmSpec, HeatSourceSpec, TemperatureSpec, ThermalSupportSpec,
+};
 
 /// A parsed case file.
 #[derive(Clone, Debug, Deserialize, JsonSchema)]
@@ -51,6 +55,15 @@ pub struct Case {
     /// Contact pairs carried by interface elements.
     #[serde(default, rename = "contact")]
     pub contacts: Vec<ContactSpec>,
+    /// Uniform temperature changes of bodies (`[[temperature]]`, [`thermal`]).
+    #[serde(default, rename = "temperature")]
+    pub temperatures: Vec<TemperatureSpec>,
+    /// Boundary conditions of the heat conduction (`[[thermal_support]]`, [`thermal`]).
+    #[serde(default, rename = "thermal_support")]
+    pub thermal_supports: Vec<ThermalSupportSpec>,
+    /// Volumetric heat sources (`[[heat_source]]`, [`thermal`]).
+    #[serde(default, rename = "heat_source")]
+    pub heat_sources: Vec<HeatSourceSpec>,
     /// The simple load schedule (exclusive with `[[step]]`).
     #[serde(default)]
     pub steps: Steps,
@@ -139,6 +152,10 @@ pub struct BodySpec {
     /// bodies and for ν ≥ 0.45 in plane strain and axisymmetry, full otherwise (see
     /// [`Formulation::for_body`](crate::element::continuum::Formulation::for_body)).
     pub formulation: Option<FormulationKind>,
+    /// Thermal conductivity k in W/(mm·K): the body takes part in the steady heat
+    /// conduction, whose temperature drives its thermal strain (exclusive with a
+    /// `[[temperature]]` entry for it).
+    pub conductivity: Option<f64>,
 }
 
 /// The element formulation of a body (`[[body]] formulation`).
@@ -182,6 +199,10 @@ pub struct MaterialSpec {
     /// linear `hardening` when both are given. Q < 0 is cyclic softening. Needs
     /// `yield_stress`.
     pub isotropic: Option<VoceSpec>,
+    /// Linear thermal expansion coefficient α in 1/K (default 0): the thermal strain
+    /// α ΔT in every direction, ΔT from `[[temperature]]` or the heat conduction. Plastic
+    /// strain and the other properties do not depend on the temperature.
+    pub expansion: Option<f64>,
 }
 
 /// The most backstresses `kinematic` may list (the material's
@@ -356,6 +377,10 @@ pub struct ContactSpec {
     pub law: LawSpec,
     /// Wear of the pair's surfaces (default: none).
     pub wear: Option<wear::WearSpec>,
+    /// Joint conductance for the heat conduction: h in W/(mm²·K), or `{ h0, exponent }` for
+    /// h = h0 (|p|/1 MPa)^exponent, optionally with `gap` for open points (default: no heat
+    /// crosses an open point). See [`thermal::ConductanceSpec`].
+    pub conductance: Option<ConductanceSpec>,
     /// Points (x, y in mm, on the contact) whose local loops p_T against u_T are written to
     /// `point_loops_<name>.csv` at every frame (default: none).
     #[serde(default)]

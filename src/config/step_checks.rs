@@ -89,9 +89,11 @@ impl Case {
         let supports = self.supports.iter().map(|s| s.name());
         let amplitudes = self.amplitudes.iter().map(|a| a.name.as_str());
         let steps = (0..self.analysis_steps.len()).map(|i| self.analysis_steps[i].name(i));
-        let kinds: [(&str, Vec<String>); 4] = [
+        let thermal = self.thermal_names().map(|(name, _)| name);
+        let kinds: [(&str, Vec<String>); 5] = [
             ("load", loads.map(String::from).collect()),
             ("support", supports.map(String::from).collect()),
+            ("thermal", thermal.map(String::from).collect()),
             ("amplitude", amplitudes.map(String::from).collect()),
             ("step", steps.collect()),
         ];
@@ -185,20 +187,20 @@ impl Case {
     /// Whether a load or support of `step` follows an amplitude.
     fn step_has_amplitude(&self, step: &StepSpec) -> bool {
         let targets = step.loads.values().chain(step.supports.values());
+        let targets = targets.chain(step.thermal.values());
         targets.into_iter().any(|t| !matches!(t, Target::Ramp(_)))
     }
 
     /// The `loads` and `supports` tables of step `i`: known names and amplitudes, finite
     /// ramps, valid inline tables.
     fn check_step_targets(&self, i: usize, step: &StepSpec) -> Result<()> {
-        for role in [Role::Load, Role::Support] {
-            let (table, known): (_, Vec<&str>) = match role {
-                Role::Load => (&step.loads, self.loads.iter().map(|l| l.name()).collect()),
-                Role::Support => (
-                    &step.supports,
-                    self.supports.iter().map(|s| s.name()).collect(),
-                ),
-            };
+        for role in [Role::Load, Role::Support, Role::Thermal] {
+            let table = step.table(role);
+            let known: Vec<&str> = self
+                .history_names()
+                .filter(|(r, _, _)| *r == role)
+                .map(|(_, _, name)| name)
+                .collect();
             for (name, target) in table {
                 let key = format!("step[{i}].{}.{name}", role.key());
                 if !known.contains(&name.as_str()) {
@@ -206,8 +208,8 @@ impl Case {
                         key,
                         format!("{name:?}"),
                         format!(
-                            "no [[{}]] has this name (known: {})",
-                            role.name(),
+                            "no {} has this name (known: {})",
+                            role.entries(),
                             known.join(", ")
                         ),
                     ));
@@ -303,19 +305,20 @@ impl Case {
             let nonzero = match role {
                 Role::Load => true,
                 Role::Support => self.supports[i].is_nonzero(),
+                Role::Thermal => self.thermal_names().nth(i).is_some_and(|(_, v)| v != 0.0),
             };
-            let named = self.analysis_steps.iter().any(|s| match role {
-                Role::Load => s.loads.contains_key(name),
-                Role::Support => s.supports.contains_key(name),
-            });
+            let named = self
+                .analysis_steps
+                .iter()
+                .any(|s| s.table(role).contains_key(name));
             if nonzero && !named {
                 return Err(self.invalid(
                     format!("{}[{i}]", role.name()),
                     format!("{name:?}"),
                     format!(
-                        "this {} is named in no [[step]], so it would never be applied: name it \
-                         in a step's `{}` table",
-                        role.name(),
+                        "this {} entry is named in no [[step]], so it would never be applied: \
+                         name it in a step's `{}` table",
+                        role.entries(),
                         role.key()
                     ),
                 ));

@@ -71,6 +71,10 @@ pub struct StepSpec {
     /// Supports by name, as `loads`.
     #[serde(default)]
     pub supports: BTreeMap<String, Target>,
+    /// `[[temperature]]`, `[[thermal_support]]` and `[[heat_source]]` entries by name, as
+    /// `loads` (their ΔT, temperature, flux, ambient temperature or power scales).
+    #[serde(default)]
+    pub thermal: BTreeMap<String, Target>,
 }
 
 fn one() -> usize {
@@ -87,6 +91,15 @@ impl StepSpec {
         self.name
             .clone()
             .unwrap_or_else(|| format!("step-{}", index + 1))
+    }
+
+    /// The step's table of `role` (`loads`, `supports`, `thermal`).
+    pub fn table(&self, role: Role) -> &BTreeMap<String, Target> {
+        match role {
+            Role::Load => &self.loads,
+            Role::Support => &self.supports,
+            Role::Thermal => &self.thermal,
+        }
     }
 
     /// Whether the step repeats its amplitudes.
@@ -119,6 +132,8 @@ impl StepSpec {
 pub enum Role {
     Load,
     Support,
+    /// A temperature, thermal support or heat source.
+    Thermal,
 }
 
 impl Role {
@@ -127,14 +142,25 @@ impl Role {
         match self {
             Role::Load => "loads",
             Role::Support => "supports",
+            Role::Thermal => "thermal",
         }
     }
 
-    /// The role's name in column headers (`load`, `support`).
+    /// The case-file tables of the role's entries, for messages.
+    pub fn entries(self) -> &'static str {
+        match self {
+            Role::Load => "[[load]]",
+            Role::Support => "[[support]]",
+            Role::Thermal => "[[temperature]], [[thermal_support]] or [[heat_source]]",
+        }
+    }
+
+    /// The role's name in column headers (`load`, `support`, `thermal`).
     pub fn name(self) -> &'static str {
         match self {
             Role::Load => "load",
             Role::Support => "support",
+            Role::Thermal => "thermal",
         }
     }
 }
@@ -207,10 +233,7 @@ impl Case {
         self.analysis_steps
             .iter()
             .map(|step| {
-                let table = match role {
-                    Role::Load => &step.loads,
-                    Role::Support => &step.supports,
-                };
+                let table = step.table(role);
                 let motion = match table.get(name) {
                     None => Motion::Hold,
                     Some(Target::Ramp(v)) => Motion::Ramp(*v),
@@ -229,14 +252,17 @@ impl Case {
             .collect()
     }
 
-    /// The supports' and loads' names with their role and case-file index: supports first
-    /// (the order of the per-load columns of `history.csv`).
+    /// The supports', loads' and thermal entries' names with their role and index (case-file
+    /// order; the thermal entries' as [`Case::thermal_names`]): supports first (the order of
+    /// the per-load columns of `history.csv`).
     pub fn history_names(&self) -> impl Iterator<Item = (Role, usize, &str)> {
         let supports = self.supports.iter().enumerate();
         let loads = self.loads.iter().enumerate();
+        let thermal = self.thermal_names().enumerate();
         supports
             .map(|(i, s)| (Role::Support, i, s.name()))
             .chain(loads.map(|(i, l)| (Role::Load, i, l.name())))
+            .chain(thermal.map(|(i, (name, _))| (Role::Thermal, i, name)))
     }
 }
 

@@ -201,6 +201,41 @@ pub fn min_jacobian(kind: CellKind, coords: &[[f64; 2]; 8]) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
+/// The thermal eigenstrain of a cell: its body's linear expansion coefficient α (1/K) and
+/// the temperature change from the stress-free reference at its nodes (node order of the
+/// cell; a uniform change has the same value at every node).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CellTemperature {
+    pub expansion: f64,
+    pub nodal: [f64; 8],
+}
+
+/// The components of the isotropic unit strain m = (1, 1, 0, 1) (xx, yy, zz; rr, zz, θθ):
+/// the directions a thermal strain α ΔT m stretches.
+pub const NORMAL_COMPONENTS: [usize; 3] = [0, 1, ZZ];
+
+/// The thermal strain magnitude α ΔT at every point of `kind`'s rule, ΔT interpolated from
+/// the nodal values with the cell's shape functions.
+fn thermal_strains(kind: CellKind, t: &CellTemperature) -> [f64; MAX_CELL_POINTS] {
+    let mut out = [0.0; MAX_CELL_POINTS];
+    for (e, p) in out.iter_mut().zip(cell_rule(kind)) {
+        let s = cell_shape(kind, p.xi, p.eta);
+        let dt: f64 = (0..kind.node_count()).map(|i| s.n[i] * t.nodal[i]).sum();
+        *e = t.expansion * dt;
+    }
+    out
+}
+
+/// What a cell takes from its body: the element formulation, the material, when the model
+/// has temperatures the cell's thermal eigenstrain, and when the material has internal
+/// variables (backstresses) their history.
+pub struct CellBody<'a> {
+    pub formulation: Formulation,
+    pub material: &'a dyn Material,
+    pub temperature: Option<&'a CellTemperature>,
+    pub history: Option<CellHistory<'a>>,
+}
+
 /// Tangent stiffness and internal force of one continuum cell for element displacements `u`.
 ///
 /// Each integration point's material is updated from `committed[g]` into `trial[g]`, and,
@@ -208,19 +243,25 @@ pub fn min_jacobian(kind: CellKind, coords: &[[f64; 2]; 8]) -> f64 {
 /// [`Material::internal_variables`] each). The tangent is accumulated into `k` only when `k`
 /// is given (residual-only evaluations skip it). Cells must have passed [`min_jacobian`] at
 /// model set-up.
+///
+/// With a `temperature`, the material sees the mechanical strain ε − α ΔT m (the thermal
+/// strain is a kinematic eigenstrain, as Abaqus' *EXPANSION); the state keeps the total
+/// strain (in plane stress the material's out-of-plane ε_zz plus α ΔT). The tangent does
+/// not depend on the temperature.
 pub fn evaluate_cell(
     analysis: &Analysis,
     kind: CellKind,
     coords: &[[f64; 2]; 8],
-    formulation: Formulation,
-    material: CellMaterial,
+    body: CellBody,
     input: &ElementInput<PointState>,
     output: ElementOutput<PointState>,
 ) {
-    let CellMaterial {
-        law: material,
+    let CellBody {
+        formulation,
+        material,
+        temperature,
         mut history,
-    } = material;
+    } = body;
     let ElementInput { u, committed, .. } = *input;
     let ElementOutput { trial, mut k, f } = output;
     let out_of_plane = if analysis.is_plane_stress() {
@@ -230,9 +271,16 @@ pub fn evaluate_cell(
     };
     let stride = material.internal_variables();
     let points = cell_kinematics(analysis, kind, coords, formulation);
+    let thermal = temperature
+        .filter(|t| t.expansion != 0.0)
+        .map(|t| thermal_strains(kind, t));
     for (g, pk) in points.iter().enumerate() {
-        let strain: Voigt = pk.b * u;
-        let (state, d) = match history.as_mut() {
+        let mut strain: Voigt = pk.b * u;
+        let eigen = thermal.map(|t| t[g]);
+        for c in NORMAL_COMPONENTS {
+            strain[c] -= eigen.unwrap_or_default();
+        }
+        let (mut state, d) = match history.as_mut() {
             Some(h) => {
                 let slots = g * stride..(g + 1) * stride;
                 material.update_with_history(
@@ -245,6 +293,11 @@ pub fn evaluate_cell(
             }
             None => material.update(&strain, &committed[g], out_of_plane),
         };
+        if let Some(eigen) = eigen {
+            for c in NORMAL_COMPONENTS {
+                state.strain[c] += eigen;
+            }
+        }
         f.gemv_tr(pk.dvol, &pk.b, &state.stress, 1.0);
         if let Some(k) = k.as_deref_mut() {
             let db = d * pk.b;
@@ -260,20 +313,6 @@ pub fn evaluate_cell(
 pub struct CellHistory<'a> {
     pub committed: &'a [f64],
     pub trial: &'a mut [f64],
-}
-
-/// A cell's material and, when it has internal variables, their history.
-#[derive(Debug)]
-pub struct CellMaterial<'a> {
-    pub law: &'a dyn Material,
-    pub history: Option<CellHistory<'a>>,
-}
-
-impl<'a> From<&'a dyn Material> for CellMaterial<'a> {
-    /// A material without internal variables.
-    fn from(law: &'a dyn Material) -> Self {
-        Self { law, history: None }
-    }
 }
 
 /// The kinematics of a cell at all points of its rule, with the B matrices of
@@ -409,8 +448,12 @@ mod tests {
             analysis,
             kind,
             &cell(kind),
-            formulation,
-            material.into(),
+            CellBody {
+                formulation,
+                material,
+                temperature: None,
+                history: None,
+            },
             &ElementInput {
                 u,
                 committed,

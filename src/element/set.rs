@@ -4,7 +4,7 @@
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use super::continuum::{CellHistory, CellMaterial, Formulation, evaluate_cell};
+use super::continuum::{CellBody, CellHistory, CellTemperature, Formulation, evaluate_cell};
 use super::interface6::{InterfaceElement, evaluate_interface};
 use super::quadrature::{MAX_CELL_POINTS, cell_rule};
 use super::{Analysis, ElementInput, ElementMatrix, ElementOutput, ElementVector};
@@ -79,6 +79,8 @@ pub struct ContinuumSet {
     pub materials: Vec<Box<dyn Material>>,
     /// Element formulation of each body.
     pub formulations: Vec<Formulation>,
+    /// Linear thermal expansion coefficient α (1/K) of each body (0: no thermal strain).
+    pub expansions: Vec<f64>,
 }
 
 impl ElementSet for ContinuumSet {
@@ -111,8 +113,12 @@ impl ElementSet for ContinuumSet {
             &self.analysis,
             c.kind,
             &c.coords,
-            formulation,
-            material.into(),
+            CellBody {
+                formulation,
+                material,
+                temperature: None,
+                history: None,
+            },
             input,
             output,
         );
@@ -197,25 +203,64 @@ impl InternalLayout {
     }
 }
 
-/// The continuum cells together with their internal variables: the set assembly evaluates
-/// when some body has internal variables (kinematic hardening). The trial values are written
-/// by the parallel element evaluations, each into its own cell's range, through atomic
-/// stores (plain stores on the usual targets) so that no evaluation order can race.
+/// The temperature change from the stress-free reference that drives the thermal strains:
+/// per body a uniform change, or the nodal field (of the conduction solve).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TemperatureField {
+    /// Per body: its uniform change, or `None` where it follows [`Self::nodal`]. Empty: no
+    /// temperature anywhere.
+    pub bodies: Vec<Option<f64>>,
+    /// Per mesh node (read only for the bodies that follow it).
+    pub nodal: Vec<f64>,
+}
+
+impl TemperatureField {
+    /// The temperature change of cell `cell`'s nodes (its body's uniform value, or the nodal
+    /// field), or `None` when there is no temperature.
+    pub fn cell(&self, cell: &ContinuumCell) -> Option<[f64; 8]> {
+        match self.bodies.get(cell.body as usize)? {
+            Some(uniform) => Some([*uniform; 8]),
+            None => {
+                let mut t = [0.0; 8];
+                for (t, &n) in t.iter_mut().zip(&cell.nodes[..cell.kind.node_count()]) {
+                    *t = self.nodal.get(n as usize).copied().unwrap_or(0.0);
+                }
+                Some(t)
+            }
+        }
+    }
+}
+
+/// The continuum cells in the context of one evaluation: the temperature field that drives
+/// their thermal strains (eigenstrains, [`evaluate_cell`]) and, when some body has internal
+/// variables (kinematic hardening), their committed values and the trial ones to write.
+/// Tangents do not depend on the temperature, so the reference matrices are the set's.
 #[derive(Debug)]
-pub struct ContinuumWithHistory<'a> {
+pub struct ContinuumInContext<'a> {
     pub set: &'a ContinuumSet,
-    pub layout: &'a InternalLayout,
-    pub committed: &'a [f64],
+    pub field: &'a TemperatureField,
+    history: Option<SharedHistory<'a>>,
+}
+
+/// The continuum's internal variables during a parallel assembly. The trial values are
+/// written by the element evaluations, each into its own cell's range, through atomic stores
+/// (plain stores on the usual targets) so that no evaluation order can race.
+#[derive(Debug)]
+struct SharedHistory<'a> {
+    layout: &'a InternalLayout,
+    committed: &'a [f64],
     trial: &'a [AtomicU64],
 }
 
 /// Internal variables one cell holds at most: its points times the largest stride.
 const MAX_CELL_INTERNAL: usize = MAX_CELL_POINTS * crate::material::MAX_INTERNAL_VARIABLES;
 
-impl<'a> ContinuumWithHistory<'a> {
-    /// The set with its committed internal variables and the trial ones to write.
+impl<'a> ContinuumInContext<'a> {
+    /// The set under the temperature `field`, with its committed internal variables and the
+    /// trial ones to write (both empty when `layout` is).
     pub fn new(
         set: &'a ContinuumSet,
+        field: &'a TemperatureField,
         layout: &'a InternalLayout,
         committed: &'a [f64],
         trial: &'a mut [f64],
@@ -223,21 +268,32 @@ impl<'a> ContinuumWithHistory<'a> {
         const { assert!(std::mem::align_of::<AtomicU64>() == std::mem::align_of::<f64>()) };
         assert_eq!(committed.len(), layout.len());
         assert_eq!(trial.len(), layout.len());
-        // SAFETY: AtomicU64 has the size of f64 and (checked above) its alignment, and the
-        // exclusive borrow of `trial` for 'a makes these atomics its only access.
-        let trial = unsafe {
-            std::slice::from_raw_parts(trial.as_mut_ptr().cast::<AtomicU64>(), trial.len())
-        };
+        let history = (!layout.is_empty()).then(|| {
+            // SAFETY: AtomicU64 has the size of f64 and (checked above) its alignment, and
+            // the exclusive borrow of `trial` for 'a makes these atomics its only access.
+            let trial = unsafe {
+                std::slice::from_raw_parts(trial.as_mut_ptr().cast::<AtomicU64>(), trial.len())
+            };
+            SharedHistory {
+                layout,
+                committed,
+                trial,
+            }
+        });
         Self {
             set,
-            layout,
-            committed,
-            trial,
+            field,
+            history,
         }
+    }
+
+    /// Whether some body has internal variables.
+    pub fn has_history(&self) -> bool {
+        self.history.is_some()
     }
 }
 
-impl ElementSet for ContinuumWithHistory<'_> {
+impl ElementSet for ContinuumInContext<'_> {
     type State = PointState;
 
     fn len(&self) -> usize {
@@ -258,32 +314,40 @@ impl ElementSet for ContinuumWithHistory<'_> {
         input: &ElementInput<PointState>,
         output: ElementOutput<PointState>,
     ) {
-        let range = self.layout.range(e);
-        if range.is_empty() {
-            return self.set.evaluate(e, input, output);
-        }
         let set = self.set;
         let c = &set.cells[e];
         let body = c.body as usize;
+        let temperature = self.field.cell(c).map(|nodal| CellTemperature {
+            expansion: set.expansions[body],
+            nodal,
+        });
+        let range = self.history.as_ref().map_or(0..0, |h| h.layout.range(e));
         let mut trial = [0.0; MAX_CELL_INTERNAL];
         let trial = &mut trial[..range.len()];
+        let history = match &self.history {
+            Some(h) if !range.is_empty() => Some(CellHistory {
+                committed: &h.committed[range.clone()],
+                trial: &mut *trial,
+            }),
+            _ => None,
+        };
         evaluate_cell(
             &set.analysis,
             c.kind,
             &c.coords,
-            set.formulations[body],
-            CellMaterial {
-                law: set.materials[body].as_ref(),
-                history: Some(CellHistory {
-                    committed: &self.committed[range.clone()],
-                    trial: &mut *trial,
-                }),
+            CellBody {
+                formulation: set.formulations[body],
+                material: set.materials[body].as_ref(),
+                temperature: temperature.as_ref(),
+                history,
             },
             input,
             output,
         );
-        for (slot, value) in self.trial[range].iter().zip(trial.iter()) {
-            slot.store(value.to_bits(), Ordering::Relaxed);
+        if let Some(h) = &self.history {
+            for (slot, value) in h.trial[range].iter().zip(trial.iter()) {
+                slot.store(value.to_bits(), Ordering::Relaxed);
+            }
         }
     }
 

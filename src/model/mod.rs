@@ -10,6 +10,8 @@ mod loads;
 mod penalty;
 mod rigid;
 mod spec;
+mod thermal;
+mod thermal_spec;
 pub mod timeline;
 
 pub use constraints::{AXIS_SUPPORT, Support};
@@ -20,6 +22,8 @@ pub use spec::{
     ArcLength, Body, Contact, Control, LineLoad, Load, LoadKind, ModelSpec, PairLaw, Prescribed,
     load_factors,
 };
+pub use thermal::{Thermal, UniformTemperature};
+pub use thermal_spec::{BodyHeatSource, BodyTemperature, ThermalBoundary, ThermalSpec};
 
 use crate::assembly::{Coloring, DofMap, SparsityPattern};
 use crate::contact::laws::{self, LawDescriptor};
@@ -62,6 +66,8 @@ pub struct Model {
     pub schedule: Schedule,
     /// How the steps are driven and checked.
     pub control: Control,
+    /// Uniform body temperatures and the heat conduction.
+    pub thermal: Thermal,
     /// Size of the model (bounding-box diagonal) in mm.
     pub size: f64,
     pub dofs: DofMap,
@@ -80,7 +86,10 @@ impl Model {
             contacts,
             mut schedule,
             control,
+            thermal,
         } = spec;
+        let conductivity: Vec<Option<f64>> = bodies.iter().map(|b| b.conductivity).collect();
+        let joints = contacts.iter().map(|c| c.conductance).collect();
         // Interfaces first: splitting a conforming curve re-points body B's cells.
         let topologies = insert_interfaces(&mut mesh, &bodies, &contacts)?;
         let (bodies, continuum) = build_continuum(&mesh, analysis, bodies)?;
@@ -99,6 +108,15 @@ impl Model {
         } = prescribe(&mesh, analysis, &supports, &in_body, scale, &mut schedule)?;
         let nodal_loads =
             nodal_loads(&mesh, analysis, &continuum, &loads, &in_body, &mut schedule)?;
+        let inputs = thermal::ThermalInputs {
+            mesh: &mesh,
+            bodies: &bodies,
+            continuum: &continuum,
+            interface: &interface,
+            conductivity,
+            joints,
+        };
+        let thermal = thermal::build(inputs, thermal, &mut schedule)?;
         let Numbering {
             dofs,
             pattern,
@@ -119,6 +137,7 @@ impl Model {
             nodal_loads,
             schedule,
             control,
+            thermal,
             size: scale,
             dofs,
             pattern,
@@ -394,6 +413,7 @@ fn build_continuum(
     let mut names: Vec<String> = Vec::new();
     let mut materials = Vec::new();
     let mut formulations = Vec::new();
+    let mut expansions = Vec::new();
     let mut cells = Vec::new();
     for (
         b,
@@ -401,6 +421,8 @@ fn build_continuum(
             group: name,
             material,
             formulation,
+            expansion,
+            ..
         },
     ) in bodies.into_iter().enumerate()
     {
@@ -450,6 +472,7 @@ fn build_continuum(
         names.push(name);
         materials.push(material);
         formulations.push(formulation);
+        expansions.push(expansion);
     }
     for g in mesh
         .groups
@@ -468,6 +491,7 @@ fn build_continuum(
             cells,
             materials,
             formulations,
+            expansions,
         },
     ))
 }

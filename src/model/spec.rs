@@ -4,6 +4,7 @@
 //! checked before any mesh exists; [`Model::build`](super::Model::build) consumes the spec.
 
 use super::loads::{History, Schedule, Table, factors_history};
+use super::thermal_spec::{ThermalSpec, thermal};
 use super::timeline::{StepPlan, Timeline};
 use crate::config::wear::{WearLawKind, WearSpec};
 use crate::config::{
@@ -22,6 +23,7 @@ use crate::material::cyclic::{CyclicPlasticity, KinematicTerm, Voce};
 use crate::material::elastic::LinearElastic;
 use crate::material::j2::J2Plasticity;
 use crate::mesh::interface::Pairing;
+use crate::thermal::JointConductance;
 use crate::{Error, Result};
 
 /// The bodies, supports, loads and contact pairs of a case, with built materials and laws.
@@ -38,6 +40,8 @@ pub struct ModelSpec {
     pub schedule: Schedule,
     /// How the steps are controlled and when a converged increment is implausible.
     pub control: Control,
+    /// Uniform body temperatures, thermal supports and heat sources.
+    pub thermal: ThermalSpec,
 }
 
 /// How the load steps are driven and checked (`[steps]` and the bounds of `[solver]`).
@@ -91,6 +95,10 @@ pub struct Body {
     pub group: String,
     pub material: Box<dyn Material>,
     pub formulation: Formulation,
+    /// Linear thermal expansion coefficient α (1/K).
+    pub expansion: f64,
+    /// Thermal conductivity (W/(mm·K)); `None`: the body does not conduct.
+    pub conductivity: Option<f64>,
 }
 
 /// Prescribed displacement components on the nodes of a physical curve or point, at load
@@ -145,6 +153,8 @@ pub struct Contact {
     pub interference: f64,
     pub law: PairLaw,
     pub wear: Option<WearModel>,
+    /// The joint's heat conductance (`None`: no heat crosses it).
+    pub conductance: Option<JointConductance>,
 }
 
 /// The interface law of a contact pair: built, or, when the case leaves a penalty stiffness
@@ -204,6 +214,8 @@ impl ModelSpec {
                         group: b.group.clone(),
                         material,
                         formulation,
+                        expansion: b.material.expansion.unwrap_or(0.0),
+                        conductivity: b.conductivity,
                     })
                 })
                 .collect::<Result<_>>()?;
@@ -225,6 +237,13 @@ impl ModelSpec {
                     interference: c.interference,
                     law,
                     wear: c.wear.as_ref().map(wear_model),
+                    conductance: c.conductance.and_then(|h| h.conductance().ok()).map(|h| {
+                        JointConductance {
+                            h0: h.h0,
+                            exponent: h.exponent,
+                            gap: h.gap,
+                        }
+                    }),
                 })
             })
             .collect::<Result<_>>()?;
@@ -296,6 +315,7 @@ impl ModelSpec {
             contacts,
             schedule: schedule(case),
             control,
+            thermal: thermal(case),
         })
     }
 }
@@ -317,7 +337,7 @@ fn schedule(case: &Case) -> Schedule {
 /// The history of the support or load `name`: its own `[steps]` factors if given, else the
 /// global factor; with `[[step]]` a table per step, from its motions through the steps (the
 /// global, zero, amplitude for a support that no step names: it holds its zero value).
-fn history(case: &Case, role: Role, name: &str, factors: Option<&[f64]>) -> History {
+pub(super) fn history(case: &Case, role: Role, name: &str, factors: Option<&[f64]>) -> History {
     let column = format!("factor_{}_{name}", role.name());
     if !case.has_analysis_steps() {
         return factors.map_or(History::Global, |f| factors_history(column, f));

@@ -37,7 +37,7 @@ use crate::{Error, Result};
 
 /// First bytes of a record; the trailing digit is the format version (3: `postcard`; 4: the
 /// growing files' lengths and checksums instead of their rows; 5: the continuum's internal
-/// variables, the backstresses of kinematic hardening).
+/// variables, the backstresses of kinematic hardening, and the energy ledger's thermal work).
 const MAGIC: &[u8; 16] = b"asperity-rst-v5\n";
 /// Bytes of [`MAGIC`] before the format version.
 const MAGIC_NAME: usize = 14;
@@ -251,6 +251,8 @@ impl Body<'_> {
             energy: self.energy.into_owned(),
             // Output of the last cycle end only, not a state to continue from.
             jump_use: template.jump_use.clone(),
+            // Recomputed from the model at the record's time when the run continues.
+            thermal: Default::default(),
         };
         Record {
             resume: Resume {
@@ -278,6 +280,7 @@ mod tests {
             internal: Default::default(),
             energy: EnergyLedger::default(),
             jump_use: vec![],
+            thermal: Default::default(),
         }
     }
 
@@ -319,8 +322,10 @@ mod tests {
 
         assert_eq!(refusal(b"x,y\n1,2\n"), "not an asperity restart record");
         let mut older = good.clone();
-        older[14] = b'2';
-        assert!(refusal(&older).contains("another format"));
+        for version in [b'2', b'4'] {
+            older[14] = version;
+            assert!(refusal(&older).contains("another format"));
+        }
         for cut in [0, 10, MAGIC.len(), good.len() / 2, good.len() - 1] {
             assert_eq!(
                 refusal(&good[..cut]),

@@ -23,7 +23,7 @@ use crate::mesh::topology::directed_chains;
 use crate::model::Model;
 use crate::output::csv::CsvTable;
 use crate::output::{Field, FieldValues, Grid};
-use crate::post::{BodyPoints, nodal_values};
+use crate::post::{BodyPoints, nodal_values, thermal};
 use crate::solver::state::Solution;
 
 /// Names of the scalar point fields, in the order of [`NodalContact::values`].
@@ -541,7 +541,35 @@ impl InterfaceOutput {
                 row.extend(v);
             }
         }
+        if let Some(heat) = thermal::joint_values(model, solution) {
+            for ((k, table), p) in tables.iter_mut().enumerate().zip(&self.pairs) {
+                table
+                    .columns
+                    .extend(thermal::JOINT_FIELDS.iter().map(|s| s.to_string()));
+                for (row, &n) in table.rows.iter_mut().zip(&p.nodes) {
+                    row.extend(heat.get(k, n));
+                }
+            }
+        }
         tables
+    }
+
+    /// The (pair, side-B node) of every grid point and table row, in order.
+    fn pair_nodes(&self) -> impl Iterator<Item = (usize, u32)> + '_ {
+        let pairs = self.pairs.iter().enumerate();
+        pairs.flat_map(|(k, p)| p.nodes.iter().map(move |&n| (k, n)))
+    }
+
+    /// Adds the joints' heat transfer ([`thermal::JOINT_FIELDS`]) to the interface `grid`
+    /// when some pair conducts heat.
+    pub fn add_joint_heat(&self, grid: &mut Grid, model: &Model, solution: &Solution) {
+        let Some(values) = thermal::joint_values(model, solution) else {
+            return;
+        };
+        for (f, name) in thermal::JOINT_FIELDS.iter().enumerate() {
+            let column = self.pair_nodes().map(|(p, n)| values.get(p, n)[f]);
+            grid.point_data.push(Field::scalar(name, column.collect()));
+        }
     }
 
     /// Adds the fretting point data ([`FRETTING`]; `regime` as integers) to the interface

@@ -26,6 +26,7 @@ pub mod backstress;
 pub mod fretting;
 pub mod interface;
 pub mod quantities;
+pub mod thermal;
 
 /// Extrapolation matrix (nodes × integration points) of a cell kind.
 pub(crate) fn extrapolation(kind: CellKind) -> &'static DMatrix<f64> {
@@ -276,10 +277,12 @@ pub fn step_grids(
     bodies
         .point_data
         .extend(backstress::fields(model, points, &solution.internal));
+    thermal::add_body_fields(&mut bodies, model, points, solution);
     bodies.field_data.extend(info.field_data());
     let interface = (!model.interface.elements.is_empty()).then(|| {
         let mut grid = interface.grid(model, &solution.interface_committed);
         interface.add_fretting(&mut grid, model, solution);
+        interface.add_joint_heat(&mut grid, model, solution);
         grid.point_data.push(nodal_vector(
             "displacement",
             &interface.nodes(),

@@ -11,6 +11,9 @@
 //! - friction dissipation += Σ p_T,{n+1} Δu_Tᵖ dA (Buczkowski & Kleiber (1994), Eq. 6);
 //! - wear work += Σ −½ (p_N,n + p_N,{n+1}) Δh dA (p_N ≤ 0: removed material takes energy out);
 //! - numerical dissipation += Σ ½ (σ_n − σ_{n+1}):Δεᵖ dV + Σ ½ (p_T,n − p_T,{n+1}) Δu_Tᵖ dA;
+//! - thermal work += Σ ½ (σ_n + σ_{n+1}):Δε_th dV, the work of the stresses on the thermal
+//!   strains (computed as the stress work on the total strain less the stored, plastic and
+//!   numerical terms of the same point, for the bodies with an expansion coefficient);
 //! - interface energy += the interfaces' trapezoidal work Σ ½ (p_n + p_{n+1})·Δu_rel dA minus
 //!   their friction, numerical and wear terms (for a linear law without wear: Δ(½ p²/k)).
 //!
@@ -47,6 +50,11 @@ pub struct Energy {
     pub wear_work: f64,
     /// Dissipation of the time discretisation itself (vanishes as increments shrink).
     pub numerical_dissipation: f64,
+    /// Work of the bodies' stresses on their thermal strains, Σ ½ (σ_n + σ_{n+1}):Δε_th dV:
+    /// the mechanical work the thermal expansion takes from the bodies (negative when a
+    /// heated body pushes against its surroundings and so supplies work).
+    #[serde(default)]
+    pub thermal_work: f64,
 }
 
 impl Energy {
@@ -63,7 +71,11 @@ impl Energy {
     /// External work minus everything it went into: the work of the out-of-balance forces
     /// the convergence criteria accepted (0 for exact equilibrium).
     pub fn imbalance(&self) -> f64 {
-        self.external_work - self.stored() - self.dissipation() - self.numerical_dissipation
+        self.external_work
+            - self.stored()
+            - self.dissipation()
+            - self.numerical_dissipation
+            - self.thermal_work
     }
 
     /// Whether the books still hold after a wear jump and its re-equilibrium. A jump's wear
@@ -108,6 +120,7 @@ impl Sub for Energy {
             friction_dissipation: self.friction_dissipation - earlier.friction_dissipation,
             wear_work: self.wear_work - earlier.wear_work,
             numerical_dissipation: self.numerical_dissipation - earlier.numerical_dissipation,
+            thermal_work: self.thermal_work - earlier.thermal_work,
         }
     }
 }
@@ -273,7 +286,7 @@ impl EnergyLedger {
     /// The bodies' stored energy (from the trial states), plastic work and the numerical
     /// part of the trapezoidal rule on it; returns the plastic dissipation per body.
     fn record_bodies(&mut self, model: &Model, increment: &Increment) -> Vec<f64> {
-        let (mut elastic, mut plastic, mut numerical) = (0.0, 0.0, 0.0);
+        let (mut elastic, mut plastic, mut numerical, mut thermal) = (0.0, 0.0, 0.0, 0.0);
         let mut bodies = vec![0.0; model.bodies.len()];
         let cells = &model.continuum.cells;
         let slots = increment
@@ -283,14 +296,25 @@ impl EnergyLedger {
             .zip(self.weights.volumes.chunks_exact(MAX_CELL_POINTS));
         for (cell, ((trial, committed), volumes)) in cells.iter().zip(slots) {
             let material = model.continuum.materials[cell.body as usize].as_ref();
+            let expands = model.continuum.expansions[cell.body as usize] != 0.0;
             let points = cell_rule(cell.kind).len();
             for ((t, c), &dv) in trial.iter().zip(committed).zip(volumes).take(points) {
                 let plastic_increment = t.plastic_strain - c.plastic_strain;
-                elastic += material.elastic_energy(t) * dv;
-                let work = t.stress.dot(&plastic_increment) * dv;
-                plastic += work;
-                bodies[cell.body as usize] += work;
-                numerical += 0.5 * (c.stress - t.stress).dot(&plastic_increment) * dv;
+                let stored = material.elastic_energy(t);
+                let point_plastic = t.stress.dot(&plastic_increment);
+                let point_numerical = 0.5 * (c.stress - t.stress).dot(&plastic_increment);
+                elastic += stored * dv;
+                plastic += point_plastic * dv;
+                bodies[cell.body as usize] += point_plastic * dv;
+                numerical += point_numerical * dv;
+                if expands {
+                    // The stress work on the total strain less its mechanical part (the
+                    // stored, plastic and numerical terms above): the work on α ΔT m.
+                    let work = 0.5 * (c.stress + t.stress).dot(&(t.strain - c.strain));
+                    let mechanical =
+                        stored - material.elastic_energy(c) + point_plastic + point_numerical;
+                    thermal += (work - mechanical) * dv;
+                }
             }
         }
         let (stored, released) =
@@ -299,6 +323,7 @@ impl EnergyLedger {
         t.elastic_energy = elastic + stored;
         t.plastic_dissipation += plastic - released;
         t.numerical_dissipation += numerical;
+        t.thermal_work += thermal;
         bodies
     }
 

@@ -10,7 +10,8 @@ use crate::assembly::{
 use crate::contact::{ContactAlgorithm, InterfaceState};
 use crate::element::interface6::evaluate_interface;
 use crate::element::set::{
-    ContinuumWithHistory, ElementSet, INTERFACE_POINTS, InterfaceSet, InternalLayout,
+    ContinuumInContext, ElementSet, INTERFACE_POINTS, InterfaceSet, InternalLayout,
+    TemperatureField,
 };
 use crate::element::{ElementInput, ElementMatrix, ElementOutput, ElementVector};
 use crate::material::PointState;
@@ -97,6 +98,8 @@ pub struct Mechanics<'a> {
     pub internal_layout: &'a InternalLayout,
     pub internal_committed: &'a [f64],
     pub internal_trial: &'a mut [f64],
+    /// The temperature change driving the bodies' thermal strains.
+    pub temperature: &'a TemperatureField,
 }
 
 impl Problem for Mechanics<'_> {
@@ -152,18 +155,17 @@ impl Problem for Mechanics<'_> {
     fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) {
         let m = self.model;
         let (cc, ct) = (self.committed, &mut *self.trial);
-        if !self.internal_layout.is_empty() {
-            let set = ContinuumWithHistory::new(
-                &m.continuum,
-                self.internal_layout,
-                self.internal_committed,
-                self.internal_trial,
-            );
-            system.assemble_reusing(input, &set, &m.continuum_coloring, cc, ct);
-        } else if m.continuum.is_linear() {
-            system.assemble(input, &m.continuum, &m.continuum_coloring, cc, ct);
+        let bodies = ContinuumInContext::new(
+            &m.continuum,
+            self.temperature,
+            self.internal_layout,
+            self.internal_committed,
+            &mut *self.internal_trial,
+        );
+        if !bodies.has_history() && m.continuum.is_linear() {
+            system.assemble(input, &bodies, &m.continuum_coloring, cc, ct);
         } else {
-            system.assemble_reusing(input, &m.continuum, &m.continuum_coloring, cc, ct);
+            system.assemble_reusing(input, &bodies, &m.continuum_coloring, cc, ct);
         }
     }
 

@@ -21,6 +21,7 @@ use crate::solver::energy::{EnergyLedger, Increment};
 use crate::solver::mechanics::Mechanics;
 use crate::solver::newton::{ForceAverage, NewtonLog};
 use crate::solver::shakedown::BodyCycles;
+use crate::thermal::ThermalState;
 
 /// The evolving solution: displacements and integration-point states.
 #[derive(Clone, Debug)]
@@ -44,6 +45,9 @@ pub struct Solution {
     /// [`Solution::end_cycle`] for the cycle-end output; not part of the state a run
     /// continues from.
     pub jump_use: Vec<f64>,
+    /// The temperatures of the current increment (not part of a restart record: they follow
+    /// from the model, the time and the interface states).
+    pub thermal: ThermalState,
 }
 
 impl Solution {
@@ -60,6 +64,7 @@ impl Solution {
             internal: InternalVariables::new(model),
             energy: EnergyLedger::default(),
             jump_use: vec![0.0; model.interface.pairs.len()],
+            thermal: ThermalState::default(),
         }
     }
 
@@ -96,6 +101,7 @@ impl Solution {
             internal_layout: &self.internal.layout,
             internal_committed: &self.internal.committed,
             internal_trial: &mut self.internal.trial,
+            temperature: &self.thermal.field,
         };
         (&mut self.u, problem)
     }

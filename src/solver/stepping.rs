@@ -17,6 +17,7 @@ use crate::assembly::{AssemblyInput, GlobalSystem};
 use crate::contact::{ContactStatus, InterfaceState};
 use crate::error::{Attempt, AttemptFailure, NoConvergence};
 use crate::model::Model;
+use crate::solver::coupling;
 use crate::solver::diagnosis::{diagnose, implausible_increment, step_failure};
 use crate::solver::newton::Problem;
 use crate::solver::newton::{Newton, NewtonLog, NewtonSettings, distance, norm};
@@ -75,6 +76,7 @@ pub fn run_steps_from(
     } = resume.unwrap_or_else(|| Resume::start(model));
     newton.restore_force_average(state.force_average);
     solution.reset_trial();
+    coupling::start_temperatures(model, &mut solution, state.time)?;
     let mut converged_u = solution.u.clone();
     let mut f_ext = vec![0.0; model.dofs.dof_count()];
     let constant_tangent = !model.control.plastic && model.interface.elements.is_empty();
@@ -117,8 +119,15 @@ pub fn run_steps_from(
             if schedule.leaves_direction(state.time, trial_time) {
                 release_slip(&mut solution.interface_committed);
             }
-            let (u, mut problem) = solution.split(model);
-            let attempt = newton.solve_increment(&mut problem, u, &f_ext, state.force_floor);
+            let attempt = coupling::solve_increment(
+                model,
+                settings,
+                &mut newton,
+                &mut solution,
+                trial_time,
+                &f_ext,
+                state.force_floor,
+            );
             let implausible = match &attempt {
                 Ok(log) if log.converged => implausible_increment(model, &solution, &converged_u),
                 _ => None,

@@ -1,0 +1,102 @@
+//! The temperatures of an increment and their staggered coupling with the mechanics
+//! (Abaqus' sequentially coupled thermal-stress analysis, iterated within the increment):
+//! the conduction is solved with the contact states of the last converged increment, the
+//! mechanics with its temperature; when a joint's conductance depends on the contact
+//! (pressure, open or closed), the conduction is solved again with the new contact states
+//! and the mechanics again with the new temperature, until the temperature changes by no more
+//! than the Newton displacement tolerance (relative to its largest value). The increment's
+//! pressures then agree with its temperatures to the same tolerance.
+
+use crate::Result;
+use crate::model::Model;
+use crate::solver::newton::{Newton, NewtonLog, NewtonSettings};
+use crate::solver::state::Solution;
+
+/// Most conduction–mechanics exchanges of one increment; an increment that needs more is
+/// cut back like one whose Newton iterations do not converge.
+pub const MAX_EXCHANGES: usize = 50;
+
+/// Sets the temperatures of `solution` to those of pseudo-time `time` with the joints in the
+/// committed contact states (the start of an increment, or of a resumed run).
+pub fn start_temperatures(model: &Model, solution: &mut Solution, time: f64) -> Result<()> {
+    if !model.has_temperature() {
+        return Ok(());
+    }
+    let heat = model.heat(time, &solution.interface_committed)?;
+    solution.thermal.field = model.temperature_field(time, heat.as_ref());
+    solution.thermal.heat = heat;
+    solution.thermal.exchanges = 0;
+    Ok(())
+}
+
+/// Solves the increment ending at pseudo-time `time` (prescribed displacements already set
+/// in `solution.u`): temperatures, then Newton, then, for a coupled model, the exchanges.
+/// The log's iterations count every Newton solve of the exchanges; an increment whose
+/// exchanges do not settle within [`MAX_EXCHANGES`] returns a log that did not converge.
+pub fn solve_increment(
+    model: &Model,
+    settings: &NewtonSettings,
+    newton: &mut Newton,
+    solution: &mut Solution,
+    time: f64,
+    external_force: &[f64],
+    force_floor: f64,
+) -> Result<NewtonLog> {
+    start_temperatures(model, solution, time)?;
+    let mut iterations = 0;
+    loop {
+        let (u, mut problem) = solution.split(model);
+        let mut log = newton.solve_increment(&mut problem, u, external_force, force_floor)?;
+        iterations += log.iterations;
+        log.iterations = iterations;
+        if !log.converged || !model.is_thermally_coupled() {
+            return Ok(log);
+        }
+        let heat = model.heat(time, &solution.interface_trial)?;
+        let change = relative_change(
+            solution.thermal.heat.as_ref().map(|h| h.nodal.as_slice()),
+            heat.as_ref().map(|h| h.nodal.as_slice()),
+        );
+        let thermal = &mut solution.thermal;
+        thermal.exchanges += 1;
+        thermal.field = model.temperature_field(time, heat.as_ref());
+        thermal.heat = heat;
+        if change <= settings.displacement_tolerance {
+            tracing::info!(
+                "thermal-mechanical coupling: {} exchange(s), last temperature change {change:.2e} \
+                 (relative)",
+                thermal.exchanges
+            );
+            return Ok(log);
+        }
+        if thermal.exchanges >= MAX_EXCHANGES {
+            tracing::info!(
+                "thermal-mechanical coupling: no agreement after {MAX_EXCHANGES} exchanges \
+                 (temperature change {change:.2e}, relative)"
+            );
+            log.converged = false;
+            return Ok(log);
+        }
+        tracing::debug!(
+            "thermal-mechanical exchange {}: temperature change {change:.2e} (relative)",
+            thermal.exchanges
+        );
+    }
+}
+
+/// Largest change from `old` to `new` relative to the largest |new| (0 when both vanish).
+fn relative_change(old: Option<&[f64]>, new: Option<&[f64]>) -> f64 {
+    let (Some(old), Some(new)) = (old, new) else {
+        return 0.0;
+    };
+    let scale = new.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    let change = old
+        .iter()
+        .zip(new)
+        .fold(0.0_f64, |m, (a, b)| m.max((a - b).abs()));
+    if change == 0.0 {
+        0.0
+    } else {
+        change / scale.max(f64::MIN_POSITIVE)
+    }
+}
