@@ -141,6 +141,17 @@ impl Case {
                 format!("`{name}` needs a `yield_stress` (body '{}')", b.group),
             ));
         }
+        if let Some(sy) = m.yield_stress.filter(|sy| !(sy.is_finite() && *sy > 0.0)) {
+            // before the bounds below that depend on it (Q > −yield_stress)
+            return Err(self.invalid(
+                key("yield_stress"),
+                sy,
+                format!(
+                    "the yield stress (MPa) must be positive and finite (body '{}')",
+                    b.group
+                ),
+            ));
+        }
         if let Some(terms) = m.kinematic.as_ref().map(|k| k.as_slice()) {
             if terms.is_empty() || terms.len() > MAX_KINEMATIC_TERMS {
                 return Err(self.invalid(
