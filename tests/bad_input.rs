@@ -410,6 +410,12 @@ fn case_values_out_of_range_are_named() {
             Case,
         ),
         (
+            // a case-file mistake, named by its key rather than by an element both claim
+            "one physical surface in two bodies",
+            case_plus("[[body]]\ngroup = \"plate\"\nmaterial = { E = 2000.0, nu = 0.3 }"),
+            Invalid("body[1].group"),
+        ),
+        (
             // named by its own key, not by the Voce Q it makes look out of range
             "negative yield stress with cyclic hardening",
             case_edit(

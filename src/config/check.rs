@@ -310,8 +310,8 @@ impl Case {
         Ok(())
     }
 
-    /// Every group and pair name (they become parts of file names and CSV headers), and no
-    /// pair name used twice (two pairs of one name would overwrite each other's files, and
+    /// Every group and pair name (they become parts of file names and CSV headers), no
+    /// physical surface in two bodies, and no pair name used twice (two pairs of one name would overwrite each other's files, and
     /// two identical pairs would double the interface).
     fn check_names(&self) -> Result<()> {
         let mut names: Vec<(String, &str)> = Vec::new();
@@ -341,6 +341,17 @@ impl Case {
         }
         for (key, name) in names {
             check_name(name).map_err(|reason| self.invalid(key, format!("{name:?}"), reason))?;
+        }
+        let mut bodies = BTreeSet::new();
+        for (i, b) in self.bodies.iter().enumerate() {
+            if !bodies.insert(&b.group) {
+                return Err(self.invalid(
+                    format!("body[{i}].group"),
+                    format!("{:?}", b.group),
+                    "another [[body]] has this physical surface: give each surface one body \
+                     (and one material)",
+                ));
+            }
         }
         let mut seen = BTreeSet::new();
         for (i, c) in self.contacts.iter().enumerate() {
