@@ -443,6 +443,7 @@ fn check(case: &Path) -> asperity::Result<String> {
     let scratch = tempfile::tempdir().map_err(|e| asperity::Error::io(std::env::temp_dir(), e))?;
     let mesh = run::load_mesh(&parsed, &OutputFolder::scratch(scratch.path())?)?;
     let model = Model::build(mesh, spec)?;
+    run::check_history_of(&parsed, &model)?;
     Ok(format!(
         "{}\ncase {}: ok",
         ModelReport(&model),

@@ -410,6 +410,22 @@ fn case_values_out_of_range_are_named() {
             Case,
         ),
         (
+            // a case-file mistake, named by its key rather than by an element both claim
+            "one physical surface in two bodies",
+            case_plus("[[body]]\ngroup = \"plate\"\nmaterial = { E = 2000.0, nu = 0.3 }"),
+            Invalid("body[1].group"),
+        ),
+        (
+            // named by its own key, not by the Voce Q it makes look out of range
+            "negative yield stress with cyclic hardening",
+            case_edit(
+                "material = { E = 1000.0, nu = 0.3 }",
+                "material = { E = 1000.0, nu = 0.3, yield_stress = -200.0, \
+                 isotropic = { Q = 50.0, b = 10.0 }, kinematic = [{ C = 1.0, gamma = 0.0 }] }",
+            ),
+            Invalid("body[0].material.yield_stress"),
+        ),
+        (
             "thickness negative",
             case_edit("thickness = 1.0", "thickness = -5.0"),
             Invalid("analysis.thickness"),

@@ -86,3 +86,43 @@ fn history_has_the_start_the_factors_and_the_requested_quantities() {
         assert!((row["reaction_base_x"] + row["lid_x"]).abs() <= 1e-6 * load);
     }
 }
+
+/// A `[[history]]` entry named like a column history.csv already has (`time`, a support's
+/// reaction) would write two columns of one name, and a CSV reader keyed by name would read
+/// the wrong one: `asperity check` and `asperity run` refuse it, naming the entry, before
+/// anything is written.
+#[test]
+fn a_history_name_that_repeats_a_column_is_refused_by_check_and_run() {
+    for (name, column) in [("time", "time"), ("reaction_base_y", "reaction_base_y")] {
+        let dir = tempfile::tempdir().unwrap();
+        let path = two_blocks(0.5)
+            .push(
+                "history",
+                table(&[
+                    ("name", name.into()),
+                    ("kind", "reaction".into()),
+                    ("support", "base".into()),
+                    ("component", "y".into()),
+                ]),
+            )
+            .write(&dir.path().join("case.toml"));
+        let out = dir.path().join("out");
+        for args in [vec!["check"], vec!["run", "--out", out.to_str().unwrap()]] {
+            let output = Command::new(env!("CARGO_BIN_EXE_asperity"))
+                .args(&args[..1])
+                .arg(&path)
+                .args(&args[1..])
+                .output()
+                .unwrap();
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            assert_eq!(output.status.code(), Some(3), "{args:?}: {stderr}");
+            assert!(
+                stderr.contains("case.toml")
+                    && stderr.contains("history[0].name")
+                    && stderr.contains(&format!("`{column}`")),
+                "{args:?}: {stderr}"
+            );
+        }
+        assert!(!out.join("history.csv").exists());
+    }
+}

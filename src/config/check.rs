@@ -142,6 +142,17 @@ impl Case {
                 format!("`{name}` needs a `yield_stress` (body '{}')", b.group),
             ));
         }
+        if let Some(sy) = m.yield_stress.filter(|sy| !(sy.is_finite() && *sy > 0.0)) {
+            // before the bounds below that depend on it (Q > −yield_stress)
+            return Err(self.invalid(
+                key("yield_stress"),
+                sy,
+                format!(
+                    "the yield stress (MPa) must be positive and finite (body '{}')",
+                    b.group
+                ),
+            ));
+        }
         if let Some(terms) = m.kinematic.as_ref().map(|k| k.as_slice()) {
             if terms.is_empty() || terms.len() > MAX_KINEMATIC_TERMS {
                 return Err(self.invalid(
@@ -300,8 +311,8 @@ impl Case {
         Ok(())
     }
 
-    /// Every group and pair name (they become parts of file names and CSV headers), and no
-    /// pair name used twice (two pairs of one name would overwrite each other's files, and
+    /// Every group and pair name (they become parts of file names and CSV headers), no
+    /// physical surface in two bodies, and no pair name used twice (two pairs of one name would overwrite each other's files, and
     /// two identical pairs would double the interface).
     fn check_names(&self) -> Result<()> {
         let mut names: Vec<(String, &str)> = Vec::new();
@@ -331,6 +342,17 @@ impl Case {
         }
         for (key, name) in names {
             check_name(name).map_err(|reason| self.invalid(key, format!("{name:?}"), reason))?;
+        }
+        let mut bodies = BTreeSet::new();
+        for (i, b) in self.bodies.iter().enumerate() {
+            if !bodies.insert(&b.group) {
+                return Err(self.invalid(
+                    format!("body[{i}].group"),
+                    format!("{:?}", b.group),
+                    "another [[body]] has this physical surface: give each surface one body \
+                     (and one material)",
+                ));
+            }
         }
         let mut seen = BTreeSet::new();
         for (i, c) in self.contacts.iter().enumerate() {

@@ -149,6 +149,33 @@ impl HistoryLayout {
         (layout, columns)
     }
 
+    /// Refuses a case whose `history.csv` would have two columns of one name: a
+    /// `[[history]]` entry named like a column the table has anyway (`time`,
+    /// `reaction_<support>_y`, ...) would be read in place of it by any reader that keys
+    /// columns by name.
+    pub(super) fn check_unique(case: &Case, model: &Model) -> Result<()> {
+        let (_, columns) = Self::new(case, model);
+        let mut seen = std::collections::BTreeSet::new();
+        let Some(column) = columns.iter().find(|c| !seen.insert(c.as_str())) else {
+            return Ok(());
+        };
+        let entry = case.history.iter().position(|q| &q.name == column);
+        let message = match entry {
+            Some(i) => format!(
+                "history[{i}].name = {column:?}: history.csv has a column `{column}` already \
+                 (docs/guide/outputs.md): give the entry another name"
+            ),
+            None => format!(
+                "two columns of history.csv would be named `{column}`: rename a support, \
+                 load or contact pair"
+            ),
+        };
+        Err(Error::Case {
+            path: case.path.clone(),
+            message,
+        })
+    }
+
     /// Values of a row.
     pub(super) fn columns(&self) -> usize {
         self.columns

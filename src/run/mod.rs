@@ -380,6 +380,7 @@ fn solve(
         _ => None,
     };
     let settings = newton_settings(&case.solver);
+    history::HistoryLayout::check_unique(case, &model)?;
     let traced = traced_points(case, &model)?;
     let mut writer = StepWriter::new(case, &model, session, summary, traced, on_step);
     let resume = match record {
@@ -414,6 +415,13 @@ fn solve(
 fn resume_record(model: &Model, folder: &OutputFolder, case_text: &str) -> Result<Record> {
     let path = folder.dir().join(RunFile::Restart.name());
     read_record(&path, case_text, &Solution::new(model))
+}
+
+/// What `asperity check` checks of a built model beyond the model itself: the case's
+/// `[[history]]` requests, and that they name columns of their own.
+pub fn check_history_of(case: &Case, model: &Model) -> Result<()> {
+    check_history(case)?;
+    history::HistoryLayout::check_unique(case, model)
 }
 
 /// Checks the case's `[[history]]` requests as the quantities they are.
