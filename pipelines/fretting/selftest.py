@@ -107,7 +107,7 @@ def synthetic_run(out: Path) -> None:
     history = [[0, 0.0, 0.0, 0.0]] + [[f[0], float(f[0]), -f[6], f[5]] for f in frames]  # compression negative, as asperity writes it
     _write_csv(out / "history.csv", ["step", "time", "cone_normal_force", "cone_tangential_force"], history)
     (out / "results.pvd").write_text('<VTKFile type="Collection"><Collection>' + "".join(
-        f'<DataSet timestep="{f[0]}" part="0" file="bodies_{f[0]:04d}.vtu"/>' for f in frames) + "</Collection></VTKFile>")
+        f'<DataSet timestep="{f[0]}" part="0" file="frame_{f[0]:04d}.vtm"/>' for f in frames) + "</Collection></VTKFile>")
 
 
 def _edit_csv(path: Path, row: int, column: str, factor: float) -> None:
