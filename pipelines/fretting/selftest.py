@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
+CASE = HERE.parent.parent / "examples" / "fretting" / "tapered_fretting.toml"  # the gallery's case
 sys.path.insert(0, str(HERE.parent))
 from check_fretting import check_run  # noqa: E402
 from fretting_data import (CYCLES_COLUMNS, ENERGY_TERMS, HYSTERESIS_COLUMNS, POINT_LOOPS_COLUMNS,  # noqa: E402
@@ -61,7 +62,7 @@ def _energy(external: float, friction: float, wear: float) -> dict:
 def synthetic_run(out: Path) -> None:
     """Writes a consistent synthetic output folder."""
     out.mkdir(parents=True)
-    case = (HERE / "tapered_fretting.toml").read_text()
+    case = (CASE).read_text()
     case = case.replace("increments = 10", f"increments = {PRESS}", 1)  # the press-in step
     case = re.sub(r"(?m)^cycles_per_jump = \d+$", f"cycles_per_jump = {JUMP}", case, count=1)
     case = case.replace("cycles = 1000000", f"cycles = {done(CYCLES)}").replace("increments = 10",
