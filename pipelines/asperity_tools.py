@@ -158,36 +158,51 @@ def read_contact(out: Path, pair: str, step: int | None = None) -> dict[str, np.
     return read_csv(files[-1])
 
 
-def read_step(out: Path, step: int | None = None):
-    """The whole-model VTU files of step `step` (1-based; default: the last) of the series
-    results.pvd, as a pyvista MultiBlock with the blocks `bodies` and (with contact pairs)
-    `interface`, and whose own field_data `step` is the step (its position in the series).
-    results.pvd lists a `frame_NNNN.vtm` per step (its bodies and pairs by name, which
-    `pyvista.read` shows); its whole-model files are `bodies_NNNN.vtu` and `interface_NNNN.vtu`.
-    Each block's field_data holds what its VTU records (`TimeValue`, `load_factor`, names of
-    bodies and pairs)."""
+def frames(out: Path) -> list[tuple[float, Path]]:
+    """(time, `frame_NNNN.vtm`) of every output frame the series `out`/results.pvd lists, in
+    order of time."""
     import xml.etree.ElementTree as ET
 
+    entries = {(float(d.get("timestep")), d.get("file"))
+               for d in ET.parse(out / "results.pvd").getroot().iter("DataSet")}
+    return [(time, out / file) for time, file in sorted(entries)]
+
+
+def frame_parts(vtm: Path) -> dict[str, list[tuple[str, Path]]]:
+    """The blocks of a frame's multiblock file (`bodies`, and `contacts` with contact pairs),
+    each a list of (part name, VTU file) in the case's order. Each cell is in one file: a
+    model of one body has `bodies_NNNN.vtu`, one of several `bodies_NNNN_K.vtu` per body
+    (the same for the pairs, `interface_...`; docs/guide/outputs.md)."""
+    import xml.etree.ElementTree as ET
+
+    return {block.get("name"): [(d.get("name"), vtm.parent / d.get("file")) for d in block.iter("DataSet")]
+            for block in ET.parse(vtm).getroot().iter("Block")}
+
+
+def read_frame(vtm: Path):
+    """A frame's parts as a pyvista MultiBlock with the blocks `bodies` (all bodies in one
+    UnstructuredGrid, cell data `body` telling them apart) and, with contact pairs,
+    `interface` (all pairs, cell data `pair`); each keeps the field data of its VTU files
+    (`TimeValue`, `load_factor`, `body_names`, `pair_names`)."""
     import pyvista as pv
 
-    entries = [(float(d.get("timestep")), d.get("name") or f"part_{d.get('part')}", d.get("file"))
-               for d in ET.parse(out / "results.pvd").getroot().iter("DataSet")]
-    times = sorted({t for t, _, _ in entries})
-    if not times or (step is not None and not 1 <= step <= len(times)):
-        raise ValueError(f"{out / 'results.pvd'}: no step {step} (it lists {len(times)})")
-    time = times[-1] if step is None else times[step - 1]
     blocks = pv.MultiBlock()
-    blocks.field_data["step"] = [times.index(time) + 1]
-    for t, name, file in entries:
-        if t != time:
-            continue
-        if file.endswith(".vtm"):
-            number = file.removeprefix("frame_").removesuffix(".vtm")
-            for part in ("bodies", "interface"):
-                if (out / f"{part}_{number}.vtu").is_file():
-                    blocks[part] = pv.read(out / f"{part}_{number}.vtu")
-        else:
-            blocks[name] = pv.read(out / file)
+    for block, key in (("bodies", "bodies"), ("contacts", "interface")):
+        grids = [pv.read(file) for _, file in frame_parts(vtm).get(block, [])]
+        if grids:
+            blocks[key] = grids[0] if len(grids) == 1 else pv.MultiBlock(grids).combine()
+    return blocks
+
+
+def read_step(out: Path, step: int | None = None):
+    """Frame `step` (1-based position in the series results.pvd; default: the last) as
+    `read_frame` gives it, whose own field_data `step` is that position."""
+    series = frames(out)
+    if not series or (step is not None and not 1 <= step <= len(series)):
+        raise ValueError(f"{out / 'results.pvd'}: no step {step} (it lists {len(series)})")
+    index = len(series) if step is None else step
+    blocks = read_frame(series[index - 1][1])
+    blocks.field_data["step"] = [index]
     return blocks
 
 

@@ -13,13 +13,14 @@ elements through each wall; measured 6e-6 in the solver tests) or the interface 
 incomplete; or when pyvista does not show the bodies and contact pairs by name.
 """
 import csv
+import json
 import math
-import re
 import sys
 from pathlib import Path
 
 import numpy as np
 import pyvista as pv
+from asperity_tools import frame_parts, frames, read_frame
 
 POINT_ARRAYS = {"displacement": 3, "stress": 6, "von_mises": 1, "equivalent_plastic_strain": 1}
 CELL_ARRAYS = {"body": 1, "plastic": 1}
@@ -70,7 +71,7 @@ def check_shrink_fit(out: Path, history: list) -> None:
     e1, nu1 = e / (1 - nu**2), nu / (1 - nu)
     compliance = b * ((1 - nu1) / e1 + ((c * c + b * b) / (c * c - b * b) + nu1) / e1)
     exact = delta / (compliance + 1 / k_n)
-    grid = check_interface(whole(sorted(out.glob("interface_*.vtu")))[-1])
+    grid = read_frame(frames(out)[-1][1])["interface"]
     p = np.asarray(grid.point_data["contact_pressure"])
     err = np.max(np.abs(p - exact)) / exact
     print(f"contact pressure {p.min():.5f}..{p.max():.5f} MPa, closed form {exact:.5f} MPa, relative error {err:.2e}")
@@ -83,47 +84,47 @@ def check_shrink_fit(out: Path, history: list) -> None:
         sys.exit("contact CSV missing")
 
 
-def whole(paths) -> list:
-    """The whole-model files among `paths` (`bodies_NNNN.vtu`, not a body's part `bodies_NNNN_K.vtu`)."""
-    return [p for p in paths if re.fullmatch(r"(bodies|interface)_\d+\.vtu", p.name)]
-
-
 def check_blocks(out: Path) -> None:
     """`pyvista.read("results.pvd")` shows the parts by name: each frame's multiblock has the
     block `bodies` with a dataset per body and `contacts` with one per pair, named as the
-    whole-model files' `body_names` and `pair_names`, each holding exactly its own cells."""
+    files' `body_names` and `pair_names`, each holding only its own cells and together the
+    model's cells as summary.json counts them (each cell once)."""
     frame = pv.read(out / "results.pvd")[0]
-    first = whole(sorted(out.glob("bodies_*.vtu")))[0]
-    bodies = pv.read(first)
-    names = [str(n) for n in bodies.field_data["body_names"]]
-    if list(frame["bodies"].keys()) != names:
-        sys.exit(f"results.pvd: body blocks {frame['bodies'].keys()}, expected {names}")
-    for k, name in enumerate(names):
-        block = frame["bodies"][name]
-        own = np.count_nonzero(np.asarray(bodies.cell_data["body"]) == k)
-        if block.n_cells != own or np.any(np.asarray(block.cell_data["body"]) != k):
-            sys.exit(f"results.pvd: block '{name}' has {block.n_cells} cells, body {k} has {own}")
-    interface = first.with_name(first.name.replace("bodies_", "interface_"))
-    if interface.is_file():
-        pairs = [str(n) for n in pv.read(interface).field_data["pair_names"]]
-        if list(frame["contacts"].keys()) != pairs:
-            sys.exit(f"results.pvd: contact blocks {frame['contacts'].keys()}, expected {pairs}")
-    print(f"results.pvd: blocks by name: bodies {names}, contacts {list(frame.get('contacts', {}).keys())}")
+    model = json.loads((out / "summary.json").read_text())["model"]
+    blocks = [("bodies", "body", "elements")]
+    if "contacts" in frame.keys():
+        blocks.append(("contacts", "pair", "interface_elements"))
+    for block, index, count in blocks:
+        parts = frame[block]
+        names = [str(n) for n in parts[0].field_data[f"{index}_names"]]
+        if list(parts.keys()) != names:
+            sys.exit(f"results.pvd: {block} blocks {parts.keys()}, expected {names}")
+        for k, name in enumerate(names):
+            if np.any(np.asarray(parts[name].cell_data[index]) != k):
+                sys.exit(f"results.pvd: block '{name}' holds cells of other {block}")
+        cells = sum(parts[name].n_cells for name in names)
+        if cells != model[count]:
+            sys.exit(f"results.pvd: the {block} blocks hold {cells} cells, the model {model[count]}")
+    contacts = list(frame["contacts"].keys()) if "contacts" in frame.keys() else []
+    print(f"results.pvd: blocks by name: bodies {list(frame['bodies'].keys())}, contacts {contacts}")
 
 
 def main() -> None:
     out = Path(sys.argv[1])
-    reader = pv.get_reader(out / "results.pvd")
+    series = frames(out)
     with open(out / "history.csv") as f:
         # Step 0 (the unloaded state) has no files.
         history = [row for row in csv.DictReader(f) if int(row["step"]) > 0]
-    if len(reader.time_values) != len(history):
-        sys.exit(f"results.pvd lists {len(reader.time_values)} steps, history.csv {len(history)}")
-    grids = [check_grid(p) for p in whole(sorted(out.glob("bodies_*.vtu")))]
-    for p in sorted(out.glob("interface_*.vtu")):
-        check_interface(p)
+    if len(series) != len(history):
+        sys.exit(f"results.pvd lists {len(series)} steps, history.csv {len(history)}")
+    for _, vtm in series:
+        parts = frame_parts(vtm)
+        for _, path in parts["bodies"]:
+            check_grid(path)
+        for _, path in parts.get("contacts", []):
+            check_interface(path)
     check_blocks(out)
-    last = grids[-1]
+    last = read_frame(series[-1][1])["bodies"]
     if "thick_cylinder" in str(out):
         a, b, p, e, nu = 10.0, 20.0, 100.0, 200000.0, 0.3
         exact = p * a * a * (1 + nu) * ((1 - 2 * nu) * a + b * b / a) / (e * (b * b - a * a))
@@ -138,7 +139,7 @@ def main() -> None:
             sys.exit("non-finite reaction")
     if "shrink_fit" in str(out):
         check_shrink_fit(out, history)
-    print(f"{out}: {len(grids)} steps, arrays {sorted(last.array_names)}: ok")
+    print(f"{out}: {len(series)} steps, arrays {sorted(last.array_names)}: ok")
 
 
 if __name__ == "__main__":

@@ -50,7 +50,7 @@ from vtkmodules.vtkCommonCore import vtkLogger  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from asperity_tools import (  # noqa: E402
-    BINARY, ROOT, phase_seconds, read_contact, read_history, run_cases, rust_exp, table, variant, write_report,
+    BINARY, ROOT, phase_seconds, read_contact, read_frame, read_history, run_cases, rust_exp, table, variant, write_report,
 )
 
 pv.OFF_SCREEN = True
@@ -138,15 +138,17 @@ def contact_at(out: Path, step: int) -> dict[str, np.ndarray]:
 
 
 def bodies(out: Path, step: int) -> pv.UnstructuredGrid:
-    grid = pv.read(out / f"bodies_{step:04d}.vtu")
+    """The bodies of output frame `step` in one grid (cell data `body`)."""
+    frame = out / f"frame_{step:04d}.vtm"
+    grid = read_frame(frame)["bodies"]
     for name in POINT_ARRAYS:
         if name not in grid.point_data:
-            fail(f"{out}/bodies_{step:04d}.vtu: point array '{name}' missing (have {list(grid.point_data)})")
+            fail(f"{frame}: point array '{name}' missing (have {list(grid.point_data)})")
         if not np.all(np.isfinite(grid.point_data[name])):
-            fail(f"{out}/bodies_{step:04d}.vtu: '{name}' has non-finite values")
+            fail(f"{frame}: '{name}' has non-finite values")
     for name in CELL_ARRAYS:
         if name not in grid.cell_data:
-            fail(f"{out}/bodies_{step:04d}.vtu: cell array '{name}' missing")
+            fail(f"{frame}: cell array '{name}' missing")
     return grid
 
 
@@ -261,7 +263,7 @@ def top_deflection(out: Path, step: int) -> tuple[np.ndarray, np.ndarray]:
 
 def centre_deflection(out: Path, step: int) -> float:
     """−u_z of the foundation's top on the axis (r = 0, z = H)."""
-    grid = pv.read(out / f"bodies_{step:04d}.vtu")
+    grid = read_frame(out / f"frame_{step:04d}.vtm")["bodies"]
     pts = np.asarray(grid.points)
     body = np.zeros(len(pts), dtype=int) - 1
     cells = np.asarray(grid.cell_connectivity).reshape(grid.n_cells, -1)
@@ -390,7 +392,7 @@ def fields_picture(args: tuple[str, str, int, str]) -> str:
     out, target, step, title = args
     title = title.replace("β", "beta")  # not in VTK's font
     vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)  # no "bad X server" warnings
-    grid = pv.read(Path(out) / f"bodies_{step:04d}.vtu")
+    grid = read_frame(Path(out) / f"frame_{step:04d}.vtm")["bodies"]
     centres = np.asarray(grid.cell_centers().points)
     near = np.flatnonzero((centres[:, 0] < 3.0 * A_PUNCH) & (centres[:, 1] > H_FOUNDATION - 3.0 * A_PUNCH)
                           & (centres[:, 1] < H_FOUNDATION + A_PUNCH))

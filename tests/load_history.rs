@@ -317,7 +317,7 @@ fn the_frames_of_a_cyclic_elastic_step_repeat_every_cycle() {
     // others (frames 11 and 16); history.csv has all of them.
     let out = dir.path().join("out");
     let vtu: Vec<usize> = (1..=21)
-        .filter(|j| out.join(format!("bodies_{j:04}.vtu")).is_file())
+        .filter(|j| out.join(format!("frame_{j:04}.vtm")).is_file())
         .collect();
     assert_eq!(vtu, [1, 2, 3, 4, 5, 6, 11, 16, 17, 18, 19, 20, 21]);
 }

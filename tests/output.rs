@@ -1047,7 +1047,12 @@ fn run_writes_reactions_interface_displacement_and_field_data() {
     let steps = summary["steps"].as_array().unwrap();
     for s in steps {
         let k = s["step"].as_u64().unwrap() as usize;
-        let bodies = read_vtu(&out.join(format!("bodies_{k:04}.vtu"))).unwrap();
+        // The template's two bodies, each in its own file; its one pair.
+        let bodies: Vec<Grid> = common::frame_files(&out, k, "bodies")
+            .iter()
+            .map(|path| read_vtu(path).unwrap())
+            .collect();
+        assert_eq!(bodies.len(), 2);
         let interface = read_vtu(&out.join(format!("interface_{k:04}.vtu"))).unwrap();
         let get = |fields: &[Field], name: &str| -> Vec<f64> {
             match &fields.iter().find(|f| f.name == name).unwrap().values {
@@ -1056,7 +1061,7 @@ fn run_writes_reactions_interface_displacement_and_field_data() {
                 other => panic!("{name}: {other:?}"),
             }
         };
-        for grid in [&bodies, &interface] {
+        for grid in bodies.iter().chain([&interface]) {
             assert_eq!(get(&grid.field_data, "TimeValue"), [k as f64]);
             assert_eq!(get(&grid.field_data, "step"), [k as f64]);
             assert_eq!(
@@ -1064,12 +1069,16 @@ fn run_writes_reactions_interface_displacement_and_field_data() {
                 [s["load_factor"].as_f64().unwrap()]
             );
         }
-        // Σ RF over the grid = Σ of the supports' reactions.
-        let rf = get(&bodies.point_data, "reaction_force");
+        // Σ RF over the bodies = Σ of the supports' reactions.
         let reactions = s["reactions"].as_object().unwrap();
         for (c, key) in ["x", "y"].iter().enumerate() {
             let total: f64 = reactions.values().map(|r| r[key].as_f64().unwrap()).sum();
-            let sum: f64 = rf.iter().skip(c).step_by(3).sum();
+            let sum: f64 = bodies
+                .iter()
+                .flat_map(|b| get(&b.point_data, "reaction_force"))
+                .skip(c)
+                .step_by(3)
+                .sum();
             let scale = reactions
                 .values()
                 .map(|r| r[key].as_f64().unwrap().abs())
@@ -1080,16 +1089,17 @@ fn run_writes_reactions_interface_displacement_and_field_data() {
             );
         }
         // Each interface point moves with a body point at the same place (side B).
-        let u_body = get(&bodies.point_data, "displacement");
         let u_face = get(&interface.point_data, "displacement");
         assert_eq!(u_face.len(), 3 * interface.points.len());
         assert!(u_face.iter().any(|&v| v != 0.0), "a loaded interface moves");
         for (i, x) in interface.points.iter().enumerate() {
-            let found = bodies
-                .points
-                .iter()
-                .enumerate()
-                .any(|(j, y)| y == x && u_body[3 * j..3 * j + 3] == u_face[3 * i..3 * i + 3]);
+            let found = bodies.iter().any(|body| {
+                let u_body = get(&body.point_data, "displacement");
+                body.points
+                    .iter()
+                    .enumerate()
+                    .any(|(j, y)| y == x && u_body[3 * j..3 * j + 3] == u_face[3 * i..3 * i + 3])
+            });
             assert!(
                 found,
                 "interface point {x:?}: no body point with its displacement"

@@ -1,8 +1,9 @@
 //! The quantities a run reports without being asked (issue 28): the default penalty
 //! stiffness of a law that leaves it out (10 E*/h, in `run.json`, overlapping the faces by
-//! p/k), the prescribed displacement of every driven support, the stick, slip and open
-//! extent and the dissipation of every contact pair in `history.csv` and `summary.json`, all
-//! named by the user's names, and the parts of the model by name in `results.pvd`.
+//! p/k; fixed and reported by a model fit), the prescribed displacement of every driven
+//! support, the stick, slip and open extent and the dissipation of every contact pair in
+//! `history.csv` and `summary.json`, all named by the user's names, and the parts of the
+//! model by name in `results.pvd`.
 
 mod common;
 
@@ -347,4 +348,92 @@ fn a_fit_at_a_material_point_needs_the_penalty_stiffness() {
     );
     let given = "normal_stiffness = { value = 1e4 }\ntangential_stiffness = { value = 3e3 }";
     assert!(fit(given).is_ok());
+}
+
+/// A `model` test of `asperity fit` whose law leaves the penalty stiffnesses out keeps them
+/// fixed for the whole fit at the specimen's default: the result reports the value (in
+/// fit.json and the printed table), which is the one a run of the specimen gets (10 E*/h),
+/// and every evaluation solves with exactly that value (it equals an evaluation given it
+/// explicitly, and differs from one given twice it), so the fit recovers the friction that
+/// made the data.
+#[test]
+fn a_model_fit_keeps_a_defaulted_penalty_fixed_and_reports_it() {
+    use asperity::fit::Fit;
+    use std::fmt::Write as _;
+    let dir = tempfile::tempdir().unwrap();
+    // The upper block pressed and dragged into sliding; the measured quantity is the lid's
+    // tangential reaction, μ times the normal force once it slides.
+    let specimen = blocks(None)
+        .support("lid", &[("ux", 0.02), ("uy", -0.01)])
+        .steps(4)
+        .write(&dir.path().join("specimen.toml"));
+    let out = dir.path().join("specimen");
+    run(&specimen, &out);
+    let by_run = json(&out.join("run.json"))["penalty_defaults"][0]["stiffness"]
+        .as_f64()
+        .unwrap();
+    let elements = json(&out.join("summary.json"))["model"]["interface_elements"]
+        .as_f64()
+        .unwrap();
+    let e_star = 1000.0 / (1.0 - 0.3 * 0.3) / 2.0;
+    assert!((by_run - 10.0 * e_star / (2.0 / elements)).abs() < 1e-9 * by_run);
+
+    let data = dir.path().join("reaction.csv");
+    let write_data = |values: &[f64]| {
+        let mut csv = "# units: step = 1, value = 1\nstep,value\n".to_string();
+        for (k, v) in values.iter().enumerate() {
+            writeln!(csv, "{},{v:e}", k + 1).unwrap();
+        }
+        std::fs::write(&data, csv).unwrap();
+    };
+    write_data(&[1.0; 4]);
+    let path = dir.path().join("fit.toml");
+    std::fs::write(
+        &path,
+        format!(
+            "law = \"linear_coulomb\"\nstarts = 1\n[parameters]\n\
+             friction = {{ initial = 0.5, min = 0.0, max = 2.0 }}\n\
+             [[test]]\nkind = \"model\"\ncase = {specimen:?}\ndata = \"reaction.csv\"\n\
+             quantity = \"reactions.lid.x\"\n"
+        ),
+    )
+    .unwrap();
+    let fit = Fit::from_file(&path).unwrap();
+    let (k_n, k_t, mu) = (0, 1, 2); // linear_coulomb's parameters, in the law's order
+    let mut x = fit.parameters.values.clone();
+    assert!(x[k_n].is_nan() && x[k_t].is_nan(), "{x:?}");
+    x[mu] = 0.3;
+    let measured = fit.simulate(&x).unwrap().remove(0);
+    let mut given = x.clone();
+    given[k_n] = by_run;
+    given[k_t] = by_run;
+    assert_eq!(fit.simulate(&given).unwrap()[0], measured);
+    given[k_n] = 2.0 * by_run;
+    given[k_t] = 2.0 * by_run;
+    assert_ne!(fit.simulate(&given).unwrap()[0], measured);
+    assert!(measured.iter().all(|f| f.abs() > 0.1), "{measured:?}");
+
+    write_data(&measured);
+    let result = Fit::from_file(&path).unwrap().run().unwrap();
+    assert!(
+        (result.get("friction").unwrap().value - 0.3).abs() < 1e-6,
+        "{result}"
+    );
+    assert_eq!(result.penalty_defaults.len(), 1, "{result}");
+    let fixed = &result.penalty_defaults[0];
+    assert_eq!(fixed.default.contact, "joint");
+    assert_eq!(
+        fixed.default.parameters,
+        ["normal_stiffness", "tangential_stiffness"]
+    );
+    assert_eq!(fixed.default.stiffness, by_run);
+    assert!(result.to_string().contains("fixed at test[0]"), "{result}");
+    let fit_out = dir.path().join("fit");
+    asperity::fit::write(&result, &fit_out, false).unwrap();
+    let reported = &json(&fit_out.join("fit.json"))["penalty_defaults"][0];
+    assert_eq!(reported["stiffness"].as_f64(), Some(by_run));
+    assert_eq!(reported["contact"], "joint");
+    assert!(reported["test"].as_str().unwrap().starts_with("test[0]"));
+    // The fitted law's case line leaves the stiffnesses out: a run of it defaults them again.
+    assert!(!result.snippet.contains("stiffness"), "{}", result.snippet);
 }

@@ -43,6 +43,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent.parent
 CASE_DIR = HERE / "cases"
+sys.path.insert(0, str(ROOT / "pipelines"))  # asperity_tools, imported where the results are read
 TOLERANCE = 2e-3  # relative difference of the displacement under the load (issue 12)
 BLOCK_BEGIN = "<!-- bench-calculix:begin (written by benches/calculix/bench_calculix.py --write; reruns replace this block) -->"
 BLOCK_END = "<!-- bench-calculix:end -->"
@@ -555,28 +556,27 @@ def parse_asperity_summary(stdout: str, folder: Path) -> dict:
     return info
 
 
-def last_vtu(folder: Path) -> Path:
+def last_bodies(folder: Path):
+    """All bodies of the last output frame of the series `folder`/results.pvd as one pyvista
+    grid: a series of `frame_NNNN.vtm` files (pipelines/asperity_tools.py reads them), or,
+    from an older binary, of `bodies_NNNN.vtu` files (part 0)."""
+    import pyvista as pv  # only needed here; imported late so --help works without the venv
+    from asperity_tools import read_step
+
     pvd = folder / "results.pvd"
-    files = []
-    if pvd.is_file():
-        for ds in ET.parse(pvd).getroot().iter("DataSet"):
-            if ds.get("part", "0") == "0":
-                files.append((float(ds.get("timestep", "0")), ds.get("file")))
-    if files:
-        last = sorted(files)[-1][1]
-        # results.pvd lists a frame_NNNN.vtm per step; its whole-model file is bodies_NNNN.vtu.
-        if last.endswith(".vtm"):
-            last = last.replace("frame_", "bodies_").replace(".vtm", ".vtu")
-        return folder / last
-    vtus = sorted(folder.glob("bodies_*.vtu"))
-    if not vtus:
-        raise FileNotFoundError(f"no bodies_*.vtu in {folder}")
-    return vtus[-1]
+    if not pvd.is_file():
+        raise FileNotFoundError(f"no {pvd}")
+    files = sorted((float(ds.get("timestep", "0")), ds.get("file"))
+                   for ds in ET.parse(pvd).getroot().iter("DataSet") if ds.get("part", "0") == "0")
+    if not files:
+        raise FileNotFoundError(f"{pvd} lists no files")
+    if files[-1][1].endswith(".vtm"):
+        return read_step(folder)["bodies"]
+    return pv.read(str(folder / files[-1][1]))
 
 
 def asperity_probe(folder: Path, xy: np.ndarray, scale: float) -> np.ndarray:
-    import pyvista as pv  # only needed here; imported late so --help works without the venv
-    grid = pv.read(str(last_vtu(folder)))
+    grid = last_bodies(folder)
     pts = np.asarray(grid.points)[:, :2]
     u = np.asarray(grid.point_data["displacement"])
     picked = []

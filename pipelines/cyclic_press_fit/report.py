@@ -4,7 +4,7 @@ isotropic and with kinematic hardening side by side (issue 27).
 
 Reads, for each of the runs OUT/isotropic and OUT/kinematic:
 - history.csv: the global loop (the external pressure against the contact's normal force);
-- the bodies' VTU files of the series results.pvd (every frame of the press step and of the
+- the hub's VTU file of each frame of the series results.pvd (every frame of the press step and of the
   first and last cycles, the end of the others): the local loop, hoop stress against hoop
   total strain, at the hub's most strained point (the largest equivalent plastic strain of
   the kinematic run's last frame; the same point in both runs, the meshes being equal);
@@ -19,7 +19,6 @@ Usage: report.py OUT
 import csv
 import json
 import sys
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import matplotlib
@@ -28,6 +27,9 @@ import numpy as np
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import pyvista as pv  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from asperity_tools import frame_parts, frames  # noqa: E402
 
 RUNS = ("isotropic", "kinematic")
 BODY = "hub"
@@ -41,37 +43,27 @@ def table(path):
         return list(csv.DictReader(f))
 
 
-def frames(folder):
-    """(step, bodies VTU path) of every frame the series lists, in order."""
+def hub_frames(folder):
+    """(step, the hub's VTU file) of every frame the series lists, in order."""
     out = []
-    for d in ET.parse(folder / "results.pvd").getroot().iter("DataSet"):
-        number = d.get("file").removeprefix("frame_").removesuffix(".vtm")
-        out.append((int(number), folder / f"bodies_{number}.vtu"))
-    return sorted(set(out))
-
-
-def hub_points(grid):
-    """Indices of the points of the hub's cells."""
-    names = list(grid.field_data["body_names"])
-    cells = np.flatnonzero(grid.cell_data["body"] == names.index(BODY))
-    return np.unique(grid.extract_cells(cells)["vtkOriginalPointIds"])
+    for _, vtm in frames(folder):
+        parts = dict(frame_parts(vtm)["bodies"])
+        out.append((int(vtm.stem.removeprefix("frame_")), parts[BODY]))
+    return out
 
 
 def local_history(folder, point=None):
     """Per frame: step, hoop stress, hoop strain, equivalent plastic strain at `point` (a
     position; default the hub point of largest equivalent plastic strain at the last frame).
     Returns the arrays and the point."""
-    series = frames(folder)
+    series = hub_frames(folder)
     if point is None:
         last = pv.read(series[-1][1])
-        hub = hub_points(last)
-        p = hub[np.argmax(last.point_data["equivalent_plastic_strain"][hub])]
-        point = last.points[p]
+        point = last.points[np.argmax(last.point_data["equivalent_plastic_strain"])]
     rows = []
     for step, path in series:
         grid = pv.read(path)
-        hub = hub_points(grid)
-        p = hub[np.argmin(np.linalg.norm(grid.points[hub] - point, axis=1))]
+        p = np.argmin(np.linalg.norm(grid.points - point, axis=1))
         rows.append((step, grid.point_data["stress"][p, HOOP], grid.point_data["strain"][p, HOOP],
                      grid.point_data["equivalent_plastic_strain"][p]))
     return np.array(rows), point

@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
+CASE = HERE.parent.parent / "examples" / "fretting" / "tapered_fretting.toml"  # the gallery's case
 sys.path.insert(0, str(HERE.parent))
 from asperity_tools import read_csv, run_cases, variant  # noqa: E402
 from fretting_data import (CYCLES_COLUMNS, ENERGY_TERMS, HYSTERESIS_COLUMNS, POINT_LOOPS_COLUMNS, WEAR_COLUMNS,  # noqa: E402
@@ -294,7 +295,7 @@ def main() -> None:
     args = parser.parse_args()
     out = args.out.resolve()
     if args.quick:
-        case = variant(HERE / "tapered_fretting.toml", out.parent / f"{out.name}.toml", QUICK_CHANGES)
+        case = variant(CASE, out.parent / f"{out.name}.toml", QUICK_CHANGES)
         run_cases([(case, out)])
     try:
         failures = check_run(out, args.energy_tolerance)

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
+CASE = HERE.parent.parent / "examples" / "fretting" / "tapered_fretting.toml"  # the gallery's case
 sys.path.insert(0, str(HERE.parent))
 from check_fretting import check_run  # noqa: E402
 from fretting_data import (CYCLES_COLUMNS, ENERGY_TERMS, HYSTERESIS_COLUMNS, POINT_LOOPS_COLUMNS,  # noqa: E402
@@ -61,7 +62,7 @@ def _energy(external: float, friction: float, wear: float) -> dict:
 def synthetic_run(out: Path) -> None:
     """Writes a consistent synthetic output folder."""
     out.mkdir(parents=True)
-    case = (HERE / "tapered_fretting.toml").read_text()
+    case = (CASE).read_text()
     case = case.replace("increments = 10", f"increments = {PRESS}", 1)  # the press-in step
     case = re.sub(r"(?m)^cycles_per_jump = \d+$", f"cycles_per_jump = {JUMP}", case, count=1)
     case = case.replace("cycles = 1000000", f"cycles = {done(CYCLES)}").replace("increments = 10",
@@ -107,7 +108,7 @@ def synthetic_run(out: Path) -> None:
     history = [[0, 0.0, 0.0, 0.0]] + [[f[0], float(f[0]), -f[6], f[5]] for f in frames]  # compression negative, as asperity writes it
     _write_csv(out / "history.csv", ["step", "time", "cone_normal_force", "cone_tangential_force"], history)
     (out / "results.pvd").write_text('<VTKFile type="Collection"><Collection>' + "".join(
-        f'<DataSet timestep="{f[0]}" part="0" file="bodies_{f[0]:04d}.vtu"/>' for f in frames) + "</Collection></VTKFile>")
+        f'<DataSet timestep="{f[0]}" part="0" file="frame_{f[0]:04d}.vtm"/>' for f in frames) + "</Collection></VTKFile>")
 
 
 def _edit_csv(path: Path, row: int, column: str, factor: float) -> None:

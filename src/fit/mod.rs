@@ -52,6 +52,7 @@ pub use experiment::{Experiment, TestSpec};
 pub use params::{ParameterSpec, Parameters};
 pub use report::write;
 
+use crate::model::PenaltyDefault;
 use crate::{Error, Result};
 use lm::Problem as _;
 use params::Scale;
@@ -184,6 +185,17 @@ pub struct Starts {
     pub runs: Vec<Start>,
 }
 
+/// A penalty stiffness that the fitted law leaves out, fixed for the whole fit at the default
+/// a model test's specimen gives it (10 E*/h on its mesh).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct FixedPenalty {
+    /// The test's label.
+    pub test: String,
+    /// The contact, the parameters, the stiffness and what it comes from.
+    #[serde(flatten)]
+    pub default: PenaltyDefault,
+}
+
 /// The outcome of a fit.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct FitResult {
@@ -214,6 +226,9 @@ pub struct FitResult {
     pub starts: Starts,
     /// The case-file line with the fitted law.
     pub snippet: String,
+    /// The penalty stiffnesses the model tests fixed at their specimens' defaults: the values
+    /// every evaluation used.
+    pub penalty_defaults: Vec<FixedPenalty>,
     pub curves: Vec<Curve>,
 }
 
@@ -252,7 +267,7 @@ impl Fit {
             }
         }
         let parameters = Parameters::new(file.law, &file.parameters, path)?;
-        let experiments = file
+        let mut experiments = file
             .tests
             .iter()
             .enumerate()
@@ -270,6 +285,11 @@ impl Fit {
                          give it fixed (`value`) or free (`initial`)"
                     .into(),
             });
+        }
+        for e in &mut experiments {
+            if let experiment::Kind::Model(specimen) = &mut e.kind {
+                specimen.fix_penalty(&parameters.values, file.law)?;
+            }
         }
         if experiments.iter().any(|e| e.stated) != experiments.iter().all(|e| e.stated) {
             return Err(Error::Case {
@@ -332,6 +352,20 @@ impl Fit {
                 .map(|((f, y), s)| (f - y) / s)
         });
         Ok(DVector::from_iterator(self.points(), r))
+    }
+
+    /// The penalty stiffnesses the model tests fixed at their specimens' defaults.
+    fn penalty_defaults(&self) -> Vec<FixedPenalty> {
+        let fixed = self.experiments.iter().filter_map(|e| match &e.kind {
+            experiment::Kind::Model(specimen) => Some((e, specimen.penalty.clone()?)),
+            _ => None,
+        });
+        fixed
+            .map(|(e, default)| FixedPenalty {
+                test: e.label.clone(),
+                default,
+            })
+            .collect()
     }
 
     fn points(&self) -> usize {
@@ -558,6 +592,7 @@ impl Fit {
             stop: min.stop,
             starts,
             snippet: self.parameters.snippet(&x),
+            penalty_defaults: self.penalty_defaults(),
             curves: self
                 .experiments
                 .iter()

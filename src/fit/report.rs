@@ -129,6 +129,17 @@ impl std::fmt::Display for FitResult {
             }
             writeln!(f, "{line}")?;
         }
+        for p in &self.penalty_defaults {
+            let d = &p.default;
+            for name in &d.parameters {
+                writeln!(
+                    f,
+                    "  {name:<18} {:>14.6e}        fixed at {}'s default for contact '{}': {} E*/h \
+                     (E* = {:.6e} MPa, h = {:.4e} mm), MPa/mm",
+                    d.stiffness, p.test, d.contact, d.factor, d.surface_modulus, d.element_length
+                )?;
+            }
+        }
         writeln!(
             f,
             "  (profile intervals: where χ²/s² rises by {:.3} above its minimum; s² = {:.6e})",

@@ -3,12 +3,15 @@
 //! entry (a dotted path such as `reactions.top.y`) is compared with the measured values of the
 //! steps listed in the data. The mesh is read (or meshed by gmsh) once; each evaluation runs in
 //! its own temporary folder, so the Jacobian's columns run as independent solves in parallel.
+//! A penalty stiffness the fitted law leaves out is fixed once, at the default the fitted
+//! contact gets on the specimen's mesh (10 E*/h), and given explicitly to every evaluation.
 
 use std::path::Path;
 
 use crate::config::Case;
 use crate::contact::laws::LawDescriptor;
 use crate::mesh::Mesh;
+use crate::model::{Model, ModelSpec, PenaltyDefault};
 use crate::run::{
     self,
     folder::{OutputFolder, RunFile},
@@ -27,6 +30,9 @@ pub struct Specimen {
     /// 0-based step indices, one per measured value.
     steps: Vec<usize>,
     mesh: Mesh,
+    /// The default penalty stiffness of the fitted contact, when the fitted law leaves one
+    /// out ([`Self::fix_penalty`]): the value every evaluation gives it.
+    pub penalty: Option<PenaltyDefault>,
 }
 
 impl Specimen {
@@ -86,7 +92,25 @@ impl Specimen {
             quantity: quantity.to_string(),
             steps,
             mesh,
+            penalty: None,
         })
+    }
+
+    /// Fixes the penalty stiffnesses the law `kind` at the starting values `x` leaves out at
+    /// the default the fitted contact gets on the specimen's mesh, from the model built once
+    /// here: it depends on the bodies and the mesh only, so the whole fit keeps it.
+    pub fn fix_penalty(&mut self, x: &[f64], kind: &LawDescriptor) -> Result<()> {
+        if !kind.defaults_penalty(x) {
+            return Ok(());
+        }
+        let case = self.case_with(x, kind)?;
+        let model = Model::build(self.mesh.clone(), ModelSpec::new(&case)?)?;
+        let name = &model.interface.pairs[self.contact].name;
+        self.penalty = model
+            .penalty_defaults
+            .into_iter()
+            .find(|d| &d.contact == name);
+        Ok(())
     }
 
     /// The case with the fitted law (`kind`, parameters `x` in its order; NaN: left out).
@@ -117,7 +141,10 @@ impl Specimen {
 
     /// The quantity at the measured steps with the law's parameters `x`.
     pub fn simulate(&self, x: &[f64], kind: &LawDescriptor) -> Result<Vec<f64>> {
-        let case = self.case_with(x, kind)?;
+        let case = match &self.penalty {
+            Some(penalty) => self.case_with(&kind.with_penalty(x, penalty.stiffness), kind)?,
+            None => self.case_with(x, kind)?,
+        };
         let tmp = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
         let folder = OutputFolder::scratch(tmp.path())?;
         run::run_mesh(&case, self.mesh.clone(), 0.0, &folder, false, |_, _| Ok(()))?;

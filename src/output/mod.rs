@@ -122,38 +122,52 @@ impl Grid {
         self.cell_types.len()
     }
 
-    /// The grid of the cells `keep` selects (one flag per cell): their points renumbered in
-    /// order, the point and cell arrays restricted to them, the field data unchanged.
-    pub fn subset(&self, keep: &[bool]) -> Grid {
-        debug_assert_eq!(keep.len(), self.cell_count());
-        let mut new_index = vec![u64::MAX; self.points.len()];
-        let mut points = Vec::new();
-        let mut grid = Grid::default();
-        let mut start = 0;
-        for (c, &end) in self.offsets.iter().enumerate() {
-            let cell = &self.connectivity[start as usize..end as usize];
-            start = end;
-            if !keep[c] {
-                continue;
-            }
-            let renumbered: Vec<u64> = cell
-                .iter()
-                .map(|&p| {
-                    if new_index[p as usize] == u64::MAX {
-                        new_index[p as usize] = points.len() as u64;
-                        points.push(p as usize);
-                    }
-                    new_index[p as usize]
-                })
-                .collect();
-            grid.push_cell(self.cell_types[c], renumbered);
+    /// The grids of the parts of this grid's cells, `part[c]` (below `parts`) the part of cell
+    /// c: each holds its cells in order, their points renumbered in the order of first use,
+    /// the point and cell arrays restricted to them and the field data unchanged. One pass
+    /// over the cells and each part's own points, so the cost is the grid's size however many
+    /// parts there are.
+    pub fn split(&self, part: &[u32], parts: usize) -> Vec<Grid> {
+        debug_assert_eq!(part.len(), self.cell_count());
+        let mut cells = vec![Vec::new(); parts];
+        for (c, &p) in part.iter().enumerate() {
+            cells[p as usize].push(c);
         }
-        grid.points = points.iter().map(|&p| self.points[p]).collect();
-        let cells: Vec<usize> = (0..keep.len()).filter(|&c| keep[c]).collect();
-        grid.point_data = self.point_data.iter().map(|f| f.select(&points)).collect();
-        grid.cell_data = self.cell_data.iter().map(|f| f.select(&cells)).collect();
-        grid.field_data = self.field_data.clone();
-        grid
+        // The part that numbered each point last, and the point's index in it.
+        let mut owner = vec![usize::MAX; self.points.len()];
+        let mut local = vec![0u64; self.points.len()];
+        let mut grids = Vec::with_capacity(parts);
+        for (k, cells) in cells.iter().enumerate() {
+            let mut points = Vec::new();
+            let mut grid = Grid::default();
+            for &c in cells {
+                let start = if c == 0 {
+                    0
+                } else {
+                    self.offsets[c - 1] as usize
+                };
+                let cell = &self.connectivity[start..self.offsets[c] as usize];
+                let renumbered: Vec<u64> = cell
+                    .iter()
+                    .map(|&p| {
+                        let p = p as usize;
+                        if owner[p] != k {
+                            owner[p] = k;
+                            local[p] = points.len() as u64;
+                            points.push(p);
+                        }
+                        local[p]
+                    })
+                    .collect();
+                grid.push_cell(self.cell_types[c], renumbered);
+            }
+            grid.points = points.iter().map(|&p| self.points[p]).collect();
+            grid.point_data = self.point_data.iter().map(|f| f.select(&points)).collect();
+            grid.cell_data = self.cell_data.iter().map(|f| f.select(cells)).collect();
+            grid.field_data = self.field_data.clone();
+            grids.push(grid);
+        }
+        grids
     }
 }
 
@@ -197,5 +211,47 @@ pub fn vtk_cell_type(kind: CellKind) -> u8 {
     match kind {
         CellKind::Quad8 => 23,
         CellKind::Tri6 => 22,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Three edges (VTK 21) in two parts, point 4 shared by both: each part
+    /// gets its own cells and points in order of first use, and its arrays' tuples.
+    #[test]
+    fn split_gives_each_part_its_cells_points_and_arrays() {
+        let mut grid = Grid {
+            points: (0..7).map(|i| [i as f64, 0.0]).collect(),
+            ..Grid::default()
+        };
+        grid.push_cell(21, [0, 2, 1]);
+        grid.push_cell(21, [2, 4, 3]);
+        grid.push_cell(21, [4, 6, 5]);
+        grid.point_data = vec![Field::new(
+            "u",
+            2,
+            FieldValues::F64((0..14).map(f64::from).collect()),
+        )];
+        grid.cell_data = vec![Field::new("pair", 1, FieldValues::I32(vec![0, 1, 0]))];
+        grid.field_data = vec![Field::strings("pair_names", vec!["a".into(), "b".into()])];
+        let parts = grid.split(&[0, 1, 0], 2);
+        assert_eq!(parts.len(), 2);
+        let [a, b] = [&parts[0], &parts[1]];
+        assert_eq!(a.connectivity, [0, 1, 2, 3, 4, 5]);
+        assert_eq!(a.offsets, [3, 6]);
+        let xs = |g: &Grid| g.points.iter().map(|p| p[0]).collect::<Vec<_>>();
+        assert_eq!(xs(a), [0.0, 2.0, 1.0, 4.0, 6.0, 5.0]);
+        assert_eq!(b.connectivity, [0, 1, 2]);
+        assert_eq!(xs(b), [2.0, 4.0, 3.0]);
+        assert_eq!(
+            b.point_data[0].values,
+            FieldValues::F64(vec![4.0, 5.0, 8.0, 9.0, 6.0, 7.0])
+        );
+        assert_eq!(a.cell_data[0].values, FieldValues::I32(vec![0, 0]));
+        assert_eq!(b.cell_data[0].values, FieldValues::I32(vec![1]));
+        assert_eq!(a.field_data, grid.field_data);
+        assert_eq!(a.cell_types, [21, 21]);
     }
 }

@@ -47,9 +47,9 @@ pub enum RunFile<'a> {
     RestartEnergy,
     /// `log.txt`.
     Log,
-    /// `bodies_NNNN.vtu` of an output frame.
+    /// `bodies_NNNN.vtu` of an output frame of a model of one body.
     Bodies(usize),
-    /// `interface_NNNN.vtu` of an output frame.
+    /// `interface_NNNN.vtu` of an output frame of a model of one contact pair.
     Interface(usize),
     /// `frame_NNNN.vtm`, the multiblock file of an output frame that `results.pvd` lists:
     /// its bodies and contact pairs by name.

@@ -13,12 +13,14 @@
 //! - `run.json`: what made the results — the case file's text, program version,
 //!   command line, start and end, host, threads;
 //! - `mesh.msh` when the case meshes a `.geo` script;
-//! - `bodies_NNNN.vtu` per converged step and `results.pvd` listing them (time = step
-//!   number, since load factors may go down again when unloading), with the nodal reaction
-//!   forces and the step's FieldData (`TimeValue`, `step`, `load_factor`), see
-//!   [`crate::post::step_grids`];
-//! - `interface_NNNN.vtu` (when the case has contact pairs): the contact fields and the
-//!   side-B displacement on the interface, listed in `results.pvd` as a second part;
+//! - per output frame `frame_NNNN.vtm`, which `results.pvd` lists (time = step number, since
+//!   load factors may go down again when unloading): the frame's bodies and contact pairs by
+//!   name, each cell in one VTU file — `bodies_NNNN.vtu` for a model of one body, else
+//!   `bodies_NNNN_K.vtu` per body — with the nodal reaction forces and the step's FieldData
+//!   (`TimeValue`, `step`, `load_factor`), see [`crate::post::step_grids`];
+//! - when the case has contact pairs, `interface_NNNN.vtu` (one pair) or
+//!   `interface_NNNN_K.vtu` (per pair): the contact fields and the side-B displacement on the
+//!   interface;
 //! - `contact_<pair>_NNNN.csv`: the contact fields along each pair's curve;
 //! - `history.csv`: a step-0 row, then per step the pseudo-time, the global and per-load
 //!   factors, increments, cut-backs, Newton iterations, final residual, the reaction force

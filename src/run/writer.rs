@@ -387,8 +387,8 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
     }
 
     /// Queues the VTU files of output frame `step` (the grids of its `bodies` and of its
-    /// `interface`, if the model has one), each body's and each pair's part of them in a model
-    /// of several, and the frame's multiblock file naming them.
+    /// `interface`, if the model has one: each cell in one file, see [`Self::queue_parts`])
+    /// and the frame's multiblock file naming them.
     fn queue_frame(&mut self, step: usize, bodies: Grid, interface: Option<Grid>) -> Result<()> {
         let model = self.model;
         let cells: Vec<u32> = model.continuum.cells.iter().map(|c| c.body).collect();
@@ -419,9 +419,10 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         Ok(())
     }
 
-    /// Queues `grid` as `whole` and, when its cells belong to several `parts` (`part[c]` of
-    /// cell c), each part's cells as `part_file(k)` (k 1-based); returns the block `name`
-    /// of the frame's multiblock file that lists the parts by name.
+    /// Queues the cells of `grid`, each in one file: as `whole` when they are all one part's,
+    /// else each part's cells (`part[c]` the part of cell c) as `part_file(k)` (k 1-based), so
+    /// a frame's output grows with the model, not with the model times its parts. Returns the
+    /// block `name` of the frame's multiblock file that lists the files by the parts' names.
     fn queue_parts<'n>(
         &mut self,
         name: &str,
@@ -434,18 +435,19 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         let mut datasets = Vec::new();
         if parts.len() == 1 {
             datasets.extend(parts.map(|n| (n.to_string(), whole.name().into())));
+            self.out
+                .records
+                .queue(self.folder.path(whole)?, Content::Vtu(grid));
         } else {
-            for (k, part_name) in parts.enumerate() {
-                let keep: Vec<bool> = part.iter().map(|&p| p as usize == k).collect();
+            let grids = grid.split(part, parts.len());
+            for (k, (part_name, grid)) in parts.zip(grids).enumerate() {
                 let file = part_file(k + 1);
-                let content = Content::Vtu(grid.subset(&keep));
-                self.out.records.queue(self.folder.path(file)?, content);
+                self.out
+                    .records
+                    .queue(self.folder.path(file)?, Content::Vtu(grid));
                 datasets.push((part_name.to_string(), file.name().into()));
             }
         }
-        self.out
-            .records
-            .queue(self.folder.path(whole)?, Content::Vtu(grid));
         Ok(VtmBlock {
             name: name.into(),
             datasets,

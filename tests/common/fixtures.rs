@@ -69,3 +69,22 @@ pub fn file_names(dir: &Path) -> Vec<String> {
     names.sort();
     names
 }
+
+/// The VTU files that block `block` (`"bodies"`, `"contacts"`) of output frame `step` lists
+/// in its multiblock file `out/frame_NNNN.vtm`, in order (each cell of the frame is in one
+/// of them: `bodies_NNNN.vtu` for one body, `bodies_NNNN_K.vtu` per body of several).
+pub fn frame_files(out: &Path, step: usize, block: &str) -> Vec<PathBuf> {
+    let path = out.join(format!("frame_{step:04}.vtm"));
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let start = format!("name=\"{block}\">");
+    let inside = text
+        .split_once(&start)
+        .and_then(|(_, rest)| rest.split_once("</Block>"))
+        .unwrap_or_else(|| panic!("{}: no block {block}:\n{text}", path.display()))
+        .0;
+    inside
+        .split("file=\"")
+        .skip(1)
+        .map(|rest| out.join(rest.split('"').next().unwrap()))
+        .collect()
+}
