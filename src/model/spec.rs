@@ -159,7 +159,7 @@ pub struct Contact {
 
 /// The interface law of a contact pair: built, or, when the case leaves a penalty stiffness
 /// to its default (which depends on the mesh), checked and built when the model is
-/// ([`super::penalty`]).
+/// (`model::penalty`).
 #[derive(Debug)]
 pub enum PairLaw {
     Built(Box<dyn InterfaceLaw>),
