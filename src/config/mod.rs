@@ -379,7 +379,7 @@ pub struct ContactSpec {
     pub wear: Option<wear::WearSpec>,
     /// Joint conductance for the heat conduction: h in W/(mm²·K), or `{ h0, exponent }` for
     /// h = h0 (|p|/1 MPa)^exponent, optionally with `gap` for open points (default: no heat
-    /// crosses an open point). See [`thermal::ConductanceSpec`].
+    /// crosses an open point). See docs/guide/temperature.md.
     pub conductance: Option<ConductanceSpec>,
     /// Points (x, y in mm, on the contact) whose local loops p_T against u_T are written to
     /// `point_loops_<name>.csv` at every frame (default: none).
