@@ -56,17 +56,13 @@
 use super::elastic::LinearElastic;
 use super::j2::YIELD_TOL;
 use super::{
-    Material, OutOfPlane, PointState, Tangent, VOIGT_LEN, Voigt, ZZ, contraction, deviator,
-    engineering, identity,
+    MAX_ITERATIONS, Material, OutOfPlane, PointState, Tangent, VOIGT_LEN, Voigt, ZZ,
+    bracketed_root, contraction, deviator, engineering, identity,
 };
 use crate::error::ParameterError;
 
 /// The largest number of Armstrong–Frederick terms of a material (Chaboche's sum).
 pub const MAX_KINEMATIC_TERMS: usize = 5;
-
-/// Iteration cap of the scalar return and of the plane-stress iteration (both converge in a
-/// handful of iterations; the cap only guards the bisection fallback).
-const MAX_ITERATIONS: usize = 200;
 
 /// √(3/2): q = √(3/2) ‖s‖.
 const SQRT_3_2: f64 = 1.224_744_871_391_589;
@@ -308,28 +304,12 @@ impl CyclicPlasticity {
         // Bracket: F(0) > 0, and since ‖ξ̃‖ ≤ ‖s_tr‖ + Σ‖α_k,n‖ and σ_y > 0, F < 0 beyond
         // hi = √(3/2)(‖s_tr‖ + Σ‖α_k,n‖)/3G.
         let alpha_norms: f64 = alphas_n.iter().map(norm).sum();
-        let (mut lo, mut hi) = (0.0, SQRT_3_2 * (norm(&s_tr) + alpha_norms) / (3.0 * g));
-        let mut dp = 0.0;
-        for _ in 0..MAX_ITERATIONS {
+        let hi = SQRT_3_2 * (norm(&s_tr) + alpha_norms) / (3.0 * g);
+        // `residual` returns F and −dF/dΔp.
+        let dp = bracketed_root(hi, |dp| {
             let (f, slope) = residual(dp);
-            if f == 0.0 {
-                break;
-            }
-            if f > 0.0 {
-                lo = dp;
-            } else {
-                hi = dp;
-            }
-            let mut next = dp + f / slope;
-            if !(next > lo && next < hi) {
-                next = 0.5 * (lo + hi);
-            }
-            let step = next - dp;
-            dp = next;
-            if step.abs() <= 4.0 * f64::EPSILON * dp || hi - lo <= 4.0 * f64::EPSILON * hi {
-                break;
-            }
-        }
+            (f, -slope)
+        });
 
         let (xi, w) = xi_tilde(dp);
         let xi_norm = norm(&xi);

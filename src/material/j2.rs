@@ -49,17 +49,13 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::elastic::LinearElastic;
-use super::{Material, OutOfPlane, PointState, Tangent, Voigt, ZZ, von_mises};
+use super::{Material, OutOfPlane, PointState, Tangent, Voigt, ZZ, bracketed_root, von_mises};
 use crate::error::ParameterError;
 
 /// Relative tolerance of the elastic/plastic decision: a trial state with
 /// q_tr − σ_y(ε̄ᵖ_n) ≤ `YIELD_TOL` · σ_y(ε̄ᵖ_n) is elastic. It keeps round-off from turning a
 /// point that sits on the yield surface after a converged step into a spurious plastic one.
 pub const YIELD_TOL: f64 = 1e-12;
-
-/// Iteration cap of the plane-stress Newton iteration (it converges in fewer than ~10
-/// iterations in practice; the cap only guards the bisection fallback).
-const MAX_ITERATIONS: usize = 200;
 
 /// J2 plasticity with linear isotropic hardening: yield stress σ_y(ε̄ᵖ) = σ_Y + H ε̄ᵖ, where H
 /// is the PLASTIC hardening modulus (slope of stress vs plastic strain in uniaxial tension;
@@ -301,7 +297,7 @@ impl J2Plasticity {
             .map(|i| modes.c[i] * modes.p[i])
             .fold(f64::INFINITY, f64::min);
         let sy_min = if h < 0.0 { sy_inf } else { sy_n };
-        let (mut lo, mut hi) = (0.0, (q_tr / sy_min - 1.0) / alpha);
+        let hi = (q_tr / sy_min - 1.0) / alpha;
         let residual = |dg: f64| {
             let xi = modes.xi(dg);
             let q = (1.5 * xi).sqrt();
@@ -314,29 +310,7 @@ impl J2Plasticity {
                 dq / (q * q) - self.hardening_at(ep) * dep / (sy * sy),
             )
         };
-        let mut dgamma = 0.0;
-        for _ in 0..MAX_ITERATIONS {
-            let (res, dres) = residual(dgamma);
-            if res == 0.0 {
-                break;
-            }
-            if res > 0.0 {
-                lo = dgamma;
-            } else {
-                hi = dgamma;
-            }
-            let mut next = dgamma - res / dres;
-            if !(next > lo && next < hi) {
-                next = 0.5 * (lo + hi);
-            }
-            let step = next - dgamma;
-            dgamma = next;
-            // Quadratic convergence: once the Newton correction is at round-off level the
-            // iterate is the root to machine precision.
-            if step.abs() <= 4.0 * f64::EPSILON * dgamma || hi - lo <= 4.0 * f64::EPSILON * hi {
-                break;
-            }
-        }
+        let dgamma = bracketed_root(hi, residual);
 
         let factors = Vector3::from_fn(|i, _| 1.0 / (1.0 + dgamma * modes.c[i] * modes.p[i]));
         let stress = q_basis * a.component_mul(&factors);

@@ -157,6 +157,41 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     }
 }
 
+/// Iteration cap of [`bracketed_root`] (the return maps converge in a handful of
+/// iterations; the cap only guards the bisection fallback).
+pub(crate) const MAX_ITERATIONS: usize = 200;
+
+/// The root in (0, `hi`) of a scalar return-mapping equation F with F(0) > 0 ≥ F(`hi`):
+/// Newton's iteration safeguarded by bisection (a step that leaves the shrinking bracket is
+/// replaced by its midpoint), to round-off. `residual` returns F and dF/dx. Used by the
+/// plane-stress J2 return ([`j2`]) and the Armstrong–Frederick return ([`cyclic`]).
+pub(crate) fn bracketed_root(mut hi: f64, residual: impl Fn(f64) -> (f64, f64)) -> f64 {
+    let (mut lo, mut x) = (0.0, 0.0);
+    for _ in 0..MAX_ITERATIONS {
+        let (f, slope) = residual(x);
+        if f == 0.0 {
+            break;
+        }
+        if f > 0.0 {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        let mut next = x - f / slope;
+        if !(next > lo && next < hi) {
+            next = 0.5 * (lo + hi);
+        }
+        let step = next - x;
+        x = next;
+        // Quadratic convergence: once the Newton correction is at round-off level the
+        // iterate is the root to machine precision.
+        if step.abs() <= 4.0 * f64::EPSILON * x || hi - lo <= 4.0 * f64::EPSILON * hi {
+            break;
+        }
+    }
+    x
+}
+
 /// Von Mises equivalent stress of a Voigt stress (xx, yy, xy, zz).
 pub fn von_mises(s: &Voigt) -> f64 {
     let (xx, yy, xy, zz) = (s[0], s[1], s[2], s[3]);
