@@ -105,23 +105,7 @@ impl ElementSet for ContinuumSet {
         input: &ElementInput<PointState>,
         output: ElementOutput<PointState>,
     ) {
-        let c = &self.cells[e];
-        let body = c.body as usize;
-        let material = self.materials[body].as_ref();
-        let formulation = self.formulations[body];
-        evaluate_cell(
-            &self.analysis,
-            c.kind,
-            &c.coords,
-            CellBody {
-                formulation,
-                material,
-                temperature: None,
-                history: None,
-            },
-            input,
-            output,
-        );
+        self.evaluate_cell(e, None, None, input, output);
     }
 
     /// A point that did not yield got its material's elastic tangent (the [`Material`]
@@ -149,6 +133,33 @@ impl ElementSet for ContinuumSet {
 }
 
 impl ContinuumSet {
+    /// Evaluates cell `e` with its body's formulation and material, under its thermal
+    /// eigenstrain and with its internal-variable history where it has them.
+    fn evaluate_cell(
+        &self,
+        e: usize,
+        temperature: Option<&CellTemperature>,
+        history: Option<CellHistory>,
+        input: &ElementInput<PointState>,
+        output: ElementOutput<PointState>,
+    ) {
+        let c = &self.cells[e];
+        let body = c.body as usize;
+        evaluate_cell(
+            &self.analysis,
+            c.kind,
+            &c.coords,
+            CellBody {
+                formulation: self.formulations[body],
+                material: self.materials[body].as_ref(),
+                temperature,
+                history,
+            },
+            input,
+            output,
+        );
+    }
+
     /// Whether every body's material is linear: the continuum stiffness is then constant
     /// (small strains) and its internal force is K_c · u.
     pub fn is_linear(&self) -> bool {
@@ -331,19 +342,7 @@ impl ElementSet for ContinuumInContext<'_> {
             }),
             _ => None,
         };
-        evaluate_cell(
-            &set.analysis,
-            c.kind,
-            &c.coords,
-            CellBody {
-                formulation: set.formulations[body],
-                material: set.materials[body].as_ref(),
-                temperature: temperature.as_ref(),
-                history,
-            },
-            input,
-            output,
-        );
+        set.evaluate_cell(e, temperature.as_ref(), history, input, output);
         if let Some(h) = &self.history {
             for (slot, value) in h.trial[range].iter().zip(trial.iter()) {
                 slot.store(value.to_bits(), Ordering::Relaxed);
