@@ -13,9 +13,11 @@ mod common;
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 
-use common::{CaseBuilder, block_material, file_names, two_blocks_on, with_keys};
+use common::{
+    CaseBuilder, asperity, block_material, file_names, run_cli, two_blocks_on, with_keys,
+};
 
 /// Dragged plastic contact with unloading: 8 steps, about 30 increments.
 fn case() -> CaseBuilder {
@@ -29,24 +31,6 @@ fn case() -> CaseBuilder {
         .steps(8)
         .set("solver", "max_iterations", 8)
         .set("solver", "max_cutbacks", 12)
-}
-
-fn asperity() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_asperity"))
-}
-
-fn run(case: &Path, out: &Path, extra: &[&str]) {
-    let status = asperity()
-        .arg("run")
-        .arg(case)
-        .arg("--out")
-        .arg(out)
-        .args(extra)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .unwrap();
-    assert!(status.success(), "{status}");
 }
 
 /// A small deterministic generator (xorshift64*), so that each seed kills at the same place
@@ -235,7 +219,7 @@ fn killed_runs_leave_complete_files_and_resume_to_identical_results() {
     let root = tempfile::tempdir().unwrap();
     let case = case().write(&root.path().join("case.toml"));
     let reference = root.path().join("reference");
-    run(&case, &reference, &[]);
+    run_cli(&case, &reference, &[]);
     let steps = history_steps(&read(reference.join("history.csv")));
     assert_eq!(steps, (1..=8).collect::<Vec<_>>());
     let mut interrupted = 0;
@@ -249,7 +233,7 @@ fn killed_runs_leave_complete_files_and_resume_to_identical_results() {
         let done = check_killed(&dir, &reference);
         println!("seed {seed}: killed {delay} µs after increment {k}: {done} of 8 steps on disk");
         interrupted += usize::from(done < 8);
-        run(&case, &dir, &["--resume"]);
+        run_cli(&case, &dir, &["--resume"]);
         check_resumed(&dir, &reference);
     }
     // Otherwise the kills all came too late to test anything.

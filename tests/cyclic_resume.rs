@@ -14,13 +14,13 @@ mod common;
 
 use std::io::{BufRead, BufReader};
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 
 use asperity::output::restart::{OutputState, read_record};
 use asperity::output::writer::RecordWriter;
 use asperity::solver::shakedown::BodyCycles;
 use asperity::solver::state::{Observer, Progress, Resume, Solution, StepResult};
-use common::{file_names, fixture};
+use common::{asperity, file_names, fixture, run_cli};
 
 /// Frames of the cyclic step: a press step of 2 frames, then 4 cycles of 6.
 const FRAMES: usize = 2 + 4 * 6;
@@ -182,24 +182,6 @@ fn a_kinematic_run_resumed_from_any_record_is_bit_identical() {
     }
 }
 
-fn asperity() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_asperity"))
-}
-
-fn run(case: &Path, out: &Path, extra: &[&str]) {
-    let status = asperity()
-        .arg("run")
-        .arg(case)
-        .arg("--out")
-        .arg(out)
-        .args(extra)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .unwrap();
-    assert!(status.success(), "{status}");
-}
-
 /// Starts a run into `out` and kills it (SIGKILL) right after its `k`-th converged increment
 /// was logged. Returns the number of frames history.csv lists complete.
 fn kill_run(case: &Path, out: &Path, k: usize) -> usize {
@@ -266,12 +248,12 @@ fn a_kinematic_run_killed_mid_cycle_resumes_to_identical_files() {
     let case = root.path().join("case.toml");
     std::fs::write(&case, case_text()).unwrap();
     let reference = root.path().join("reference");
-    run(&case, &reference, &[]);
+    run_cli(&case, &reference, &[]);
 
     // A finished run resumed: nothing to compute, the summary keeps its verdicts.
     let finished = root.path().join("finished");
-    run(&case, &finished, &[]);
-    run(&case, &finished, &["--resume"]);
+    run_cli(&case, &finished, &[]);
+    run_cli(&case, &finished, &["--resume"]);
     assert_identical(&finished, &reference);
 
     // Killed after increments inside the first, second and last cycles (about 36 increments
@@ -282,7 +264,7 @@ fn a_kinematic_run_killed_mid_cycle_resumes_to_identical_files() {
         let done = kill_run(&case, &dir, k);
         println!("killed after increment {k}: {done} of {FRAMES} frames on disk");
         inside_cycles += usize::from(done > 2 && done < FRAMES && !(done - 2).is_multiple_of(6));
-        run(&case, &dir, &["--resume"]);
+        run_cli(&case, &dir, &["--resume"]);
         assert_identical(&dir, &reference);
     }
     // Where a kill lands depends on how far the background writer got, so on the machine's

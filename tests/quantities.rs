@@ -11,25 +11,8 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use common::{CaseBuilder, list, table, two_blocks};
+use common::{CaseBuilder, list, run_cli, table, two_blocks};
 use toml::Table;
-
-/// Runs `case` into `out`; panics with the output if the run fails.
-fn run(case: &Path, out: &Path) {
-    let output = Command::new(env!("CARGO_BIN_EXE_asperity"))
-        .arg("run")
-        .arg(case)
-        .arg("--out")
-        .arg(out)
-        .output()
-        .unwrap();
-    assert!(
-        output.status.success(),
-        "{}{}",
-        String::from_utf8_lossy(&output.stdout),
-        String::from_utf8_lossy(&output.stderr)
-    );
-}
 
 /// The rows of `history.csv` by column name.
 fn history(out: &Path) -> Vec<HashMap<String, f64>> {
@@ -80,7 +63,7 @@ fn a_defaulted_penalty_is_ten_surface_moduli_over_the_element_length_and_overlap
         .pressure("lid", p)
         .push("history", relative_gap())
         .write(&dir.path().join("case.toml"));
-    run(&case, &out);
+    run_cli(&case, &out, &[]);
     let info = json(&out.join("run.json"));
     let default = &info["penalty_defaults"][0];
     assert_eq!(default["contact"], "joint");
@@ -109,11 +92,12 @@ fn a_defaulted_penalty_is_ten_surface_moduli_over_the_element_length_and_overlap
 
     // A case that gives the stiffnesses gets no default.
     let given = dir.path().join("given");
-    run(
+    run_cli(
         &blocks(Some(k))
             .pressure("lid", p)
             .write(&dir.path().join("given.toml")),
         &given,
+        &[],
     );
     assert_eq!(
         json(&given.join("run.json"))["penalty_defaults"],
@@ -134,7 +118,7 @@ fn a_defaulted_penalty_answer_is_close_to_a_stiff_one() {
         let case = blocks(stiffness)
             .support("lid", &[("ux", 0.0), ("uy", -d)])
             .write(&dir.path().join(format!("{name}.toml")));
-        run(&case, &out);
+        run_cli(&case, &out, &[]);
         let k = json(&out.join("run.json"))["penalty_defaults"][0]["stiffness"].as_f64();
         (history(&out).pop().unwrap()["reaction_base_y"], k)
     };
@@ -197,7 +181,7 @@ fn fretting(cycles: i64) -> CaseBuilder {
 fn history_and_summary_report_displacements_extents_and_dissipation_by_name() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    run(&fretting(2).write(&dir.path().join("case.toml")), &out);
+    run_cli(&fretting(2).write(&dir.path().join("case.toml")), &out, &[]);
     let rows = history(&out);
     assert_eq!(rows.len(), 1 + 2 + 8, "step 0, press, two cycles of four");
     // The prescribed displacements are the step histories' values: the press ramps to
@@ -298,7 +282,7 @@ fn pyvista_shows_the_parts_by_name() {
     }
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    run(&fretting(1).write(&dir.path().join("case.toml")), &out);
+    run_cli(&fretting(1).write(&dir.path().join("case.toml")), &out, &[]);
     let vtm = std::fs::read_to_string(out.join("frame_0001.vtm")).unwrap();
     assert!(
         vtm.contains("name=\"lower\" file=\"bodies_0001_1.vtu\""),
@@ -368,7 +352,7 @@ fn a_model_fit_keeps_a_defaulted_penalty_fixed_and_reports_it() {
         .steps(4)
         .write(&dir.path().join("specimen.toml"));
     let out = dir.path().join("specimen");
-    run(&specimen, &out);
+    run_cli(&specimen, &out, &[]);
     let by_run = json(&out.join("run.json"))["penalty_defaults"][0]["stiffness"]
         .as_f64()
         .unwrap();

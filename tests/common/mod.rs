@@ -17,6 +17,30 @@ use asperity::model::Model;
 use asperity::solver::state::Solution;
 use asperity::solver::stepping::run_steps;
 
+/// The `asperity` binary of this build.
+pub fn asperity() -> std::process::Command {
+    std::process::Command::new(env!("CARGO_BIN_EXE_asperity"))
+}
+
+/// Runs `asperity run <case> --out <out> <extra...>` and asserts that it succeeds, showing
+/// what it printed when it does not.
+pub fn run_cli(case: &std::path::Path, out: &std::path::Path, extra: &[&str]) {
+    let output = asperity()
+        .arg("run")
+        .arg(case)
+        .arg("--out")
+        .arg(out)
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    );
+}
+
 /// Builds a structured quad8 (or tri6, `triangles = true`) mesh of the map
 /// `(s, t) ∈ [0,1]² → geometry(s, t)` with `nx × ny` cells. Mid-side nodes are mapped
 /// through the geometry too (so curved boundaries are followed). Interior corner nodes are
