@@ -16,13 +16,14 @@ use rayon::prelude::*;
 
 use crate::contact::ContactAlgorithm;
 use crate::element::set::ElementSet;
-use crate::element::{ElementInput, ElementMatrix, ElementOutput, ElementVector};
+use crate::element::{ElementInput, ElementMatrix, ElementOutput, ElementVector, MAX_ELEMENT_DOFS};
 
 /// Marker for a constrained (prescribed) degree of freedom in [`DofMap`].
 const FIXED: u32 = u32::MAX;
 
-/// Numbering of the equations: two degrees of freedom (x, y) per node, global dof index
-/// `2·node + component`; free dofs get consecutive equation numbers in node order.
+/// Numbering of the equations: D degrees of freedom per node (x, y, and with twist θ: see
+/// [`Analysis::dofs_per_node`](crate::element::Analysis::dofs_per_node)), global dof index
+/// `D·node + component`; free dofs get consecutive equation numbers in node order.
 #[derive(Clone, Debug)]
 pub struct DofMap {
     equation: Vec<u32>,
@@ -55,7 +56,7 @@ impl DofMap {
         self.free
     }
 
-    /// Total number of dofs (2 per node).
+    /// Total number of dofs (D per node).
     pub fn dof_count(&self) -> usize {
         self.equation.len()
     }
@@ -174,18 +175,19 @@ impl SparsityPattern {
                 v
             })
             .collect();
+        let d = dofs.dof_count() / node_count.max(1);
         let mut col_ptr = Vec::with_capacity(dofs.free_count() + 1);
         col_ptr.push(0u32);
         let mut row_idx = Vec::new();
         for (node, adjacent) in neighbours.iter().enumerate() {
-            for c in 0..2 {
-                if dofs.equation(2 * node + c).is_none() {
+            for c in 0..d {
+                if dofs.equation(d * node + c).is_none() {
                     continue;
                 }
                 for &m in adjacent {
                     row_idx.extend(
-                        (0..2)
-                            .filter_map(|d| dofs.equation(2 * m as usize + d))
+                        (0..d)
+                            .filter_map(|c| dofs.equation(d * m as usize + c))
                             .map(|e| e as u32),
                     );
                 }
@@ -227,8 +229,8 @@ pub struct DenseScatter {
 }
 
 impl DenseScatter {
-    /// Dofs per element slot (8 nodes · 2).
-    const STRIDE: usize = 16;
+    /// Dofs per element slot (8 nodes · at most 3).
+    const STRIDE: usize = MAX_ELEMENT_DOFS;
 
     /// The map of the elements of `set`: `local(eq)` is the block index of free equation `eq`
     /// (`None` if it is not in the block).
@@ -237,12 +239,13 @@ impl DenseScatter {
         dofs: &DofMap,
         local: impl Fn(usize) -> Option<usize>,
     ) -> Self {
+        let d = set.dofs_per_node();
         let mut map = vec![OUTSIDE; set.len() * Self::STRIDE];
         for e in 0..set.len() {
             for (n, &node) in set.nodes(e).iter().enumerate() {
-                for c in 0..2 {
-                    if let Some(k) = dofs.equation(2 * node as usize + c).and_then(&local) {
-                        map[e * Self::STRIDE + 2 * n + c] = k as u32;
+                for c in 0..d {
+                    if let Some(k) = dofs.equation(d * node as usize + c).and_then(&local) {
+                        map[e * Self::STRIDE + d * n + c] = k as u32;
                     }
                 }
             }
@@ -559,18 +562,18 @@ struct Dense<'m> {
 unsafe fn add_element_matrix(
     pattern: &SparsityPattern,
     dofs: &DofMap,
-    nodes: &[u32],
+    (nodes, d): (&[u32], usize),
     ke: &ElementMatrix,
     sign: f64,
     values: *mut f64,
 ) {
     let (cp, ri) = (pattern.symbolic.col_ptr(), pattern.symbolic.row_idx());
-    let mut equations = [None; 16];
-    for (a, eq) in equations.iter_mut().enumerate().take(2 * nodes.len()) {
-        *eq = dofs.equation(2 * nodes[a / 2] as usize + a % 2);
+    let mut equations = [None; MAX_ELEMENT_DOFS];
+    for (a, eq) in equations.iter_mut().enumerate().take(d * nodes.len()) {
+        *eq = dofs.equation(d * nodes[a / d] as usize + a % d);
     }
     // The first free dof of each node, as (component, equation).
-    let first = |n: usize| (0..2).find_map(|c| equations[2 * n + c].map(|eq| (c, eq)));
+    let first = |n: usize| (0..d).find_map(|c| equations[d * n + c].map(|eq| (c, eq)));
     for b in 0..nodes.len() {
         let Some((cb0, j0)) = first(b) else { continue };
         let start = cp[j0] as usize;
@@ -581,19 +584,19 @@ unsafe fn add_element_matrix(
                 + rows
                     .binary_search(&(r0 as u32))
                     .expect("entry of an element's dofs is in the pattern");
-            for cb in cb0..2 {
-                let Some(j) = equations[2 * b + cb] else {
+            for cb in cb0..d {
+                let Some(j) = equations[d * b + cb] else {
                     continue;
                 };
                 let p0 = p0 - start + cp[j] as usize;
-                for ca in ca0..2 {
-                    let Some(r) = equations[2 * a + ca] else {
+                for ca in ca0..d {
+                    let Some(r) = equations[d * a + ca] else {
                         continue;
                     };
                     let p = p0 + (r - r0);
                     debug_assert_eq!(ri[p] as usize, r);
                     // SAFETY: the caller's contract.
-                    unsafe { *values.add(p) += sign * ke[(2 * a + ca, 2 * b + cb)] };
+                    unsafe { *values.add(p) += sign * ke[(d * a + ca, d * b + cb)] };
                 }
             }
         }
@@ -622,6 +625,7 @@ fn scatter<S: ElementSet>(
         dofs, u, algorithm, ..
     } = *input;
     let ppe = set.points_per_element();
+    let d = set.dofs_per_node();
     assert_eq!(trial.len(), set.len() * ppe);
     assert_eq!(committed.len(), trial.len());
     let states = SharedMut(trial.as_mut_ptr());
@@ -629,8 +633,9 @@ fn scatter<S: ElementSet>(
         let nodes = set.nodes(e);
         let mut ue = ElementVector::zeros();
         for (a, &n) in nodes.iter().enumerate() {
-            ue[2 * a] = u[2 * n as usize];
-            ue[2 * a + 1] = u[2 * n as usize + 1];
+            for c in 0..d {
+                ue[d * a + c] = u[d * n as usize + c];
+            }
         }
         // SAFETY: every element is evaluated exactly once, and its state slots (and its
         // frozen flag) are its own.
@@ -650,9 +655,9 @@ fn scatter<S: ElementSet>(
             f: &mut fe,
         };
         set.evaluate(e, &element_input, output);
-        let global = |a: usize| 2 * nodes[a / 2] as usize + a % 2;
+        let global = |a: usize| d * nodes[a / d] as usize + a % d;
         if let Some(force) = force {
-            for a in 0..2 * nodes.len() {
+            for a in 0..d * nodes.len() {
                 // SAFETY: elements of one colour share no node, hence no dof.
                 unsafe { *force.get().add(global(a)) += fe[a] };
             }
@@ -664,12 +669,12 @@ fn scatter<S: ElementSet>(
         }) = dense
         {
             let local = map.element(e);
-            for b in 0..2 * nodes.len() {
+            for b in 0..d * nodes.len() {
                 let col = local[b];
                 if col == OUTSIDE {
                     continue;
                 }
-                for a in 0..2 * nodes.len() {
+                for a in 0..d * nodes.len() {
                     let row = local[a];
                     if row != OUTSIDE {
                         let at = row as usize + col as usize * col_stride;
@@ -697,14 +702,18 @@ fn scatter<S: ElementSet>(
                     let mut kr = ElementMatrix::zeros();
                     set.reference_tangent(e, &mut kr);
                     // SAFETY: as above.
-                    unsafe { add_element_matrix(pattern, dofs, nodes, &kr, -1.0, r.values.get()) };
+                    unsafe {
+                        add_element_matrix(pattern, dofs, (nodes, d), &kr, -1.0, r.values.get())
+                    };
                     ke -= kr;
                     *frozen = false;
                 }
                 // Its tangent is the reference one: it joins the sum.
                 (false, true) => {
                     // SAFETY: as above.
-                    unsafe { add_element_matrix(pattern, dofs, nodes, &ke, 1.0, r.values.get()) };
+                    unsafe {
+                        add_element_matrix(pattern, dofs, (nodes, d), &ke, 1.0, r.values.get())
+                    };
                     *frozen = true;
                 }
                 (false, false) => {}
@@ -712,7 +721,7 @@ fn scatter<S: ElementSet>(
         }
         // SAFETY: as above; the entries of this element's dofs are written by no other
         // element of its colour.
-        unsafe { add_element_matrix(pattern, dofs, nodes, &ke, 1.0, values.get()) };
+        unsafe { add_element_matrix(pattern, dofs, (nodes, d), &ke, 1.0, values.get()) };
     };
     let last = coloring.groups.len().saturating_sub(1);
     for (c, group) in coloring.groups.iter().enumerate() {

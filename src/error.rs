@@ -960,8 +960,9 @@ pub struct ResidualAt {
     pub position: [f64; 2],
     /// The body (physical surface) the node belongs to.
     pub body: Option<String>,
-    /// Out-of-balance force (f_ext − f_int) over the node's free components, in N.
-    pub force: [f64; 2],
+    /// Out-of-balance force (f_ext − f_int) over the node's free components, in N: x and y
+    /// (r and z), and θ with twist (0 without).
+    pub force: [f64; 3],
 }
 
 /// One attempted (sub-)increment of a step that failed.
@@ -1071,9 +1072,14 @@ impl fmt::Display for NoConvergence {
         if let Some(r) = &self.largest_residual {
             write!(
                 f,
-                ".\n  Largest out-of-balance force: ({:.3e}, {:.3e}) N at node {} ({:?}) of body '{}'",
+                ".\n  Largest out-of-balance force: ({:.3e}, {:.3e}{}) N at node {} ({:?}) of body '{}'",
                 r.force[0],
                 r.force[1],
+                if r.force[2] == 0.0 {
+                    String::new()
+                } else {
+                    format!(", θ {:.3e}", r.force[2])
+                },
                 r.node,
                 r.position,
                 r.body.as_deref().unwrap_or("?")

@@ -14,7 +14,7 @@
 
 use asperity::material::cyclic::{CyclicPlasticity, KinematicTerm, Voce};
 use asperity::material::elastic::LinearElastic;
-use asperity::material::{Material, OutOfPlane, PointState, Voigt};
+use asperity::material::{Material, OutOfPlane, PointState, voigt};
 
 const E: f64 = 200_000.0;
 const SIGMA_Y: f64 = 200.0;
@@ -50,7 +50,7 @@ impl Point {
     fn trial(&self, exx: f64, eyy: f64) -> (PointState, Vec<f64>, asperity::material::Tangent) {
         let mut internal = vec![0.0; self.internal.len()];
         let (s, d) = self.m.update_with_history(
-            &Voigt::new(exx, eyy, 0.0, 0.0),
+            &voigt(exx, eyy, 0.0, 0.0),
             &self.state,
             &self.internal,
             &mut internal,

@@ -5,7 +5,7 @@
 
 use asperity::material::elastic::LinearElastic;
 use asperity::material::j2::J2Plasticity;
-use asperity::material::{Material, OutOfPlane, PointState, Tangent, Voigt, ZZ, von_mises};
+use asperity::material::{Material, OutOfPlane, PointState, Tangent, Voigt, ZZ, voigt, von_mises};
 
 const E: f64 = 200_000.0;
 const NU: f64 = 0.3;
@@ -55,8 +55,7 @@ fn uniaxial(m: &J2Plasticity, committed: &PointState, exx: f64, mode: OutOfPlane
 
 /// Pure shear strain γ_xy (all other strain components zero).
 fn shear(m: &J2Plasticity, committed: &PointState, gamma: f64, mode: OutOfPlane) -> PointState {
-    m.update(&Voigt::new(0.0, 0.0, gamma, 0.0), committed, mode)
-        .0
+    m.update(&voigt(0.0, 0.0, gamma, 0.0), committed, mode).0
 }
 
 fn assert_close(actual: f64, expected: f64, tol: f64, what: &str) {
@@ -224,7 +223,7 @@ fn monotonic_segments_do_not_depend_on_the_number_of_increments() {
         }
         // A general radial strain path with given ε_zz (volumetric part included): the trial
         // deviator always points the same way, so the path is radial in stress space too.
-        let dir = Voigt::new(1.0, -0.4, 0.7, 0.25) * 1e-2;
+        let dir = voigt(1.0, -0.4, 0.7, 0.25) * 1e-2;
         let (one, _) = m.update(&dir, &PointState::default(), OutOfPlane::StrainGiven);
         let mut many = PointState::default();
         for t in steps(0.0, 1.0, 100) {
@@ -320,6 +319,15 @@ fn simple_shear_follows_the_exact_curve() {
 }
 
 /// Central finite differences of the stress update with respect to each strain component.
+/// The strain components a mode's tangent acts on: all six (with the twist shears rθ, zθ)
+/// at given out-of-plane strain, the in-plane four in plane stress (which has no twist).
+fn components(mode: OutOfPlane) -> usize {
+    match mode {
+        OutOfPlane::StrainGiven => 6,
+        OutOfPlane::StressFree => 4,
+    }
+}
+
 fn finite_difference_tangent(
     m: &J2Plasticity,
     strain: &Voigt,
@@ -329,7 +337,7 @@ fn finite_difference_tangent(
     let h = 1e-8 * strain.amax();
     let yielding = m.update(strain, committed, mode).0.yielding;
     let mut d = Tangent::zeros();
-    for j in 0..4 {
+    for j in 0..components(mode) {
         let mut plus = *strain;
         let mut minus = *strain;
         plus[j] += h;
@@ -350,7 +358,7 @@ fn consistent_tangent_matches_finite_differences() {
         let m = material(h);
         for mode in MODES {
             // A committed state with nonzero plastic strain.
-            let base = Voigt::new(3e-3, -1e-3, 2.5e-3, 0.5e-3);
+            let base = voigt(3e-3, -1e-3, 2.5e-3, 0.5e-3);
             let (committed, _) = m.update(&base, &PointState::default(), mode);
             assert!(committed.yielding && committed.equivalent_plastic_strain > 1e-3);
 
@@ -363,13 +371,18 @@ fn consistent_tangent_matches_finite_differences() {
             let e_el = committed.strain - committed.plastic_strain;
             for inc in [
                 e_el * 0.2,
-                e_el * 0.5 + Voigt::new(1e-3, 0.0, 0.0, 0.0),
-                e_el * 0.5 + Voigt::new(0.0, 0.0, 1.5e-3, 0.0),
-                e_el * 0.3 + Voigt::new(-1.0, 2.0, -3.0, 1.0) * 3e-5,
-                Voigt::new(1.0, 0.0, 0.0, 0.0) * 1e-3,
-                Voigt::new(5.0, -2.0, 4.0, 1.0) * 1e-3,
+                e_el * 0.5 + voigt(1e-3, 0.0, 0.0, 0.0),
+                e_el * 0.5 + voigt(0.0, 0.0, 1.5e-3, 0.0),
+                e_el * 0.3 + voigt(-1.0, 2.0, -3.0, 1.0) * 3e-5,
+                voigt(1.0, 0.0, 0.0, 0.0) * 1e-3,
+                voigt(5.0, -2.0, 4.0, 1.0) * 1e-3,
             ] {
                 cases.push((committed.strain + inc, true));
+            }
+            if mode == OutOfPlane::StrainGiven {
+                // Across the flow direction into the twist shears (rθ, zθ).
+                let twist = Voigt::new(0.0, 0.0, 0.0, 0.0, 1.2e-3, -0.8e-3);
+                cases.push((committed.strain + e_el * 0.5 + twist, true));
             }
             for (strain, plastic) in cases {
                 let (state, d) = m.update(&strain, &committed, mode);
@@ -378,7 +391,8 @@ fn consistent_tangent_matches_finite_differences() {
                 // A fully softened plane-stress point (σ_y = 0) has a zero tangent; measure the
                 // error against the elastic stiffness there.
                 let scale = d.norm().max(1e-3 * m.elastic.stiffness(mode).norm());
-                let err = (fd - d).norm() / scale;
+                let n = components(mode);
+                let err = (fd - d).view((0, 0), (n, n)).norm() / scale;
                 let sy = m.flow_stress(state.equivalent_plastic_strain);
                 eprintln!(
                     "{mode:?} H = {h:>7} {} (σ_y = {sy:6.1}): |D_fd − D|/|D| = {err:.2e}",
@@ -411,7 +425,7 @@ impl Lcg {
     }
 
     fn strain(&mut self, s: f64) -> Voigt {
-        Voigt::new(self.next(), self.next(), self.next(), self.next()) * s
+        voigt(self.next(), self.next(), self.next(), self.next()) * s
     }
 }
 

@@ -5,7 +5,7 @@ mod common;
 
 use asperity::config::AnalysisSpec;
 use asperity::material::elastic::LinearElastic;
-use asperity::material::{OutOfPlane, Voigt};
+use asperity::material::{OutOfPlane, Voigt, voigt};
 use asperity::mesh::Mesh;
 use asperity::solver::stepping::run_steps;
 use common::*;
@@ -142,7 +142,7 @@ fn axisymmetric_patch(mesh: Mesh, formulation: &str) {
     let expected = LinearElastic::new(E, NU)
         .unwrap()
         .stiffness(OutOfPlane::StrainGiven)
-        * Voigt::new(c, d, 0.0, c);
+        * voigt(c, d, 0.0, c);
     for s in solution
         .committed
         .iter()

@@ -44,8 +44,8 @@
 
 use super::quadrature::{MAX_CELL_POINTS, QuadPoint, cell_rule};
 use super::shape::{ShapeValues, cell_shape};
-use super::{Analysis, ElementInput, ElementOutput};
-use crate::material::{Material, OutOfPlane, PointState, Voigt, ZZ};
+use super::{Analysis, ElementInput, ElementMatrix, ElementOutput, ElementVector};
+use crate::material::{Material, OutOfPlane, PointState, R_THETA, Tangent, Voigt, ZZ};
 use crate::mesh::CellKind;
 use nalgebra::{SMatrix, SVector};
 
@@ -109,10 +109,21 @@ pub const PROJECTION_TERMS: usize = 3;
 /// Strain-displacement matrix: rows (xx, yy, xy, zz), columns (u_x1, u_y1, ..., u_x8, u_y8).
 pub type StrainDisplacement = SMatrix<f64, 4, 16>;
 
+/// The twist part of the strain-displacement matrix: rows (γ_rθ, γ_zθ), columns
+/// (u_θ1, ..., u_θ8). The circumferential displacement enters no other strain and the
+/// in-plane ones enter neither of these (the geometry does not depend on θ), so with twist
+/// B is block diagonal in (u_r, u_z | u_θ) and the plane block is [`StrainDisplacement`].
+pub type TwistStrainDisplacement = SMatrix<f64, 2, 8>;
+
+/// Number of strain components of the plane block (xx, yy, xy, zz).
+const PLANE_STRAINS: usize = 4;
+
 /// Kinematics at one integration point.
 #[derive(Clone, Copy, Debug)]
 pub struct PointKinematics {
     pub b: StrainDisplacement,
+    /// The twist block (zero unless the analysis has twist).
+    pub twist: TwistStrainDisplacement,
     /// Volume weight: quadrature weight × det J × (thickness or 2πr).
     pub dvol: f64,
     /// Physical position of the point.
@@ -140,6 +151,7 @@ pub fn point_kinematics(
         return Err(det);
     }
     let mut b = StrainDisplacement::zeros();
+    let mut twist = TwistStrainDisplacement::zeros();
     for i in 0..nn {
         let dx = (j22 * s.dxi[i] - j12 * s.deta[i]) / det;
         let dy = (-j21 * s.dxi[i] + j11 * s.deta[i]) / det;
@@ -150,9 +162,16 @@ pub fn point_kinematics(
         if analysis.is_axisymmetric() {
             b[(ZZ, 2 * i)] = s.n[i] / x;
         }
+        if analysis.has_twist() {
+            // γ_rθ = ∂u_θ/∂r − u_θ/r (the rigid rotation u_θ = φ r strains nothing) and
+            // γ_zθ = ∂u_θ/∂z.
+            twist[(0, i)] = dx - s.n[i] / x;
+            twist[(1, i)] = dy;
+        }
     }
     Ok(PointKinematics {
         b,
+        twist,
         dvol: p.weight * det * analysis.measure(x),
         x: [x, y],
     })
@@ -274,8 +293,20 @@ pub fn evaluate_cell(
     let thermal = temperature
         .filter(|t| t.expansion != 0.0)
         .map(|t| thermal_strains(kind, t));
+    let twist = analysis.has_twist();
+    let (u_plane, u_theta) = split_components(u, twist);
+    let mut blocks = twist.then(TwistBlocks::default);
+    let (mut f_plane, mut f_theta) = (SVector::<f64, 16>::zeros(), SVector::<f64, 8>::zeros());
     for (g, pk) in points.iter().enumerate() {
-        let mut strain: Voigt = pk.b * u;
+        let mut strain = Voigt::zeros();
+        strain
+            .fixed_rows_mut::<PLANE_STRAINS>(0)
+            .copy_from(&(pk.b * u_plane));
+        if twist {
+            strain
+                .fixed_rows_mut::<2>(R_THETA)
+                .copy_from(&(pk.twist * u_theta));
+        }
         let eigen = thermal.map(|t| t[g]);
         for c in NORMAL_COMPONENTS {
             strain[c] -= eigen.unwrap_or_default();
@@ -298,12 +329,101 @@ pub fn evaluate_cell(
                 state.strain[c] += eigen;
             }
         }
-        f.gemv_tr(pk.dvol, &pk.b, &state.stress, 1.0);
+        let stress_plane = state.stress.fixed_rows::<PLANE_STRAINS>(0);
+        if twist {
+            f_theta.gemv_tr(
+                pk.dvol,
+                &pk.twist,
+                &state.stress.fixed_rows::<2>(R_THETA),
+                1.0,
+            );
+        }
         if let Some(k) = k.as_deref_mut() {
-            let db = d * pk.b;
-            k.gemm_tr(pk.dvol, &pk.b, &db, 1.0);
+            let d_plane = d.fixed_view::<PLANE_STRAINS, PLANE_STRAINS>(0, 0);
+            let db = d_plane * pk.b;
+            match blocks.as_mut() {
+                Some(blocks) => blocks.add(pk, &d, &db),
+                None => k
+                    .fixed_view_mut::<16, 16>(0, 0)
+                    .gemm_tr(pk.dvol, &pk.b, &db, 1.0),
+            }
+        }
+        if twist {
+            f_plane.gemv_tr(pk.dvol, &pk.b, &stress_plane, 1.0);
+        } else {
+            f.fixed_rows_mut::<16>(0)
+                .gemv_tr(pk.dvol, &pk.b, &stress_plane, 1.0);
         }
         trial[g] = state;
+    }
+    if twist {
+        for a in 0..16 {
+            f[3 * (a / 2) + a % 2] += f_plane[a];
+        }
+        for i in 0..8 {
+            f[3 * i + 2] += f_theta[i];
+        }
+        if let (Some(k), Some(blocks)) = (k, blocks) {
+            blocks.scatter(k);
+        }
+    }
+}
+
+/// The in-plane (u_x, u_y) and circumferential (u_θ) nodal displacements of an element
+/// vector: without twist the leading 16 entries and zeros.
+fn split_components(u: &ElementVector, twist: bool) -> (SVector<f64, 16>, SVector<f64, 8>) {
+    if !twist {
+        return (u.fixed_rows::<16>(0).into_owned(), SVector::zeros());
+    }
+    let plane = SVector::<f64, 16>::from_fn(|a, _| u[3 * (a / 2) + a % 2]);
+    let theta = SVector::<f64, 8>::from_fn(|i, _| u[3 * i + 2]);
+    (plane, theta)
+}
+
+/// The four blocks of a twist cell's tangent, in-plane (p) and circumferential (θ) dofs,
+/// accumulated over the points and scattered into the element matrix's node-by-node order
+/// once.
+#[derive(Default)]
+struct TwistBlocks {
+    pp: SMatrix<f64, 16, 16>,
+    p_theta: SMatrix<f64, 16, 8>,
+    theta_p: SMatrix<f64, 8, 16>,
+    theta_theta: SMatrix<f64, 8, 8>,
+}
+
+impl TwistBlocks {
+    /// Adds one point's Bᵀ D B dV, `db` = D_pp B (the plane block).
+    fn add(&mut self, pk: &PointKinematics, d: &Tangent, db: &SMatrix<f64, 4, 16>) {
+        let d_p_theta = d.fixed_view::<PLANE_STRAINS, 2>(0, R_THETA);
+        let d_theta_p = d.fixed_view::<2, PLANE_STRAINS>(R_THETA, 0);
+        let d_theta_theta = d.fixed_view::<2, 2>(R_THETA, R_THETA);
+        self.pp.gemm_tr(pk.dvol, &pk.b, db, 1.0);
+        self.p_theta
+            .gemm_tr(pk.dvol, &pk.b, &(d_p_theta * pk.twist), 1.0);
+        self.theta_p
+            .gemm_tr(pk.dvol, &pk.twist, &(d_theta_p * pk.b), 1.0);
+        self.theta_theta
+            .gemm_tr(pk.dvol, &pk.twist, &(d_theta_theta * pk.twist), 1.0);
+    }
+
+    /// Adds the blocks to `k` in element dof order 3·i + c.
+    fn scatter(&self, k: &mut ElementMatrix) {
+        let plane = |a: usize| 3 * (a / 2) + a % 2;
+        let theta = |i: usize| 3 * i + 2;
+        for a in 0..16 {
+            for b in 0..16 {
+                k[(plane(a), plane(b))] += self.pp[(a, b)];
+            }
+            for j in 0..8 {
+                k[(plane(a), theta(j))] += self.p_theta[(a, j)];
+                k[(theta(j), plane(a))] += self.theta_p[(j, a)];
+            }
+        }
+        for i in 0..8 {
+            for j in 0..8 {
+                k[(theta(i), theta(j))] += self.theta_theta[(i, j)];
+            }
+        }
     }
 }
 
@@ -328,6 +448,7 @@ pub fn cell_kinematics(
         len: rule.len(),
         points: [PointKinematics {
             b: StrainDisplacement::zeros(),
+            twist: TwistStrainDisplacement::zeros(),
             dvol: 0.0,
             x: [0.0; 2],
         }; MAX_CELL_POINTS],
@@ -478,6 +599,119 @@ mod tests {
         u
     }
 
+    const TWIST: Analysis = Analysis::AxisymmetricTwist;
+
+    /// A displacement field of a twist cell (3 dofs per node): the in-plane part of
+    /// [`field`] and a circumferential u_θ = s (0.6 r z + 0.2 r² − 0.1 z²).
+    fn twist_field(kind: CellKind, s: f64) -> ElementVector {
+        let plane = field(kind, s);
+        let mut u = ElementVector::zeros();
+        for (i, x) in cell(kind)[..kind.node_count()].iter().enumerate() {
+            u[3 * i] = plane[2 * i];
+            u[3 * i + 1] = plane[2 * i + 1];
+            u[3 * i + 2] = s * (0.6 * x[0] * x[1] + 0.2 * x[0] * x[0] - 0.1 * x[1] * x[1]);
+        }
+        u
+    }
+
+    #[test]
+    fn twist_strains_of_a_rigid_rotation_and_a_torsion_field() {
+        // u_θ = φ r (rigid rotation about the axis) strains nothing; u_θ = κ r z (uniform
+        // torsion of a shaft) gives γ_zθ = κ r and γ_rθ = 0. On straight-sided cells (affine
+        // map) both fields are in the quadratic space, so exactly, at every point.
+        let (phi, kappa) = (2e-3, 5e-4);
+        let mid = |a: [f64; 2], b: [f64; 2]| [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+        let [p, q, r, t] = [[1.0, 0.0], [2.0, 0.2], [2.3, 1.2], [1.3, 1.0]];
+        let quad = [p, q, r, t, mid(p, q), mid(q, r), mid(r, t), mid(t, p)];
+        let tri = [p, q, t, mid(p, q), mid(q, t), mid(t, p), [0.0; 2], [0.0; 2]];
+        for (kind, coords) in [(CellKind::Quad8, quad), (CellKind::Tri6, tri)] {
+            let nodes = &coords[..kind.node_count()];
+            let theta = |f: &dyn Fn([f64; 2]) -> f64| {
+                SVector::<f64, 8>::from_fn(|i, _| nodes.get(i).map_or(0.0, |&x| f(x)))
+            };
+            let rotation = theta(&|x| phi * x[0]);
+            let torsion = theta(&|x| kappa * x[0] * x[1]);
+            for pk in cell_kinematics(&TWIST, kind, &coords, Formulation::Bbar).iter() {
+                assert!((pk.twist * rotation).amax() < 1e-17, "{kind:?}");
+                let g = pk.twist * torsion;
+                assert!(g[0].abs() < 1e-16 && (g[1] - kappa * pk.x[0]).abs() < 1e-16);
+            }
+        }
+    }
+
+    #[test]
+    fn twist_cell_tangent_matches_finite_differences_in_plastic_states() {
+        // J2 in six components couples the twist shears with the meridional stresses once
+        // the point yields: the off-diagonal blocks of the tangent must be right too.
+        let elastic = LinearElastic::new(200_000.0, 0.3).unwrap();
+        let j2 = J2Plasticity::new(elastic, 250.0, 1500.0).unwrap();
+        for kind in [CellKind::Quad8, CellKind::Tri6] {
+            for formulation in [Formulation::Full, Formulation::Bbar] {
+                let virgin = vec![PointState::default(); MAX_CELL_POINTS];
+                let eval =
+                    |committed: &[PointState], u: &ElementVector, k: Option<&mut ElementMatrix>| {
+                        evaluate(&TWIST, kind, formulation, &j2, committed, u, k)
+                    };
+                let (_, committed) = eval(&virgin, &twist_field(kind, 2e-3), None);
+                let u = twist_field(kind, 3e-3) + twist_field(kind, 4e-4).map(|x| x.sin());
+                let mut k = ElementMatrix::zeros();
+                let (_, trial) = eval(&committed, &u, Some(&mut k));
+                let n = cell_rule(kind).len();
+                assert!(trial[..n].iter().all(|s| s.yielding && s.stress[5] != 0.0));
+                let (h, dofs, scale) = (1e-8, 3 * kind.node_count(), k.amax());
+                for j in 0..dofs {
+                    let (mut up, mut um) = (u, u);
+                    up[j] += h;
+                    um[j] -= h;
+                    let fd =
+                        (eval(&committed, &up, None).0 - eval(&committed, &um, None).0) / (2.0 * h);
+                    for i in 0..dofs {
+                        // As in the plane test: O(h²) differences, far below 1e-6.
+                        assert!(
+                            (fd[i] - k[(i, j)]).abs() < 1e-6 * scale,
+                            "{kind:?} {formulation:?} K[{i},{j}] = {} vs fd {}",
+                            k[(i, j)],
+                            fd[i]
+                        );
+                    }
+                }
+                assert!((k - k.transpose()).amax() < 1e-9 * scale);
+                assert!(k.rows(dofs, 24 - dofs).amax() == 0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn twist_cell_without_circumferential_motion_equals_the_axisymmetric_cell() {
+        // With u_θ = 0 an elastic twist cell's meridional forces and stiffness are those of
+        // the plain axisymmetric cell (isotropic elasticity does not couple the blocks).
+        let elastic = LinearElastic::new(200_000.0, 0.3).unwrap();
+        for kind in [CellKind::Quad8, CellKind::Tri6] {
+            let virgin = vec![PointState::default(); MAX_CELL_POINTS];
+            let plane = field(kind, 1e-3);
+            let mut u = ElementVector::zeros();
+            for i in 0..kind.node_count() {
+                u[3 * i] = plane[2 * i];
+                u[3 * i + 1] = plane[2 * i + 1];
+            }
+            let (mut ka, mut kt) = (ElementMatrix::zeros(), ElementMatrix::zeros());
+            let full = Formulation::Full;
+            let (fa, _) = evaluate(&AXI, kind, full, &elastic, &virgin, &plane, Some(&mut ka));
+            let (ft, _) = evaluate(&TWIST, kind, full, &elastic, &virgin, &u, Some(&mut kt));
+            for a in 0..2 * kind.node_count() {
+                let ta = 3 * (a / 2) + a % 2;
+                assert!((fa[a] - ft[ta]).abs() <= 1e-12 * fa.amax());
+                for b in 0..2 * kind.node_count() {
+                    let tb = 3 * (b / 2) + b % 2;
+                    assert!((ka[(a, b)] - kt[(ta, tb)]).abs() <= 1e-12 * ka.amax());
+                }
+                for i in 0..kind.node_count() {
+                    assert_eq!(kt[(ta, 3 * i + 2)], 0.0);
+                }
+            }
+        }
+    }
+
     #[test]
     fn tangent_matches_finite_differences_in_plastic_states() {
         let elastic = LinearElastic::new(200_000.0, 0.3).unwrap();
@@ -556,10 +790,10 @@ mod tests {
                 let bbar = cell_kinematics(&analysis, kind, &cell(kind), Formulation::Bbar);
                 for (p, q) in full.iter().zip(bbar.iter()) {
                     assert!(
-                        (p.b * u - q.b * u).amax() < 1e-15,
+                        (p.b * u.fixed_rows::<16>(0) - q.b * u.fixed_rows::<16>(0)).amax() < 1e-15,
                         "{analysis:?} {kind:?}: {} vs {}",
-                        p.b * u,
-                        q.b * u
+                        p.b * u.fixed_rows::<16>(0),
+                        q.b * u.fixed_rows::<16>(0)
                     );
                     assert_eq!(p.dvol, q.dvol);
                 }
@@ -572,7 +806,7 @@ mod tests {
         // For a non-uniform field, B̄ differs from B only in its volumetric part: the
         // deviatoric strain is unchanged pointwise, and the volumetric strain integrates to
         // the same total over the cell (the constant is in the projection space).
-        let m = Voigt::new(1.0, 1.0, 0.0, 1.0);
+        let m = nalgebra::Vector4::new(1.0, 1.0, 0.0, 1.0);
         for analysis in [PLANE, AXI] {
             for kind in [CellKind::Quad8, CellKind::Tri6] {
                 let u = field(kind, 1e-3);
@@ -580,9 +814,10 @@ mod tests {
                 let bbar = cell_kinematics(&analysis, kind, &cell(kind), Formulation::Bbar);
                 let (mut total, mut total_bar, mut change) = (0.0, 0.0, 0.0_f64);
                 for (p, q) in full.iter().zip(bbar.iter()) {
-                    let (e, e_bar) = (p.b * u, q.b * u);
+                    let plane = u.fixed_rows::<16>(0);
+                    let (e, e_bar) = (p.b * plane, q.b * plane);
                     let (t, t_bar) = (m.dot(&e), m.dot(&e_bar));
-                    let dev = |e: Voigt, t: f64| e - m * (t / 3.0);
+                    let dev = |e: nalgebra::Vector4<f64>, t: f64| e - m * (t / 3.0);
                     assert!((dev(e, t) - dev(e_bar, t_bar)).amax() < 1e-16);
                     total += t * p.dvol;
                     total_bar += t_bar * q.dvol;

@@ -151,7 +151,7 @@ pub fn evaluate_interface(
     for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
         let p = interface_point(analysis, &element.b_coords, xi, w);
         let b = relative_operator(&p);
-        let jump = b * u;
+        let jump = b * u.fixed_rows::<16>(0);
         let mut gap = [0.0; 2];
         for i in 0..3 {
             gap[0] += p.n[i] * element.offsets[i][0];
@@ -165,11 +165,11 @@ pub fn evaluate_interface(
         let relative = [jump[0], jump[1] + g0 - interference + worn];
         let (state, tangent) = law.update(relative, before);
         let stress = nalgebra::Vector2::new(state.stress[0], state.stress[1]);
-        f.gemv_tr(p.da, &b, &stress, 1.0);
+        f.fixed_rows_mut::<16>(0).gemv_tr(p.da, &b, &stress, 1.0);
         let used = algorithm.tangent(law, &state, tangent);
         if let Some(k) = k.as_deref_mut() {
             let eb = used * b;
-            k.gemm_tr(p.da, &b, &eb, 1.0);
+            k.fixed_view_mut::<16, 16>(0, 0).gemm_tr(p.da, &b, &eb, 1.0);
         }
         let mut state = state;
         state.unsymmetric = used[(0, 1)] != used[(1, 0)];

@@ -3,9 +3,10 @@
 //! continuum element ([`continuum`]), the interface element ([`interface6`]) and what one
 //! element evaluation reads and writes ([`ElementInput`], [`ElementOutput`]).
 //!
-//! All element matrices are fixed 16×16 (8 nodes × 2 degrees of freedom); elements with fewer
-//! nodes use the leading block. Fixed sizes let nalgebra keep them on the stack, so assembly
-//! allocates nothing per element.
+//! All element matrices are fixed 24×24 (8 nodes × at most 3 degrees of freedom: u_x, u_y
+//! and, in an axisymmetric analysis with twist, u_θ); an element uses the leading block of
+//! its nodes × [`Analysis::dofs_per_node`] (16×16 for a quad8 without twist). Fixed sizes
+//! let nalgebra keep them on the stack, so assembly allocates nothing per element.
 
 pub mod continuum;
 pub mod interface6;
@@ -18,10 +19,14 @@ use serde::Deserialize;
 
 use crate::contact::ContactAlgorithm;
 
-/// Element stiffness (tangent) matrix, 8 nodes × 2 dofs, dof order (u_x1, u_y1, u_x2, ...).
-pub type ElementMatrix = SMatrix<f64, 16, 16>;
+/// Largest number of dofs of one element: 8 nodes × 3 components.
+pub const MAX_ELEMENT_DOFS: usize = 24;
+
+/// Element stiffness (tangent) matrix, dof order node by node, (u_x1, u_y1, u_x2, ...)
+/// or with twist (u_r1, u_z1, u_θ1, u_r2, ...): element dof D·i + c of node i, component c.
+pub type ElementMatrix = SMatrix<f64, MAX_ELEMENT_DOFS, MAX_ELEMENT_DOFS>;
 /// Element force or displacement vector in the same dof order.
-pub type ElementVector = SVector<f64, 16>;
+pub type ElementVector = SVector<f64, MAX_ELEMENT_DOFS>;
 
 /// What one element evaluation reads: its nodal displacements, the integration-point states
 /// of the last converged increment, and the choices of the global iteration.
@@ -63,6 +68,11 @@ pub enum Analysis {
     /// Axisymmetric about the y axis: x = r, y = z, hoop strain ε_θθ = u_r / r.
     /// Forces are totals over the full circle (2πr weighting).
     Axisymmetric,
+    /// Axisymmetric with twist (Abaqus' CGAX): every node also has the circumferential
+    /// displacement u_θ, the strains gain γ_rθ = ∂u_θ/∂r − u_θ/r and γ_zθ = ∂u_θ/∂z, and
+    /// the stress state has all six components; the geometry and the loads stay
+    /// independent of θ, so a torque about the axis can be carried.
+    AxisymmetricTwist,
 }
 
 fn unit_thickness() -> f64 {
@@ -77,7 +87,7 @@ impl Analysis {
     pub fn measure(&self, r: f64) -> f64 {
         match *self {
             Analysis::PlaneStress { thickness } | Analysis::PlaneStrain { thickness } => thickness,
-            Analysis::Axisymmetric => 2.0 * std::f64::consts::PI * r,
+            Analysis::Axisymmetric | Analysis::AxisymmetricTwist => 2.0 * std::f64::consts::PI * r,
         }
     }
 
@@ -88,10 +98,23 @@ impl Analysis {
         matches!(self, Analysis::PlaneStress { .. })
     }
 
-    /// Whether this is an axisymmetric analysis.
+    /// Whether this is an axisymmetric analysis (with or without twist).
     #[inline]
     pub fn is_axisymmetric(&self) -> bool {
-        matches!(self, Analysis::Axisymmetric)
+        matches!(self, Analysis::Axisymmetric | Analysis::AxisymmetricTwist)
+    }
+
+    /// Whether the nodes carry the circumferential displacement u_θ (axisymmetry with twist).
+    #[inline]
+    pub fn has_twist(&self) -> bool {
+        matches!(self, Analysis::AxisymmetricTwist)
+    }
+
+    /// Displacement components per node, D: 2 (u_x, u_y), or 3 with twist (u_r, u_z, u_θ).
+    /// Node n's global dof of component c is D·n + c.
+    #[inline]
+    pub fn dofs_per_node(&self) -> usize {
+        if self.has_twist() { 3 } else { 2 }
     }
 
     /// Short name for logs and reports.
@@ -100,6 +123,7 @@ impl Analysis {
             Analysis::PlaneStress { .. } => "plane stress",
             Analysis::PlaneStrain { .. } => "plane strain",
             Analysis::Axisymmetric => "axisymmetric",
+            Analysis::AxisymmetricTwist => "axisymmetric with twist",
         }
     }
 }

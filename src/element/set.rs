@@ -30,6 +30,10 @@ pub trait ElementSet: Sync {
     /// Global node indices of element `e` (at most 8).
     fn nodes(&self, e: usize) -> &[u32];
 
+    /// Displacement components per node, D ([`Analysis::dofs_per_node`]): element dof
+    /// D·i + c is component c of node i, global dof D·n + c of node n.
+    fn dofs_per_node(&self) -> usize;
+
     /// State slots per element; element `e` owns slots `e·P .. (e+1)·P`.
     fn points_per_element(&self) -> usize;
 
@@ -93,6 +97,10 @@ impl ElementSet for ContinuumSet {
     fn nodes(&self, e: usize) -> &[u32] {
         let c = &self.cells[e];
         &c.nodes[..c.kind.node_count()]
+    }
+
+    fn dofs_per_node(&self) -> usize {
+        self.analysis.dofs_per_node()
     }
 
     fn points_per_element(&self) -> usize {
@@ -315,6 +323,10 @@ impl ElementSet for ContinuumInContext<'_> {
         self.set.nodes(e)
     }
 
+    fn dofs_per_node(&self) -> usize {
+        self.set.dofs_per_node()
+    }
+
     fn points_per_element(&self) -> usize {
         MAX_CELL_POINTS
     }
@@ -416,6 +428,10 @@ impl ElementSet for InterfaceSet {
 
     fn nodes(&self, e: usize) -> &[u32] {
         &self.elements[e].nodes
+    }
+
+    fn dofs_per_node(&self) -> usize {
+        self.analysis.dofs_per_node()
     }
 
     fn points_per_element(&self) -> usize {

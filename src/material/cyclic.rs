@@ -56,7 +56,7 @@
 use super::elastic::LinearElastic;
 use super::j2::YIELD_TOL;
 use super::{
-    MAX_ITERATIONS, Material, OutOfPlane, PointState, Tangent, VOIGT_LEN, Voigt, ZZ,
+    IN_PLANE, MAX_ITERATIONS, Material, OutOfPlane, PointState, Tangent, VOIGT_LEN, Voigt, ZZ,
     bracketed_root, contraction, deviator, engineering, identity,
 };
 use crate::error::ParameterError;
@@ -385,8 +385,8 @@ impl CyclicPlasticity {
         }
         let d = result.tangent;
         let mut condensed = Tangent::zeros();
-        for i in (0..VOIGT_LEN).filter(|&i| i != ZZ) {
-            for j in (0..VOIGT_LEN).filter(|&j| j != ZZ) {
+        for i in IN_PLANE {
+            for j in IN_PLANE {
                 condensed[(i, j)] = d[(i, j)] - d[(i, ZZ)] * d[(ZZ, j)] / d[(ZZ, ZZ)];
             }
         }
@@ -505,6 +505,7 @@ pub fn centre_norm(alpha: &Voigt) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::material::voigt;
 
     fn material(kinematic: &[KinematicTerm], voce: Voce) -> CyclicPlasticity {
         let elastic = LinearElastic::new(200_000.0, 0.3).unwrap();
@@ -530,16 +531,19 @@ mod tests {
         let m = material(&TWO_TERMS, Voce { q: 80.0, b: 20.0 });
         for mode in [OutOfPlane::StrainGiven, OutOfPlane::StressFree] {
             let first = m.update_exact(
-                &Voigt::new(3e-3, -1e-3, 2e-3, 0.0),
+                &voigt(3e-3, -1e-3, 2e-3, 0.0),
                 &PointState::default(),
-                &[0.0; 8],
+                &[0.0; 2 * VOIGT_LEN],
                 mode,
             );
-            let mut internal = [0.0; 8];
-            for (chunk, a) in internal.chunks_exact_mut(4).zip(&first.backstresses) {
+            let mut internal = [0.0; 2 * VOIGT_LEN];
+            for (chunk, a) in internal
+                .chunks_exact_mut(VOIGT_LEN)
+                .zip(&first.backstresses)
+            {
                 chunk.copy_from_slice(a.as_slice());
             }
-            let strain = Voigt::new(1e-3, 4e-3, -2e-3, 5e-4);
+            let strain = voigt(1e-3, 4e-3, -2e-3, 5e-4);
             let exact = m.update_exact(&strain, &first.state, &internal, mode);
             assert!(exact.state.yielding);
             let h = 1e-8;
@@ -572,7 +576,7 @@ mod tests {
         let m = material(&[], Voce::default());
         let j2 = super::super::j2::J2Plasticity::new(m.elastic, 250.0, 500.0).unwrap();
         for mode in [OutOfPlane::StrainGiven, OutOfPlane::StressFree] {
-            let eps = Voigt::new(4e-3, -1e-3, 3e-3, 5e-4);
+            let eps = voigt(4e-3, -1e-3, 3e-3, 5e-4);
             let (a, da) = m.update(&eps, &PointState::default(), mode);
             let (b, db) = j2.update(&eps, &PointState::default(), mode);
             assert!(
@@ -588,11 +592,11 @@ mod tests {
     fn returned_state_is_on_the_shifted_yield_surface_and_alphas_saturate() {
         let m = material(&TWO_TERMS, Voce { q: 80.0, b: 20.0 });
         let (state, internal) = {
-            let mut internal = [0.0; 8];
+            let mut internal = [0.0; 2 * VOIGT_LEN];
             let (s, _) = m.update_with_history(
-                &Voigt::new(0.05, -0.02, 0.01, 0.0),
+                &voigt(0.05, -0.02, 0.01, 0.0),
                 &PointState::default(),
-                &[0.0; 8],
+                &[0.0; 2 * VOIGT_LEN],
                 &mut internal,
                 OutOfPlane::StrainGiven,
             );

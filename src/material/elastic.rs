@@ -1,6 +1,6 @@
 //! Isotropic linear elasticity.
 
-use super::{Material, OutOfPlane, PointState, Tangent, Voigt, ZZ};
+use super::{Material, OutOfPlane, PointState, SHEAR, Tangent, Voigt, ZZ};
 use crate::error::ParameterError;
 
 /// Isotropic linear-elastic material with Young's modulus `e` (MPa) and Poisson's ratio `nu`.
@@ -63,7 +63,9 @@ impl LinearElastic {
                     }
                     d[(i, i)] += 2.0 * m;
                 }
-                d[(2, 2)] = m;
+                for i in SHEAR {
+                    d[(i, i)] = m;
+                }
             }
             OutOfPlane::StressFree => {
                 let c = self.e / (1.0 - self.nu * self.nu);
@@ -78,11 +80,12 @@ impl LinearElastic {
     }
 
     /// The complementary energy density ½ σ:C⁻¹:σ = [(1 + ν) σ:σ − ν (tr σ)²] / 2E of a
-    /// stress in Voigt order (xx, yy, xy, zz); σ_zz is 0 in plane stress, so one formula
+    /// stress in Voigt order (xx, yy, xy, zz, xθ, yθ); σ_zz is 0 in plane stress, so one formula
     /// serves every analysis.
     pub fn complementary_energy(&self, s: &Voigt) -> f64 {
         let trace = s[0] + s[1] + s[ZZ];
-        let contracted = s[0] * s[0] + s[1] * s[1] + s[ZZ] * s[ZZ] + 2.0 * s[2] * s[2];
+        let normal = s[0] * s[0] + s[1] * s[1] + s[ZZ] * s[ZZ];
+        let contracted = SHEAR.iter().fold(normal, |acc, &i| acc + 2.0 * s[i] * s[i]);
         ((1.0 + self.nu) * contracted - self.nu * trace * trace) / (2.0 * self.e)
     }
 
@@ -135,11 +138,12 @@ impl Material for LinearElastic {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::material::voigt;
 
     #[test]
     fn uniaxial_stress_in_plane_stress_gives_poisson_contraction() {
         let m = LinearElastic::new(200_000.0, 0.3).unwrap();
-        let eps = Voigt::new(1e-3, -0.3e-3, 0.0, 0.0);
+        let eps = voigt(1e-3, -0.3e-3, 0.0, 0.0);
         let (s, _) = m.update(&eps, &PointState::default(), OutOfPlane::StressFree);
         assert!((s.stress[0] - 200.0).abs() < 1e-9);
         assert!(s.stress[1].abs() < 1e-9);
@@ -149,7 +153,7 @@ mod tests {
     #[test]
     fn uniaxial_stress_in_3d_form() {
         let m = LinearElastic::new(200_000.0, 0.25).unwrap();
-        let eps = Voigt::new(1e-3, -0.25e-3, 0.0, -0.25e-3);
+        let eps = voigt(1e-3, -0.25e-3, 0.0, -0.25e-3);
         let (s, _) = m.update(&eps, &PointState::default(), OutOfPlane::StrainGiven);
         assert!((s.stress[0] - 200.0).abs() < 1e-9);
         assert!(s.stress[1].abs() < 1e-9 && s.stress[ZZ].abs() < 1e-9);
@@ -159,7 +163,7 @@ mod tests {
     #[test]
     fn elastic_energy_is_half_stress_times_strain() {
         let m = LinearElastic::new(70_000.0, 0.33).unwrap();
-        let eps = Voigt::new(1.2e-3, -0.4e-3, 0.9e-3, 0.3e-3);
+        let eps = voigt(1.2e-3, -0.4e-3, 0.9e-3, 0.3e-3);
         for mode in [OutOfPlane::StrainGiven, OutOfPlane::StressFree] {
             let (s, _) = m.update(&eps, &PointState::default(), mode);
             let work = 0.5 * s.stress.dot(&s.strain);

@@ -49,7 +49,10 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::elastic::LinearElastic;
-use super::{Material, OutOfPlane, PointState, Tangent, Voigt, ZZ, bracketed_root, von_mises};
+use super::{
+    Material, OutOfPlane, PointState, SHEAR, Tangent, Voigt, ZZ, bracketed_root, engineering,
+    identity, voigt, von_mises,
+};
 use crate::error::ParameterError;
 
 /// Relative tolerance of the elastic/plastic decision: a trial state with
@@ -167,7 +170,7 @@ impl J2Plasticity {
 
         // Plastic corrector. The deviator shrinks radially, s = θ s_tr, so
         // q = q_tr − 3G Δγ and the consistency q = σ_y_n + H Δγ gives Δγ = f_tr / (3G + H).
-        let m = Voigt::new(1.0, 1.0, 0.0, 1.0);
+        let m = identity();
         let p = (sigma_tr[0] + sigma_tr[1] + sigma_tr[ZZ]) / 3.0;
         let s_tr = sigma_tr - p * m;
         let h = self.hardening_at(ep_n);
@@ -182,21 +185,20 @@ impl J2Plasticity {
         state.stress = p * m + theta * s_tr;
 
         // Unit flow direction n = s_tr / ‖s_tr‖ in tensor components (‖s‖ = √(2/3) q);
-        // Δεᵖ = √(3/2) Δγ n, written to Voigt with engineering shear (×2 on xy).
+        // Δεᵖ = √(3/2) Δγ n, written to Voigt with engineering shear (×2 on the shears).
         let n = s_tr * (1.5_f64.sqrt() / q_tr);
-        let mut dep = n * (1.5_f64.sqrt() * dgamma);
-        dep[2] *= 2.0;
-        state.plastic_strain += dep;
+        state.plastic_strain += engineering(&(n * (1.5_f64.sqrt() * dgamma)));
         state.equivalent_plastic_strain += dgamma;
         state.yielding = true;
 
         // C_ep = K 1⊗1 + 2Gθ I_dev − 2Gθ̄ n⊗n = C − 2G(1 − θ) I_dev − 2Gθ̄ n⊗n with
         // θ̄ = 1/(1 + H/3G) − (1 − θ). As a Voigt matrix acting on engineering strain, the
-        // symmetric identity has ½ on the xy diagonal, and n⊗n uses the tensor components of n
-        // (n : dε = n_xx dε_xx + … + n_xy γ_xy).
+        // symmetric identity has ½ on the shear diagonal, and n⊗n uses the tensor components
+        // of n (n : dε = n_xx dε_xx + … + n_xy γ_xy).
         let theta_bar = 1.0 / (1.0 + h_alg / (3.0 * g)) - (1.0 - theta);
-        let i_dev =
-            Tangent::from_diagonal(&Voigt::new(1.0, 1.0, 0.5, 1.0)) - m * m.transpose() / 3.0;
+        let mut identity_diagonal = m;
+        SHEAR.iter().for_each(|&i| identity_diagonal[i] = 0.5);
+        let i_dev = Tangent::from_diagonal(&identity_diagonal) - m * m.transpose() / 3.0;
         let tangent = c - 2.0 * g * (1.0 - theta) * i_dev - 2.0 * g * theta_bar * n * n.transpose();
         (state, tangent)
     }
@@ -259,9 +261,9 @@ impl J2Plasticity {
             let ep_zz = -(plastic[0] + plastic[1]);
             let e_zz = -nu / e * (stress[0] + stress[1]) + ep_zz;
             PointState {
-                strain: Voigt::new(strain[0], strain[1], strain[2], e_zz),
-                stress: Voigt::new(stress[0], stress[1], stress[2], 0.0),
-                plastic_strain: Voigt::new(plastic[0], plastic[1], plastic[2], ep_zz),
+                strain: voigt(strain[0], strain[1], strain[2], e_zz),
+                stress: voigt(stress[0], stress[1], stress[2], 0.0),
+                plastic_strain: voigt(plastic[0], plastic[1], plastic[2], ep_zz),
                 equivalent_plastic_strain: ep,
                 yielding,
             }
@@ -411,7 +413,7 @@ mod tests {
     #[test]
     fn elastic_energy_is_that_of_the_elastic_strain() {
         let m = steel(1_000.0);
-        let eps = Voigt::new(4e-3, -1e-3, 3e-3, 0.0);
+        let eps = voigt(4e-3, -1e-3, 3e-3, 0.0);
         for mode in MODES {
             let (s, _) = m.update(&eps, &PointState::default(), mode);
             assert!(s.equivalent_plastic_strain > 0.0, "{mode:?} yields");
@@ -426,7 +428,7 @@ mod tests {
     #[test]
     fn elastic_range_matches_linear_elastic() {
         let m = steel(1000.0);
-        let eps = Voigt::new(3e-4, -2e-4, 4e-4, 1e-4);
+        let eps = voigt(3e-4, -2e-4, 4e-4, 1e-4);
         for mode in MODES {
             let (s, d) = m.update(&eps, &PointState::default(), mode);
             let (se, de) = m.elastic.update(&eps, &PointState::default(), mode);
@@ -441,7 +443,7 @@ mod tests {
     fn tangent_is_symmetric_and_plastic_state_returns_to_surface() {
         for h in [5000.0, 0.0, -30_000.0] {
             let m = steel(h);
-            let eps = Voigt::new(4e-3, -1e-3, 3e-3, 5e-4);
+            let eps = voigt(4e-3, -1e-3, 3e-3, 5e-4);
             for mode in MODES {
                 let (s, d) = m.update(&eps, &PointState::default(), mode);
                 assert!(s.yielding);
@@ -458,7 +460,7 @@ mod tests {
     #[test]
     fn reevaluating_a_converged_state_is_elastic_and_unchanged() {
         let m = steel(2000.0);
-        let eps = Voigt::new(5e-3, 1e-3, -2e-3, 0.0);
+        let eps = voigt(5e-3, 1e-3, -2e-3, 0.0);
         for mode in MODES {
             let (s1, _) = m.update(&eps, &PointState::default(), mode);
             let (s2, d2) = m.update(&s1.strain, &s1, mode);
@@ -477,12 +479,12 @@ mod tests {
         let m = steel(3000.0);
         let committed = m
             .update(
-                &Voigt::new(2e-3, 1.5e-3, 0.0, 0.0),
+                &voigt(2e-3, 1.5e-3, 0.0, 0.0),
                 &PointState::default(),
                 OutOfPlane::StressFree,
             )
             .0;
-        let eps = Voigt::new(1e-3, 4e-3, -3e-3, 0.0);
+        let eps = voigt(1e-3, 4e-3, -3e-3, 0.0);
         let (ps, _) = m.update(&eps, &committed, OutOfPlane::StressFree);
         let (full, _) = m.update(&ps.strain, &committed, OutOfPlane::StrainGiven);
         assert!(ps.yielding && full.yielding);
@@ -498,13 +500,13 @@ mod tests {
     #[test]
     fn fully_softened_point_carries_no_deviatoric_stress() {
         let m = steel(-50_000.0); // σ_y reaches 0 at ε̄ᵖ = 0.005
-        let eps = Voigt::new(0.02, -0.01, 0.0, -0.01);
+        let eps = voigt(0.02, -0.01, 0.0, -0.01);
         let (s, d) = m.update(&eps, &PointState::default(), OutOfPlane::StrainGiven);
         assert!(s.yielding && m.flow_stress(s.equivalent_plastic_strain) == 0.0);
         assert!(von_mises(&s.stress) <= 1e-9);
         // Only the bulk response is left: K 1⊗1.
         let k = m.elastic.e / (3.0 * (1.0 - 2.0 * m.elastic.nu));
-        let m1 = Voigt::new(1.0, 1.0, 0.0, 1.0);
+        let m1 = voigt(1.0, 1.0, 0.0, 1.0);
         assert!((d - k * m1 * m1.transpose()).norm() <= 1e-9 * k);
 
         let (s, d) = m.update(&eps, &PointState::default(), OutOfPlane::StressFree);

@@ -12,18 +12,26 @@ pub mod j2;
 
 use nalgebra::{SMatrix, SVector};
 
-/// Stress or strain in the solver's Voigt order (xx, yy, xy, zz); in axisymmetry
-/// (rr, zz, rz, θθ). Strain uses engineering shear γ_xy = 2ε_xy.
-pub type Voigt = SVector<f64, 4>;
+/// Stress or strain in the solver's Voigt order (xx, yy, xy, zz, xθ, yθ); in axisymmetry
+/// (rr, zz, rz, θθ, rθ, zθ). Strain uses engineering shear γ_xy = 2ε_xy. The last two
+/// (out-of-plane shear) components are those of an axisymmetric body with twist; they are
+/// zero in every other analysis.
+pub type Voigt = SVector<f64, 6>;
 /// Material tangent dσ/dε in Voigt order.
-pub type Tangent = SMatrix<f64, 4, 4>;
+pub type Tangent = SMatrix<f64, 6, 6>;
 
 /// Index of the out-of-plane (zz or θθ) component in [`Voigt`] vectors.
 pub const ZZ: usize = 3;
 
+/// Index of the rθ shear component (twist) in [`Voigt`] vectors.
+pub const R_THETA: usize = 4;
+
+/// Index of the zθ shear component (twist) in [`Voigt`] vectors.
+pub const Z_THETA: usize = 5;
+
 /// Number of components of a [`Voigt`] vector: the stride of a stress-like internal variable
 /// (a backstress) in a point's internal-variable slice.
-pub const VOIGT_LEN: usize = 4;
+pub const VOIGT_LEN: usize = 6;
 
 /// The most internal variables a material may have per point (five backstresses).
 pub const MAX_INTERNAL_VARIABLES: usize = cyclic::MAX_KINEMATIC_TERMS * VOIGT_LEN;
@@ -31,11 +39,20 @@ pub const MAX_INTERNAL_VARIABLES: usize = cyclic::MAX_KINEMATIC_TERMS * VOIGT_LE
 /// Indices of the normal components in [`Voigt`] vectors (xx, yy, zz).
 pub const NORMAL: [usize; 3] = [0, 1, ZZ];
 
-/// Indices of the shear components in [`Voigt`] vectors (xy): a strain stores engineering
-/// shear there, a stress the tensor component. New code names components through these
-/// constants and the helpers below, never by literal index, so that widening [`Voigt`] (a
-/// twist's rθ and zθ) is a change here only.
-pub const SHEAR: [usize; 1] = [2];
+/// Indices of the shear components in [`Voigt`] vectors (xy, xθ, yθ): a strain stores
+/// engineering shear there, a stress the tensor component. Material code names components
+/// through these constants and the helpers below, never by literal index.
+pub const SHEAR: [usize; 3] = [2, R_THETA, Z_THETA];
+
+/// The components of a plane-stress state (xx, yy, xy): there is no twist in plane stress,
+/// and σ_zz = 0.
+pub const IN_PLANE: [usize; 3] = [0, 1, 2];
+
+/// A [`Voigt`] vector from its in-plane and out-of-plane normal components (xx, yy, xy, zz),
+/// the twist shears zero.
+pub fn voigt(xx: f64, yy: f64, xy: f64, zz: f64) -> Voigt {
+    Voigt::new(xx, yy, xy, zz, 0.0, 0.0)
+}
 
 /// The identity m in Voigt form (1 on the normal components): tr σ = mᵀσ.
 pub fn identity() -> Voigt {
@@ -47,13 +64,22 @@ pub fn identity() -> Voigt {
 /// The deviator s = σ − ⅓ (tr σ) m of a stress-like Voigt vector.
 pub fn deviator(s: &Voigt) -> Voigt {
     let m = identity();
-    s - m * (m.dot(s) / 3.0)
+    s - m * (dot(&m, s) / 3.0)
+}
+
+/// The plain dot product aᵀb of two Voigt vectors (σᵀε = σ:ε for a stress and an
+/// engineering strain). Summed as the in-plane four first, then the twist shears, so that
+/// without twist the value is bit for bit the one of the four-component vectors asperity
+/// had before twist (nalgebra sums a 4-vector pairwise, a longer one in sequence).
+pub fn dot(a: &Voigt, b: &Voigt) -> f64 {
+    let plane = a.fixed_rows::<4>(0).dot(&b.fixed_rows::<4>(0));
+    plane + a[R_THETA] * b[R_THETA] + a[Z_THETA] * b[Z_THETA]
 }
 
 /// The tensor contraction a:b of two stress-like Voigt vectors (tensor shear components, so
 /// each shear product counts twice).
 pub fn contraction(a: &Voigt, b: &Voigt) -> f64 {
-    a.dot(b) + SHEAR.iter().map(|&i| a[i] * b[i]).sum::<f64>()
+    dot(a, b) + SHEAR.iter().map(|&i| a[i] * b[i]).sum::<f64>()
 }
 
 /// A stress-like (tensor-component) Voigt vector as a strain-like one (engineering shear):
@@ -192,8 +218,14 @@ pub(crate) fn bracketed_root(mut hi: f64, residual: impl Fn(f64) -> (f64, f64)) 
     x
 }
 
-/// Von Mises equivalent stress of a Voigt stress (xx, yy, xy, zz).
+/// Von Mises equivalent stress of a Voigt stress (xx, yy, xy, zz, xθ, yθ).
 pub fn von_mises(s: &Voigt) -> f64 {
-    let (xx, yy, xy, zz) = (s[0], s[1], s[2], s[3]);
-    (0.5 * ((xx - yy).powi(2) + (yy - zz).powi(2) + (zz - xx).powi(2)) + 3.0 * xy * xy).sqrt()
+    let (xx, yy, zz) = (s[0], s[1], s[ZZ]);
+    let normal = 0.5 * ((xx - yy).powi(2) + (yy - zz).powi(2) + (zz - xx).powi(2));
+    // Shear terms added one by one (3 τ τ each), so that without twist the value is the
+    // plane formula's bit for bit.
+    SHEAR
+        .iter()
+        .fold(normal, |acc, &i| acc + 3.0 * s[i] * s[i])
+        .sqrt()
 }

@@ -641,7 +641,7 @@ mod tests {
         ))
         .unwrap();
         let m = &built.bodies[0].material;
-        assert_eq!(m.internal_variables(), 8);
+        assert_eq!(m.internal_variables(), 2 * crate::material::VOIGT_LEN);
         assert!(
             m.describe()
                 .contains("backstress 2: C = 1000 MPa, gamma = 0")

@@ -12,7 +12,6 @@ use std::sync::OnceLock;
 
 use nalgebra::DMatrix;
 
-use crate::element::Analysis;
 use crate::element::quadrature::cell_rule;
 use crate::element::shape::cell_shape;
 use crate::material::{PointState, Voigt, ZZ, von_mises};
@@ -166,7 +165,7 @@ pub fn body_grid(model: &Model, points: &BodyPoints, u: &[f64], states: &[PointS
             .flat_map(|s| [s[0], s[1], s[ZZ], shear * s[2], 0.0, 0.0])
             .collect()
     };
-    let names = tensor_component_names(matches!(model.analysis, Analysis::Axisymmetric));
+    let names = tensor_component_names(model.analysis.is_axisymmetric());
     let ppe = crate::element::quadrature::MAX_CELL_POINTS;
     let plastic = (0..model.continuum.cells.len())
         .map(|e| states[e * ppe..(e + 1) * ppe].iter().any(|s| s.yielding) as i32)

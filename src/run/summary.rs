@@ -13,7 +13,7 @@ pub(super) fn describe_model(summary: &mut Summary, model: &Model, model_seconds
     let (analysis, thickness) = match model.analysis {
         Analysis::PlaneStress { thickness } => ("plane_stress", Some(thickness)),
         Analysis::PlaneStrain { thickness } => ("plane_strain", Some(thickness)),
-        Analysis::Axisymmetric => ("axisymmetric", None),
+        Analysis::Axisymmetric | Analysis::AxisymmetricTwist => ("axisymmetric", None),
     };
     summary.analysis = Some(analysis);
     summary.model = Some(ModelSize {

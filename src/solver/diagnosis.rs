@@ -36,16 +36,17 @@ pub fn diagnose(
 
 /// The free node with the largest out-of-balance force |f_ext − f_int|, with its body.
 fn largest_residual(model: &Model, f_ext: &[f64], f_int: &[f64]) -> Option<ResidualAt> {
-    let mut best: Option<(usize, [f64; 2])> = None;
+    let d = model.analysis.dofs_per_node();
+    let mut best: Option<(usize, [f64; 3])> = None;
     let mut best_norm = 0.0;
-    for (node, (e, i)) in f_ext.chunks_exact(2).zip(f_int.chunks_exact(2)).enumerate() {
-        let mut r = [0.0; 2];
-        for c in 0..2 {
-            if model.dofs.equation(2 * node + c).is_some() {
+    for (node, (e, i)) in f_ext.chunks_exact(d).zip(f_int.chunks_exact(d)).enumerate() {
+        let mut r = [0.0; 3];
+        for c in 0..d {
+            if model.dofs.equation(d * node + c).is_some() {
                 r[c] = e[c] - i[c];
             }
         }
-        let size = r[0].hypot(r[1]);
+        let size = r[0].hypot(r[1]).hypot(r[2]);
         if size.is_finite() && size > best_norm {
             best_norm = size;
             best = Some((node, r));

@@ -30,7 +30,7 @@ use crate::element::continuum::point_kinematics;
 use crate::element::interface6::{InterfacePoint, interface_point, relative_operator};
 use crate::element::quadrature::{MAX_CELL_POINTS, cell_rule};
 use crate::element::set::{INTERFACE_POINTS, InternalLayout};
-use crate::material::PointState;
+use crate::material::{PointState, dot};
 use crate::model::Model;
 
 /// Energy totals from the unloaded start (N·mm = mJ; per unit thickness as the forces are).
@@ -301,8 +301,8 @@ impl EnergyLedger {
             for ((t, c), &dv) in trial.iter().zip(committed).zip(volumes).take(points) {
                 let plastic_increment = t.plastic_strain - c.plastic_strain;
                 let stored = material.elastic_energy(t);
-                let point_plastic = t.stress.dot(&plastic_increment);
-                let point_numerical = 0.5 * (c.stress - t.stress).dot(&plastic_increment);
+                let point_plastic = dot(&t.stress, &plastic_increment);
+                let point_numerical = 0.5 * dot(&(c.stress - t.stress), &plastic_increment);
                 elastic += stored * dv;
                 plastic += point_plastic * dv;
                 bodies[cell.body as usize] += point_plastic * dv;
@@ -310,7 +310,7 @@ impl EnergyLedger {
                 if expands {
                     // The stress work on the total strain less its mechanical part (the
                     // stored, plastic and numerical terms above): the work on α ΔT m.
-                    let work = 0.5 * (c.stress + t.stress).dot(&(t.strain - c.strain));
+                    let work = 0.5 * dot(&(c.stress + t.stress), &(t.strain - c.strain));
                     let mechanical =
                         stored - material.elastic_energy(c) + point_plastic + point_numerical;
                     thermal += (work - mechanical) * dv;
@@ -345,7 +345,7 @@ impl EnergyLedger {
                 }
             }
             for ((t, c), p) in trial.iter().zip(committed).zip(points) {
-                let jump = relative_operator(p) * du;
+                let jump = relative_operator(p) * du.fixed_rows::<16>(0);
                 let mean = [
                     0.5 * (c.stress[0] + t.stress[0]),
                     0.5 * (c.stress[1] + t.stress[1]),

@@ -38,6 +38,10 @@ impl ElementSet for ElasticContactCorrection<'_> {
         self.0.nodes(e)
     }
 
+    fn dofs_per_node(&self) -> usize {
+        self.0.dofs_per_node()
+    }
+
     fn points_per_element(&self) -> usize {
         INTERFACE_POINTS
     }
@@ -121,9 +125,10 @@ impl Problem for Mechanics<'_> {
     }
 
     fn interface_equations(&self, dofs: &DofMap) -> Vec<usize> {
+        let d = self.model.interface.dofs_per_node();
         let mut eqs: Vec<usize> = (0..self.model.interface.len())
             .flat_map(|e| self.model.interface.nodes(e))
-            .flat_map(|&n| (0..2).filter_map(move |c| dofs.equation(2 * n as usize + c)))
+            .flat_map(|&n| (0..d).filter_map(move |c| dofs.equation(d * n as usize + c)))
             .collect();
         eqs.sort_unstable();
         eqs.dedup();

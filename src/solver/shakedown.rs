@@ -353,15 +353,16 @@ fn equivalent_strain(strain: &Voigt) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::material::voigt;
 
     #[test]
     fn equivalent_strain_of_uniaxial_plastic_flow_is_its_axial_strain() {
         // Isochoric uniaxial plastic strain (1, −½, 0, −½) ε: equivalent ε.
         let e = 2e-3;
-        let strain = Voigt::new(e, -0.5 * e, 0.0, -0.5 * e);
+        let strain = voigt(e, -0.5 * e, 0.0, -0.5 * e);
         assert!((equivalent_strain(&strain) - e).abs() < 1e-15);
         // Pure shear γ: equivalent γ/√3.
-        let shear = Voigt::new(0.0, 0.0, e, 0.0);
+        let shear = voigt(0.0, 0.0, e, 0.0);
         assert!((equivalent_strain(&shear) - e / 3f64.sqrt()).abs() < 1e-15);
     }
 
