@@ -16,7 +16,9 @@ use rayon::prelude::*;
 
 use crate::contact::ContactAlgorithm;
 use crate::element::set::ElementSet;
-use crate::element::{ElementInput, ElementMatrix, ElementOutput, ElementVector, MAX_ELEMENT_DOFS};
+use crate::element::{
+    ElementInput, ElementMatrix, ElementOutput, ElementVector, MAX_ELEMENT_DOFS, MAX_ELEMENT_NODES,
+};
 
 /// Marker for a constrained (prescribed) degree of freedom in [`DofMap`].
 const FIXED: u32 = u32::MAX;
@@ -603,6 +605,23 @@ unsafe fn add_element_matrix(
     }
 }
 
+/// One worker's element matrix and force, reused from element to element (an element
+/// zeroes only the block its set can write: a 24×24 matrix zeroed per element was a fifth
+/// of a plane run's instructions).
+struct ElementScratch {
+    ke: Box<ElementMatrix>,
+    fe: ElementVector,
+}
+
+impl ElementScratch {
+    fn new() -> Self {
+        Self {
+            ke: Box::new(ElementMatrix::zeros()),
+            fe: ElementVector::zeros(),
+        }
+    }
+}
+
 /// Evaluates every element of `set` (colour by colour, in parallel within a colour) and adds
 /// its matrix and its force into `targets`. Allocates nothing: element vectors and matrices
 /// live on the stack.
@@ -629,7 +648,10 @@ fn scatter<S: ElementSet>(
     assert_eq!(trial.len(), set.len() * ppe);
     assert_eq!(committed.len(), trial.len());
     let states = SharedMut(trial.as_mut_ptr());
-    let element = |e: usize| {
+    // The leading block an element of this set can write (8 nodes × D): zeroed per element,
+    // the rest of the scratch matrix is never touched.
+    let used = MAX_ELEMENT_NODES * d;
+    let element = |e: usize, scratch: &mut ElementScratch| {
         let nodes = set.nodes(e);
         let mut ue = ElementVector::zeros();
         for (a, &n) in nodes.iter().enumerate() {
@@ -647,12 +669,19 @@ fn scatter<S: ElementSet>(
             committed: &committed[e * ppe..(e + 1) * ppe],
             algorithm,
         };
-        let mut ke = ElementMatrix::zeros();
-        let mut fe = ElementVector::zeros();
+        let (ke, fe): (&mut ElementMatrix, _) = (&mut scratch.ke, &mut scratch.fe);
+        for column in ke
+            .as_mut_slice()
+            .chunks_exact_mut(MAX_ELEMENT_DOFS)
+            .take(used)
+        {
+            column[..used].fill(0.0);
+        }
+        fe.as_mut_slice()[..used].fill(0.0);
         let output = ElementOutput {
             trial: &mut *trial_e,
-            k: ((values.is_some() || dense.is_some()) && !was_frozen).then_some(&mut ke),
-            f: &mut fe,
+            k: ((values.is_some() || dense.is_some()) && !was_frozen).then_some(&mut *ke),
+            f: &mut *fe,
         };
         set.evaluate(e, &element_input, output);
         let global = |a: usize| d * nodes[a / d] as usize + a % d;
@@ -695,7 +724,7 @@ fn scatter<S: ElementSet>(
                 (true, false) => {
                     let output = ElementOutput {
                         trial: &mut *trial_e,
-                        k: Some(&mut ke),
+                        k: Some(&mut *ke),
                         f: &mut ElementVector::zeros(),
                     };
                     set.evaluate(e, &element_input, output);
@@ -705,14 +734,14 @@ fn scatter<S: ElementSet>(
                     unsafe {
                         add_element_matrix(pattern, dofs, (nodes, d), &kr, -1.0, r.values.get())
                     };
-                    ke -= kr;
+                    *ke -= kr;
                     *frozen = false;
                 }
                 // Its tangent is the reference one: it joins the sum.
                 (false, true) => {
                     // SAFETY: as above.
                     unsafe {
-                        add_element_matrix(pattern, dofs, (nodes, d), &ke, 1.0, r.values.get())
+                        add_element_matrix(pattern, dofs, (nodes, d), ke, 1.0, r.values.get())
                     };
                     *frozen = true;
                 }
@@ -721,17 +750,22 @@ fn scatter<S: ElementSet>(
         }
         // SAFETY: as above; the entries of this element's dofs are written by no other
         // element of its colour.
-        unsafe { add_element_matrix(pattern, dofs, (nodes, d), &ke, 1.0, values.get()) };
+        unsafe { add_element_matrix(pattern, dofs, (nodes, d), ke, 1.0, values.get()) };
     };
     let last = coloring.groups.len().saturating_sub(1);
     for (c, group) in coloring.groups.iter().enumerate() {
         if c == last && coloring.groups.len() == 64 {
-            group.iter().for_each(|&e| element(e as usize));
+            let mut scratch = ElementScratch::new();
+            group
+                .iter()
+                .for_each(|&e| element(e as usize, &mut scratch));
         } else {
             group
                 .par_iter()
                 .with_min_len(64)
-                .for_each(|&e| element(e as usize));
+                .for_each_init(ElementScratch::new, |scratch, &e| {
+                    element(e as usize, scratch)
+                });
         }
     }
 }
