@@ -206,7 +206,8 @@ fn solve(n: usize, size: f64) -> Run {
         &case,
         &asperity::run::folder::OutputFolder::scratch(dir.path()).unwrap(),
     )
-    .expect("gmsh meshes the case");
+    .expect("gmsh meshes the case")
+    .0;
     let model = common::model(mesh, &case).expect("the model builds");
     let mut frames = Vec::new();
     run_steps(&model, &common::settings(&case), |step| {

@@ -169,8 +169,11 @@ pub struct Totals {
 /// for a whole run (the solver's, when a run fails), is `null`.
 #[derive(Clone, Copy, Debug, Default, Serialize)]
 pub struct Seconds {
-    /// Reading the mesh, or meshing the `.geo` script with gmsh.
+    /// Reading the mesh, or meshing the `.geo` script with gmsh (all of the mesh phase).
     pub mesh: f64,
+    /// The part of `mesh` spent in gmsh (its element-count probes and the mesh); 0 when the
+    /// mesh came from the mesh cache, `null` when the case names a `.msh` file.
+    pub gmsh: Option<f64>,
     /// Building the model (numbering, constraints, interface elements).
     pub model: Option<f64>,
     /// Fill-reducing ordering and symbolic Cholesky factorisation.
