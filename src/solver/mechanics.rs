@@ -5,7 +5,7 @@
 use faer::MatMut;
 
 use crate::assembly::{
-    AssemblyInput, DenseBlock, DenseScatter, DofMap, GlobalSystem, SparsityPattern,
+    AssemblyInput, DenseBlock, DenseScatter, DofMap, ElementNodes, GlobalSystem, SparsityPattern,
 };
 use crate::contact::{ContactAlgorithm, InterfaceState};
 use crate::element::interface6::evaluate_interface;
@@ -141,7 +141,10 @@ impl Problem for Mechanics<'_> {
 
     fn bulk_pattern(&self, dofs: &DofMap) -> SparsityPattern {
         let continuum = &self.model.continuum;
-        let connectivity = (0..continuum.len()).map(|e| continuum.nodes(e));
+        let connectivity = (0..continuum.len()).map(|e| ElementNodes {
+            nodes: continuum.nodes(e),
+            couples_twist: continuum.couples_twist(e),
+        });
         SparsityPattern::new(self.model.mesh.nodes.len(), dofs, connectivity)
     }
 
