@@ -37,7 +37,7 @@
 //! # An unsymmetric bulk
 //! Kinematic hardening with dynamic recovery makes the continuum's tangent unsymmetric where
 //! it yields non-proportionally (`material::cyclic`). [`CondensedSolver::factor_bulk_unsymmetric`]
-//! then factors K_BB alone by sparse LU ([`SparseLu`], in the same bulk order) and forms
+//! then factors K_BB alone by sparse LU ([`SparseLu`]) and forms
 //! S_c = K_II − K_IB (K_BB⁻¹ K_BI) with [`SCHUR_BLOCK`] right-hand sides per LU solve (the
 //! pivoting LU cannot keep the interface rows last, so S_c does not fall out of the factor);
 //! solves substitute twice through the LU around the same dense interface LU. It costs n_I
@@ -770,8 +770,7 @@ impl CondensedSolver {
             col_ptr.push(rows.len() as u32);
         }
         let bulk = SymbolicSparseColMat::new_checked(n_bulk, n_bulk, col_ptr, None, rows);
-        let identity: Vec<u32> = (0..n_bulk as u32).collect();
-        let lu = SparseLu::new(bulk.as_ref(), Some(&identity), SCHUR_BLOCK, self.par)?;
+        let lu = SparseLu::new(bulk.as_ref(), SCHUR_BLOCK, self.par)?;
         let mut bi_ptr = vec![0usize];
         let (mut bi_rows, mut bi_source, mut ii) = (Vec::new(), Vec::new(), Vec::new());
         for (k, &eq) in self.interface.iter().enumerate() {
