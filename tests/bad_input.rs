@@ -569,7 +569,7 @@ fn case_values_out_of_range_are_named() {
         (
             "traction with one component",
             case_edit("pressure = 1.0", "traction = [1.0]"),
-            Case,
+            Invalid("load[0].traction"),
         ),
         (
             "force with three components",
