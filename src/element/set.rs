@@ -168,6 +168,13 @@ impl ContinuumSet {
         );
     }
 
+    /// Whether cell `e`'s matrix may couple the in-plane displacements with the
+    /// circumferential one (twist): not for a linear (isotropic elastic) body, whose
+    /// tangent is block diagonal in (xx, yy, xy, zz | rθ, zθ); yes for a plastic one.
+    pub fn couples_twist(&self, e: usize) -> bool {
+        !self.materials[self.cells[e].body as usize].is_linear()
+    }
+
     /// Whether every body's material is linear: the continuum stiffness is then constant
     /// (small strains) and its internal force is K_c · u.
     pub fn is_linear(&self) -> bool {

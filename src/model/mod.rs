@@ -25,7 +25,7 @@ pub use spec::{
 pub use thermal::{Thermal, UniformTemperature};
 pub use thermal_spec::{BodyHeatSource, BodyTemperature, ThermalBoundary, ThermalSpec};
 
-use crate::assembly::{Coloring, DofMap, SparsityPattern};
+use crate::assembly::{Coloring, DofMap, ElementNodes, SparsityPattern};
 use crate::contact::laws::{self, LawDescriptor};
 use crate::element::Analysis;
 use crate::element::continuum::min_jacobian;
@@ -262,8 +262,11 @@ fn numbering(
         return Err(Error::NothingToSolve);
     }
     let connectivity = (0..continuum.len())
-        .map(|e| continuum.nodes(e))
-        .chain((0..interface.len()).map(|e| interface.nodes(e)));
+        .map(|e| ElementNodes {
+            nodes: continuum.nodes(e),
+            couples_twist: continuum.couples_twist(e),
+        })
+        .chain((0..interface.len()).map(|e| interface.nodes(e).into()));
     let pattern = SparsityPattern::new(node_count, &dofs, connectivity);
     Ok(Numbering {
         pattern,

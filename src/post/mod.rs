@@ -14,10 +14,10 @@ use nalgebra::DMatrix;
 
 use crate::element::quadrature::cell_rule;
 use crate::element::shape::cell_shape;
-use crate::material::{PointState, R_THETA, Voigt, Z_THETA, ZZ, von_mises};
+use crate::material::{PointState, Voigt, von_mises};
 use crate::mesh::CellKind;
 use crate::model::Model;
-use crate::output::{Field, FieldValues, Grid, tensor_component_names, vtk_cell_type};
+use crate::output::{Field, FieldValues, Grid, tensor_component_names, vtk_cell_type, vtk_tensor};
 use crate::solver::state::StepResult;
 use interface::InterfaceOutput;
 
@@ -158,21 +158,12 @@ pub fn body_grid(model: &Model, points: &BodyPoints, u: &[f64], states: &[PointS
         );
     }
     let nodes: Vec<u32> = points.points.iter().map(|&(_, n)| n).collect();
-    // Solver order (xx, yy, xy, zz, xθ, yθ) → VTK order (xx, yy, zz, xy, yz, xz), the
-    // circumferential direction θ as VTK's z; `shear` scales the shears.
-    let twist = model.analysis.has_twist();
+    // Solver order → VTK order, the circumferential direction θ as VTK's z (the twist shears
+    // are zero without twist); `shear` scales the shears.
     let tensor = |of: fn(&NodalValues) -> &Voigt, shear: f64| -> Vec<f64> {
         nodal
             .iter()
-            .map(of)
-            .flat_map(|s| {
-                let (yz, xz) = if twist {
-                    (shear * s[Z_THETA], shear * s[R_THETA])
-                } else {
-                    (0.0, 0.0)
-                };
-                [s[0], s[1], s[ZZ], shear * s[2], yz, xz]
-            })
+            .flat_map(|v| vtk_tensor(of(v), shear))
             .collect()
     };
     let names = tensor_component_names(model.analysis.is_axisymmetric());
