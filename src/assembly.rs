@@ -711,15 +711,16 @@ unsafe fn add_element_matrix_by_column(
 /// One worker's element matrix and force, reused from element to element (an element
 /// zeroes only the block its set can write: a 24×24 matrix zeroed per element was a fifth
 /// of a plane run's instructions).
+/// On the stack, not boxed: iterations must not allocate (`tests/allocation.rs`).
 struct ElementScratch {
-    ke: Box<ElementMatrix>,
+    ke: ElementMatrix,
     fe: ElementVector,
 }
 
 impl ElementScratch {
     fn new() -> Self {
         Self {
-            ke: Box::new(ElementMatrix::zeros()),
+            ke: ElementMatrix::zeros(),
             fe: ElementVector::zeros(),
         }
     }

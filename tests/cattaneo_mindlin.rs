@@ -43,9 +43,9 @@ impl Setup {
         let [top, left, right] = &case.loads[..] else {
             panic!("the case has three loads")
         };
-        let (pressure, traction) = (top.pressure.unwrap(), left.traction.unwrap());
+        let (pressure, traction) = (top.pressure.unwrap(), left.traction.clone().unwrap());
         // The halves carry the same shear and opposite vertical tractions (the couple).
-        assert_eq!(right.traction, Some([traction[0], -traction[1]]));
+        assert_eq!(right.traction, Some(vec![traction[0], -traction[1]]));
         assert_eq!(right.factors, left.factors);
         let materials: Vec<_> = case.bodies.iter().map(|b| b.material).collect();
         assert!(

@@ -83,8 +83,8 @@ pub struct RunSummary {
     pub gmsh_seconds: Option<f64>,
     pub model_seconds: f64,
     pub stats: RunStatistics,
-    /// Reaction of each support at the last step: (name, [F_x, F_y]).
-    pub reactions: Vec<(String, [f64; 2])>,
+    /// Reaction of each support at the last step: (name, force and, with twist, torque).
+    pub reactions: Vec<(String, crate::output::summary::Force)>,
 }
 
 impl std::fmt::Display for RunSummary {
@@ -121,11 +121,15 @@ impl std::fmt::Display for RunSummary {
             s.output_seconds
         )?;
         for (name, r) in &self.reactions {
-            writeln!(
+            write!(
                 f,
                 "reaction '{name}': Fx = {:.6e} N, Fy = {:.6e} N",
-                r[0], r[1]
+                r.x, r.y
             )?;
+            match r.torque {
+                Some(t) => writeln!(f, ", T = {t:.6e} N·mm")?,
+                None => writeln!(f)?,
+            }
         }
         let series = self.out_dir.join(RunFile::Series.name());
         write!(f, "results: {}", series.display())

@@ -48,7 +48,7 @@ pub(super) struct StepWriter<'m, 's, F> {
     /// The last row of `history.csv` (the summary's record of the last step).
     last_row: Vec<f64>,
     pub(super) summary: &'s mut Summary,
-    pub(super) last_reactions: Vec<[f64; 2]>,
+    pub(super) last_reactions: Vec<crate::output::summary::Force>,
     pub(super) bar: RunBar,
     /// Writes the files in the background, in the order they are queued, and keeps the
     /// series up to date.
@@ -294,12 +294,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         self.queue_series(false)?;
         self.out.commit()?;
         let summary = self.layout.step_summary(self.model, &self.last_row);
-        self.last_reactions = summary
-            .reactions
-            .0
-            .iter()
-            .map(|(_, f)| [f.x, f.y])
-            .collect();
+        self.last_reactions = summary.reactions.0.iter().map(|(_, f)| *f).collect();
         self.summary.push_step(summary);
         (self.on_step)(self.model, step)?;
         if super::progress::stop_requested() {
