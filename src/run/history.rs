@@ -13,12 +13,11 @@ use std::io::BufRead;
 use std::path::Path;
 
 use crate::config::Case;
-use crate::contact::InterfaceState;
-use crate::element::set::INTERFACE_POINTS;
 use crate::model::{Circumferential, Model};
 use crate::output::summary::{
     ContactResultant, Displacement, Force, HeatFlows, Named, StepSummary,
 };
+use crate::post::interface::torques as pair_torques;
 use crate::post::quantities::PairQuantities;
 use crate::post::reaction_torques;
 use crate::solver::state::StepResult;
@@ -385,33 +384,6 @@ impl HistoryLayout {
         }
         Named(out)
     }
-}
-
-/// The torque body A exerts on body B about the axis, −∫ τ_θ r dA, of every contact pair
-/// (N·mm, signed as the pair's `force_on_b`).
-///
-/// CALL SITE FOR THE CONTACT HELPER: this stands in for the pair torque resultant of
-/// `post::interface` until the interface states carry the circumferential traction (their
-/// `stress[2]`); until then no interface law transmits a torque and every value is 0.
-fn pair_torques(model: &Model, states: &[InterfaceState]) -> Vec<f64> {
-    let mut out = vec![0.0; model.interface.pairs.len()];
-    for (e, element) in model.interface.elements.iter().enumerate() {
-        for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
-            let p = crate::element::interface6::interface_point(
-                &model.analysis,
-                &element.b_coords,
-                xi,
-                w,
-            );
-            let circumferential = states[e * INTERFACE_POINTS + g]
-                .stress
-                .get(2)
-                .copied()
-                .unwrap_or(0.0);
-            out[element.pair as usize] -= circumferential * p.x[0] * p.da;
-        }
-    }
-    out
 }
 
 /// Calls `row` with every row of the `history.csv` at `path` (whose rows have `columns`
