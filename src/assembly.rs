@@ -16,7 +16,9 @@ use rayon::prelude::*;
 
 use crate::contact::ContactAlgorithm;
 use crate::element::set::ElementSet;
-use crate::element::{ElementInput, ElementMatrix, ElementOutput, ElementVector, MAX_ELEMENT_DOFS};
+use crate::element::{
+    ElementInput, ElementMatrix, ElementOutput, ElementVector, MAX_ELEMENT_DOFS, MAX_ELEMENT_NODES,
+};
 
 /// Marker for a constrained (prescribed) degree of freedom in [`DofMap`].
 const FIXED: u32 = u32::MAX;
@@ -133,19 +135,50 @@ pub struct SparsityPattern {
     symbolic: SymbolicSparseColMat<u32>,
 }
 
+/// The nodes of one element for [`SparsityPattern::new`], and whether its matrix couples
+/// the in-plane displacements with the circumferential one (twist). An isotropic elastic
+/// cell's does not (its stiffness is block diagonal in (u_r, u_z | u_θ)); a plastic cell's
+/// and an interface element's (friction) do. Without twist the flag is irrelevant.
+#[derive(Clone, Copy, Debug)]
+pub struct ElementNodes<'a> {
+    pub nodes: &'a [u32],
+    pub couples_twist: bool,
+}
+
+impl<'a> From<&'a [u32]> for ElementNodes<'a> {
+    /// An element whose matrix may couple every component with every other.
+    fn from(nodes: &'a [u32]) -> Self {
+        Self {
+            nodes,
+            couples_twist: true,
+        }
+    }
+}
+
+/// Whether components `c` and `d` of two nodes are coupled by an element that does not
+/// couple twist: both in-plane (0, 1) or both circumferential (2).
+#[inline]
+fn same_block(c: usize, d: usize) -> bool {
+    (c == 2) == (d == 2)
+}
+
 impl SparsityPattern {
-    /// Pattern of all element sets' couplings. `connectivity` yields the node lists of every
-    /// element of every set.
-    pub fn new<'a>(
+    /// Pattern of all element sets' couplings. `connectivity` yields the nodes of every
+    /// element of every set (with whether it couples twist, [`ElementNodes`]). With twist,
+    /// components that no element couples are left out, so that the factorisation of a
+    /// model whose elastic bodies' u_θ decouples from (u_r, u_z) costs the two blocks', not
+    /// the whole 3-dof system's.
+    pub fn new<'a, E: Into<ElementNodes<'a>>>(
         node_count: usize,
         dofs: &DofMap,
-        connectivity: impl Iterator<Item = &'a [u32]> + Clone,
+        connectivity: impl Iterator<Item = E> + Clone,
     ) -> Self {
+        let connectivity = connectivity.map(Into::into);
         // node → elements (CSR), then node → neighbouring nodes.
         let mut start = vec![0usize; node_count + 1];
         let mut element_count = 0;
-        for nodes in connectivity.clone() {
-            for &n in nodes {
+        for element in connectivity.clone() {
+            for &n in element.nodes {
                 start[n as usize + 1] += 1;
             }
             element_count += 1;
@@ -155,23 +188,31 @@ impl SparsityPattern {
         }
         let mut fill = start.clone();
         let mut node_elements = vec![0u32; start[node_count]];
-        let mut element_nodes: Vec<&[u32]> = Vec::with_capacity(element_count);
-        for (e, nodes) in connectivity.enumerate() {
-            for &n in nodes {
+        let mut elements: Vec<ElementNodes> = Vec::with_capacity(element_count);
+        for (e, element) in connectivity.enumerate() {
+            for &n in element.nodes {
                 node_elements[fill[n as usize]] = e as u32;
                 fill[n as usize] += 1;
             }
-            element_nodes.push(nodes);
+            elements.push(element);
         }
-        let neighbours: Vec<Vec<u32>> = (0..node_count)
+        // Each neighbour with whether some element couples twist between the two.
+        let neighbours: Vec<Vec<(u32, bool)>> = (0..node_count)
             .into_par_iter()
             .map(|n| {
-                let mut v: Vec<u32> = node_elements[start[n]..start[n + 1]]
+                let mut v: Vec<(u32, bool)> = node_elements[start[n]..start[n + 1]]
                     .iter()
-                    .flat_map(|&e| element_nodes[e as usize].iter().copied())
+                    .flat_map(|&e| {
+                        let element = elements[e as usize];
+                        element
+                            .nodes
+                            .iter()
+                            .map(move |&m| (m, element.couples_twist))
+                    })
                     .collect();
-                v.sort_unstable();
-                v.dedup();
+                // Coupled entries last among equal nodes, so dedup keeps them.
+                v.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(b.1.cmp(&a.1)));
+                v.dedup_by_key(|x| x.0);
                 v
             })
             .collect();
@@ -184,10 +225,11 @@ impl SparsityPattern {
                 if dofs.equation(d * node + c).is_none() {
                     continue;
                 }
-                for &m in adjacent {
+                for &(m, coupled) in adjacent {
                     row_idx.extend(
                         (0..d)
-                            .filter_map(|c| dofs.equation(d * m as usize + c))
+                            .filter(|&k| coupled || same_block(c, k))
+                            .filter_map(|k| dofs.equation(d * m as usize + k))
                             .map(|e| e as u32),
                     );
                 }
@@ -549,12 +591,14 @@ struct Dense<'m> {
     map: &'m DenseScatter,
 }
 
-/// Adds `sign` · `ke` over the free dofs of the element with nodes `nodes` into the value
-/// array `values` over `pattern`.
+/// Adds `sign` · `ke` over the free dofs of the element with nodes `nodes` (`d` dofs each)
+/// into the value array `values` over `pattern`.
 ///
 /// One binary search per pair of nodes (not per pair of dofs): by construction of
 /// [`SparsityPattern`] the free dofs of a node have consecutive equation numbers, so they
 /// are adjacent rows of every column, and the columns of a node's dofs have the same rows.
+/// With twist, where the pattern may leave out the in-plane–circumferential couplings, see
+/// [`add_element_matrix_by_column`].
 ///
 /// # Safety
 /// `values` must point to a value array over `pattern` that no other thread writes at the
@@ -567,11 +611,13 @@ unsafe fn add_element_matrix(
     sign: f64,
     values: *mut f64,
 ) {
-    let (cp, ri) = (pattern.symbolic.col_ptr(), pattern.symbolic.row_idx());
-    let mut equations = [None; MAX_ELEMENT_DOFS];
-    for (a, eq) in equations.iter_mut().enumerate().take(d * nodes.len()) {
-        *eq = dofs.equation(d * nodes[a / d] as usize + a % d);
+    let equations = element_equations(dofs, nodes, d);
+    if d == 3 {
+        // SAFETY: the caller's contract.
+        unsafe { add_element_matrix_by_column(pattern, &equations, (nodes, d), ke, sign, values) };
+        return;
     }
+    let (cp, ri) = (pattern.symbolic.col_ptr(), pattern.symbolic.row_idx());
     // The first free dof of each node, as (component, equation).
     let first = |n: usize| (0..d).find_map(|c| equations[d * n + c].map(|eq| (c, eq)));
     for b in 0..nodes.len() {
@@ -603,6 +649,83 @@ unsafe fn add_element_matrix(
     }
 }
 
+/// The equation of each element dof (`None`: prescribed).
+fn element_equations(dofs: &DofMap, nodes: &[u32], d: usize) -> [Option<usize>; MAX_ELEMENT_DOFS] {
+    let mut equations = [None; MAX_ELEMENT_DOFS];
+    for (a, eq) in equations.iter_mut().enumerate().take(d * nodes.len()) {
+        *eq = dofs.equation(d * nodes[a / d] as usize + a % d);
+    }
+    equations
+}
+
+/// [`add_element_matrix`] for a pattern that need not hold every component pair of two
+/// nodes (twist, [`SparsityPattern::new`]): per column and node, the node's rows present
+/// there are found by one search (they are consecutive equations) and each is matched to
+/// its component. Entries the pattern leaves out are structurally zero in `ke` (an element
+/// that does not couple twist has exact zeros there) and are skipped.
+///
+/// # Safety
+/// As [`add_element_matrix`].
+unsafe fn add_element_matrix_by_column(
+    pattern: &SparsityPattern,
+    equations: &[Option<usize>; MAX_ELEMENT_DOFS],
+    (nodes, d): (&[u32], usize),
+    ke: &ElementMatrix,
+    sign: f64,
+    values: *mut f64,
+) {
+    let (cp, ri) = (pattern.symbolic.col_ptr(), pattern.symbolic.row_idx());
+    // Each node's free equations, as (first, component of each).
+    let node_rows = |a: usize| {
+        let mut first = None;
+        let mut components = [0usize; 3];
+        let mut count = 0;
+        for c in 0..d {
+            if let Some(eq) = equations[d * a + c] {
+                first.get_or_insert(eq);
+                components[count] = c;
+                count += 1;
+            }
+        }
+        first.map(|f| (f, components, count))
+    };
+    for (cb_dof, j) in (0..d * nodes.len()).filter_map(|k| equations[k].map(|j| (k, j))) {
+        let (start, end) = (cp[j] as usize, cp[j + 1] as usize);
+        let rows = &ri[start..end];
+        for a in 0..nodes.len() {
+            let Some((first, components, count)) = node_rows(a) else {
+                continue;
+            };
+            let last = first + count - 1;
+            let mut p = start + rows.partition_point(|&r| (r as usize) < first);
+            while p < end && (ri[p] as usize) <= last {
+                let ca = components[ri[p] as usize - first];
+                // SAFETY: the caller's contract.
+                unsafe { *values.add(p) += sign * ke[(d * a + ca, cb_dof)] };
+                p += 1;
+            }
+        }
+    }
+}
+
+/// One worker's element matrix and force, reused from element to element (an element
+/// zeroes only the block its set can write: a 24×24 matrix zeroed per element was a fifth
+/// of a plane run's instructions).
+/// On the stack, not boxed: iterations must not allocate (`tests/allocation.rs`).
+struct ElementScratch {
+    ke: ElementMatrix,
+    fe: ElementVector,
+}
+
+impl ElementScratch {
+    fn new() -> Self {
+        Self {
+            ke: ElementMatrix::zeros(),
+            fe: ElementVector::zeros(),
+        }
+    }
+}
+
 /// Evaluates every element of `set` (colour by colour, in parallel within a colour) and adds
 /// its matrix and its force into `targets`. Allocates nothing: element vectors and matrices
 /// live on the stack.
@@ -629,7 +752,10 @@ fn scatter<S: ElementSet>(
     assert_eq!(trial.len(), set.len() * ppe);
     assert_eq!(committed.len(), trial.len());
     let states = SharedMut(trial.as_mut_ptr());
-    let element = |e: usize| {
+    // The leading block an element of this set can write (8 nodes × D): zeroed per element,
+    // the rest of the scratch matrix is never touched.
+    let used = MAX_ELEMENT_NODES * d;
+    let element = |e: usize, scratch: &mut ElementScratch| {
         let nodes = set.nodes(e);
         let mut ue = ElementVector::zeros();
         for (a, &n) in nodes.iter().enumerate() {
@@ -647,12 +773,19 @@ fn scatter<S: ElementSet>(
             committed: &committed[e * ppe..(e + 1) * ppe],
             algorithm,
         };
-        let mut ke = ElementMatrix::zeros();
-        let mut fe = ElementVector::zeros();
+        let (ke, fe): (&mut ElementMatrix, _) = (&mut scratch.ke, &mut scratch.fe);
+        for column in ke
+            .as_mut_slice()
+            .chunks_exact_mut(MAX_ELEMENT_DOFS)
+            .take(used)
+        {
+            column[..used].fill(0.0);
+        }
+        fe.as_mut_slice()[..used].fill(0.0);
         let output = ElementOutput {
             trial: &mut *trial_e,
-            k: ((values.is_some() || dense.is_some()) && !was_frozen).then_some(&mut ke),
-            f: &mut fe,
+            k: ((values.is_some() || dense.is_some()) && !was_frozen).then_some(&mut *ke),
+            f: &mut *fe,
         };
         set.evaluate(e, &element_input, output);
         let global = |a: usize| d * nodes[a / d] as usize + a % d;
@@ -695,7 +828,7 @@ fn scatter<S: ElementSet>(
                 (true, false) => {
                     let output = ElementOutput {
                         trial: &mut *trial_e,
-                        k: Some(&mut ke),
+                        k: Some(&mut *ke),
                         f: &mut ElementVector::zeros(),
                     };
                     set.evaluate(e, &element_input, output);
@@ -705,14 +838,14 @@ fn scatter<S: ElementSet>(
                     unsafe {
                         add_element_matrix(pattern, dofs, (nodes, d), &kr, -1.0, r.values.get())
                     };
-                    ke -= kr;
+                    *ke -= kr;
                     *frozen = false;
                 }
                 // Its tangent is the reference one: it joins the sum.
                 (false, true) => {
                     // SAFETY: as above.
                     unsafe {
-                        add_element_matrix(pattern, dofs, (nodes, d), &ke, 1.0, r.values.get())
+                        add_element_matrix(pattern, dofs, (nodes, d), ke, 1.0, r.values.get())
                     };
                     *frozen = true;
                 }
@@ -721,17 +854,22 @@ fn scatter<S: ElementSet>(
         }
         // SAFETY: as above; the entries of this element's dofs are written by no other
         // element of its colour.
-        unsafe { add_element_matrix(pattern, dofs, (nodes, d), &ke, 1.0, values.get()) };
+        unsafe { add_element_matrix(pattern, dofs, (nodes, d), ke, 1.0, values.get()) };
     };
     let last = coloring.groups.len().saturating_sub(1);
     for (c, group) in coloring.groups.iter().enumerate() {
         if c == last && coloring.groups.len() == 64 {
-            group.iter().for_each(|&e| element(e as usize));
+            let mut scratch = ElementScratch::new();
+            group
+                .iter()
+                .for_each(|&e| element(e as usize, &mut scratch));
         } else {
             group
                 .par_iter()
                 .with_min_len(64)
-                .for_each(|&e| element(e as usize));
+                .for_each_init(ElementScratch::new, |scratch, &e| {
+                    element(e as usize, scratch)
+                });
         }
     }
 }
@@ -746,6 +884,7 @@ mod tests {
     use crate::material::elastic::LinearElastic;
     use crate::material::j2::J2Plasticity;
     use crate::mesh::CellKind;
+    use faer::Mat;
 
     /// An `nx` × `ny` grid of unit quad8 cells of a J2 material in plane strain, held at
     /// its bottom, with its node count.
@@ -858,5 +997,81 @@ mod tests {
         );
         assert_eq!(frozen[4], set.len());
         assert_eq!(frozen[6], set.len());
+    }
+
+    #[test]
+    fn a_twist_pattern_leaves_out_only_the_couplings_elastic_cells_do_not_have() {
+        // Axisymmetry with twist, the block moved off the axis: the left half of the cells
+        // elastic (body 0), the right half J2 (body 1), sheared and twisted past yield.
+        let (mut set, node_count, _) = plastic_block(4, 2);
+        set.analysis = Analysis::AxisymmetricTwist;
+        for cell in &mut set.cells {
+            cell.coords.iter_mut().for_each(|x| x[0] += 1.0);
+            cell.body = u32::from(cell.coords[0][0] >= 3.0);
+        }
+        let elastic = LinearElastic::new(1000.0, 0.3).unwrap();
+        set.materials.insert(0, Box::new(elastic));
+        set.formulations.push(Formulation::Full);
+        set.expansions.push(0.0);
+        let mut fixed = vec![false; 3 * node_count];
+        fixed[..3 * 9].fill(true);
+        let dofs = DofMap::new(&fixed);
+        let split = (0..set.len()).map(|e| ElementNodes {
+            nodes: set.nodes(e),
+            couples_twist: set.couples_twist(e),
+        });
+        let pattern = SparsityPattern::new(node_count, &dofs, split);
+        let full = SparsityPattern::new(node_count, &dofs, (0..set.len()).map(|e| set.nodes(e)));
+        assert!(
+            pattern.nnz() < full.nnz(),
+            "{} vs {}",
+            pattern.nnz(),
+            full.nnz()
+        );
+        let coloring = Coloring::new(&set, node_count);
+        let mut system = GlobalSystem::new(pattern.clone(), dofs.dof_count());
+        let mut u = vec![0.0; dofs.dof_count()];
+        for n in 0..node_count {
+            let (x, y) = ((n % 9) as f64 / 2.0 + 1.0, (n / 9) as f64 / 2.0);
+            u[3 * n] = 2e-3 * y * x;
+            u[3 * n + 1] = -1e-3 * y;
+            u[3 * n + 2] = 3e-3 * y * x;
+        }
+        let input = AssemblyInput {
+            dofs: &dofs,
+            u: &u,
+            tangent: true,
+            algorithm: Default::default(),
+        };
+        let states = set.len() * set.points_per_element();
+        let committed = vec![PointState::default(); states];
+        let mut trial = committed.clone();
+        system.clear(true);
+        system.assemble(&input, &set, &coloring, &committed, &mut trial);
+        assert!(trial.iter().any(|s| s.yielding), "the J2 half yields");
+        // The same matrix assembled densely (every entry of every element kept).
+        let n = dofs.free_count();
+        let map = DenseScatter::new(&set, &dofs, Some);
+        let mut dense = Mat::<f64>::zeros(n, n);
+        let mut other = GlobalSystem::new(pattern.clone(), dofs.dof_count());
+        let mut trial = committed.clone();
+        other.clear(true);
+        let block = DenseBlock {
+            values: dense.as_mut(),
+            map: &map,
+        };
+        other.assemble_dense(&input, &set, &coloring, &committed, &mut trial, block);
+        let (cp, ri) = (pattern.symbolic.col_ptr(), pattern.symbolic.row_idx());
+        let mut sparse = Mat::<f64>::zeros(n, n);
+        for j in 0..n {
+            for p in cp[j] as usize..cp[j + 1] as usize {
+                sparse[(ri[p] as usize, j)] = system.values[p];
+            }
+        }
+        let scale = dense.norm_max();
+        // Identical sums, only the entries left out of the pattern are exact zeros.
+        assert!((&sparse - &dense).norm_max() <= 1e-14 * scale);
+        let coupled = (0..n).any(|j| (0..n).any(|i| dense[(i, j)] != 0.0 && i % 3 != j % 3));
+        assert!(coupled, "the yielded cells couple twist");
     }
 }

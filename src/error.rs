@@ -54,11 +54,11 @@ pub enum Error {
         message: String,
     },
     /// Two supports prescribe different histories of the same displacement component
-    /// (`component` 0 = x, 1 = y) of node `node` (gmsh tag).
+    /// (`component` 0 = x, 1 = y, 2 = θ) of node `node` (gmsh tag).
     #[error(
         "model: supports '{first}' and '{second}' prescribe different {} displacement histories ({} and {} \
          at factor 1) at node {node} ({position:?})",
-        ["x", "y"][*component], values[0], values[1]
+        ["x", "y", "θ"][*component], values[0], values[1]
     )]
     ConflictingSupports {
         first: String,
@@ -73,11 +73,17 @@ pub enum Error {
         "model: axisymmetric model: node {node} lies at negative radius r = {radius} (the axis is x = r = 0)"
     )]
     NegativeRadius { node: u64, radius: f64 },
-    /// A support prescribes a non-zero radial displacement on the axis.
+    /// A support prescribes a non-zero radial (`component` 0) or circumferential (2)
+    /// displacement on the axis.
     #[error(
-        "model: node {node} on the axis has a prescribed radial displacement {value}; it must be 0"
+        "model: node {node} on the axis has a prescribed {} displacement {value}; it must be 0",
+        ["radial", "axial", "circumferential"][*component]
     )]
-    AxisDisplacement { node: u64, value: f64 },
+    AxisDisplacement {
+        node: u64,
+        component: usize,
+        value: f64,
+    },
     /// A support or load of group `group` reaches a node or boundary element (`entity`, at
     /// `position`) that belongs to no body.
     #[error("model: {role} '{group}': {}", off_body_message(entity, position))]
@@ -887,6 +893,8 @@ pub struct FreeBody {
     pub translations: Vec<[f64; 2]>,
     /// Whether it can rotate (plane models).
     pub rotates: bool,
+    /// Whether it can turn about the axis (axisymmetric models with twist).
+    pub twists: bool,
     /// The one point it can rotate about, when it can rotate but not translate.
     pub centre: Option<[f64; 2]>,
 }
@@ -912,7 +920,15 @@ impl FreeBody {
             [_] => Some("uy"),
             _ => Some("ux and uy"),
         };
+        let twist = format!(
+            "hold utheta or rotation on a curve or point of '{b}' off the axis (or apply no \
+             torque that nothing resists)"
+        );
         match (components, self.rotates) {
+            _ if self.twists && components.is_none() => twist,
+            (Some(c), false) if self.twists => {
+                format!("hold {c} on a curve or point of '{b}', and {twist}")
+            }
             (Some(c), false) => format!("hold {c} on a curve or point of '{b}'"),
             (Some(c), true) => format!(
                 "hold {c} on a curve of '{b}' (or at two points of it, a point holding only \
@@ -931,6 +947,12 @@ impl fmt::Display for FreeBody {
     /// "body 'b' is free to move in x and to rotate".
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "body '{}' is free to ", self.body)?;
+        if self.twists {
+            return match self.translation() {
+                Some(t) => write!(f, "move {t} and to turn about the axis"),
+                None => write!(f, "turn about the axis"),
+            };
+        }
         match (self.translation(), self.rotates, self.centre) {
             (Some(t), false, _) => write!(f, "move {t}"),
             (Some(t), true, _) => write!(f, "move {t} and to rotate"),

@@ -441,7 +441,7 @@ fn check(case: &Path) -> asperity::Result<String> {
     let parsed = Case::from_file(case)?;
     let spec = ModelSpec::new(&parsed)?;
     let scratch = tempfile::tempdir().map_err(|e| asperity::Error::io(std::env::temp_dir(), e))?;
-    let mesh = run::load_mesh(&parsed, &OutputFolder::scratch(scratch.path())?)?;
+    let mesh = run::load_mesh(&parsed, &OutputFolder::scratch(scratch.path())?)?.0;
     let model = Model::build(mesh, spec)?;
     run::check_history_of(&parsed, &model)?;
     Ok(format!(

@@ -564,12 +564,12 @@ fn case_values_out_of_range_are_named() {
         (
             "traction with three components",
             case_edit("pressure = 1.0", "traction = [0.0, 1.0, 5.0]"),
-            Case,
+            Invalid("load[0].traction"),
         ),
         (
             "traction with one component",
             case_edit("pressure = 1.0", "traction = [1.0]"),
-            Case,
+            Invalid("load[0].traction"),
         ),
         (
             "force with three components",

@@ -43,9 +43,9 @@ impl Setup {
         let [top, left, right] = &case.loads[..] else {
             panic!("the case has three loads")
         };
-        let (pressure, traction) = (top.pressure.unwrap(), left.traction.unwrap());
+        let (pressure, traction) = (top.pressure.unwrap(), left.traction.clone().unwrap());
         // The halves carry the same shear and opposite vertical tractions (the couple).
-        assert_eq!(right.traction, Some([traction[0], -traction[1]]));
+        assert_eq!(right.traction, Some(vec![traction[0], -traction[1]]));
         assert_eq!(right.factors, left.factors);
         let materials: Vec<_> = case.bodies.iter().map(|b| b.material).collect();
         assert!(
@@ -206,7 +206,8 @@ fn solve(n: usize, size: f64) -> Run {
         &case,
         &asperity::run::folder::OutputFolder::scratch(dir.path()).unwrap(),
     )
-    .expect("gmsh meshes the case");
+    .expect("gmsh meshes the case")
+    .0;
     let model = common::model(mesh, &case).expect("the model builds");
     let mut frames = Vec::new();
     run_steps(&model, &common::settings(&case), |step| {

@@ -327,7 +327,7 @@ fn summary_and_history_report_the_balance() {
     asperity::run::run_mesh(
         &case,
         mesh,
-        0.0,
+        Default::default(),
         &asperity::run::folder::OutputFolder::scratch(dir.path()).unwrap(),
         false,
         |_, _| Ok(()),

@@ -59,6 +59,7 @@ fn free_block() -> FreeBody {
         body: "block".into(),
         translations: vec![[1.0, 0.0]],
         rotates: false,
+        twists: false,
         centre: None,
     }
 }

@@ -83,12 +83,19 @@ fn run(case: &CaseBuilder) -> (Vec<Seen>, tempfile::TempDir) {
     let case = Case::from_file(&case.write(&dir.path().join("case.toml"))).unwrap();
     let out = dir.path().join("out");
     let folder = OutputFolder::scratch(&out).unwrap();
-    let mesh = run::load_mesh(&case, &folder).unwrap();
+    let (mesh, _) = run::load_mesh(&case, &folder).unwrap();
     let mut seen = Vec::new();
-    run::run_mesh(&case, mesh, 0.0, &folder, false, |model, step| {
-        seen.push(observe(model, step));
-        Ok(())
-    })
+    run::run_mesh(
+        &case,
+        mesh,
+        run::MeshTime::default(),
+        &folder,
+        false,
+        |model, step| {
+            seen.push(observe(model, step));
+            Ok(())
+        },
+    )
     .unwrap();
     (seen, dir)
 }

@@ -40,7 +40,7 @@ fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
 /// reader in the quadratic mesh).
 fn cells(dir: &Path, geo: &Path, size: f64) -> usize {
     let msh = mesh_geo(geo, size, &[], &dir.join("check.msh")).unwrap();
-    read_msh(&msh).unwrap().cells.len()
+    read_msh(&msh.path).unwrap().cells.len()
 }
 
 #[test]

@@ -320,7 +320,7 @@ fn contact_tables_show_each_pairs_own_points_at_shared_nodes() {
             .collect();
         let geo = case.resolve(case.mesh.geo.as_ref().unwrap());
         let msh = mesh_geo(&geo, 1.0, &params, &dir.join("lib.msh")).unwrap();
-        let mesh = read_msh(&msh).unwrap();
+        let mesh = read_msh(&msh.path).unwrap();
         let model = Model::build(mesh, ModelSpec::new(&case).unwrap())
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         let settings = asperity::run::newton_settings(&case.solver);

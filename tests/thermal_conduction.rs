@@ -236,7 +236,15 @@ fn summary_json_lists_the_heat_flows_by_name() {
     let (mesh, case) = concentric();
     let dir = tempfile::tempdir().unwrap();
     let folder = asperity::run::folder::OutputFolder::scratch(dir.path()).unwrap();
-    asperity::run::run_mesh(&case.case(), mesh, 0.0, &folder, false, |_, _| Ok(())).unwrap();
+    asperity::run::run_mesh(
+        &case.case(),
+        mesh,
+        Default::default(),
+        &folder,
+        false,
+        |_, _| Ok(()),
+    )
+    .unwrap();
     let text = std::fs::read_to_string(dir.path().join("summary.json")).unwrap();
     let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
     let heat = &summary["steps"].as_array().unwrap().last().unwrap()["heat"];
@@ -275,7 +283,15 @@ fn summary_json_lists_the_heat_flows_by_name() {
     let dir = tempfile::tempdir().unwrap();
     let folder = asperity::run::folder::OutputFolder::scratch(dir.path()).unwrap();
     let mesh = rectangle(4.0, 2.0, 2, 1, 0.0, false);
-    asperity::run::run_mesh(&plain.case(), mesh, 0.0, &folder, false, |_, _| Ok(())).unwrap();
+    asperity::run::run_mesh(
+        &plain.case(),
+        mesh,
+        Default::default(),
+        &folder,
+        false,
+        |_, _| Ok(()),
+    )
+    .unwrap();
     let text = std::fs::read_to_string(dir.path().join("summary.json")).unwrap();
     let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
     assert!(summary["steps"][0].get("heat").is_none(), "{text}");

@@ -8,9 +8,10 @@
 //! ([`crate::model::ModelSpec::new`]).
 
 use std::collections::BTreeSet;
+use std::path::Path;
 
 use super::{AnalysisSpec, Case, MAX_KINEMATIC_TERMS, check_name};
-use crate::Result;
+use crate::{Error, Result};
 
 /// Most load steps (`[steps] count`, the length of `factors`) and arc-length increments: a
 /// run writes files per step, and 10⁵ steps is far beyond any load history that needs
@@ -26,6 +27,62 @@ pub const MAX_CUTBACKS: usize = 20;
 pub const MAX_TOLERANCE: f64 = 1e-2;
 /// Upper bound of the late residual tolerance R_p (ten times CalculiX's default 2e-2).
 pub const MAX_LATE_TOLERANCE: f64 = 0.2;
+
+/// Why a key of the circumferential direction is refused without twist.
+const NEEDS_TWIST: &str = "the circumferential direction exists only in an axisymmetric \
+     analysis with twist: set [analysis] type = \"axisymmetric\", twist = true";
+
+/// Why a traction of three components is refused without twist.
+const NEEDS_TWIST_TRACTION: &str = "a third (circumferential) traction component needs an \
+     axisymmetric analysis with twist: set [analysis] type = \"axisymmetric\", twist = true, \
+     or give (t_x, t_y)";
+
+/// `[analysis]` on the raw table, before the typed parse (whose messages would only say
+/// "unknown field"): an axisymmetric analysis has no `thickness`, and `twist` belongs to
+/// axisymmetric analyses only. `path` names the case file.
+pub(super) fn check_analysis_table(text: &str, path: &Path) -> Result<()> {
+    // A file that is no TOML is reported by the typed parse.
+    let Ok(table) = toml::from_str::<toml::Table>(text) else {
+        return Ok(());
+    };
+    let Some(analysis) = table.get("analysis").and_then(toml::Value::as_table) else {
+        return Ok(());
+    };
+    let case_error = |message: String| Error::Case {
+        path: path.to_path_buf(),
+        message,
+    };
+    let kind = analysis.get("type").and_then(toml::Value::as_str);
+    if kind == Some("axisymmetric") {
+        return match analysis
+            .keys()
+            .find(|k| !["type", "twist"].contains(&k.as_str()))
+        {
+            Some(key) if key == "thickness" => Err(case_error(
+                "[analysis]: `thickness` is not used in axisymmetric analyses (forces and \
+                 reactions are totals over the full ring); remove it"
+                    .into(),
+            )),
+            Some(key) => Err(case_error(format!(
+                "[analysis]: unknown key `{key}` (an axisymmetric analysis has only `type` and \
+                 `twist`)"
+            ))),
+            None => Ok(()),
+        };
+    }
+    match (kind, analysis.get("twist")) {
+        (Some(kind), Some(twist)) => Err(Error::InvalidParameter {
+            path: path.to_path_buf(),
+            key: "analysis.twist".into(),
+            value: twist.to_string(),
+            reason: format!(
+                "twist (the circumferential displacement u_θ) needs type = \"axisymmetric\"; \
+                 a {kind} analysis has no axis to twist about"
+            ),
+        }),
+        _ => Ok(()),
+    }
+}
 
 impl Case {
     /// Every check of a read case, in key order; the first failure is returned.
@@ -201,42 +258,101 @@ impl Case {
         Ok(())
     }
 
-    /// Every `[[support]]` prescribes a component, with a finite value.
+    /// Every `[[support]]` prescribes a component, with a finite value; `utheta` and
+    /// `rotation` only with twist, and not both.
     fn check_supports(&self) -> Result<()> {
+        let twist = self.analysis.has_twist();
         for (i, s) in self.supports.iter().enumerate() {
-            if s.ux.is_none() && s.uy.is_none() {
-                return Err(self.error(format!("[[support]] '{}': give ux and/or uy", s.group)));
+            let values = [
+                ("ux", s.ux),
+                ("uy", s.uy),
+                ("utheta", s.utheta),
+                ("rotation", s.rotation),
+            ];
+            if values.iter().all(|(_, v)| v.is_none()) {
+                let keys = if twist {
+                    "ux, uy, utheta or rotation"
+                } else {
+                    "ux and/or uy"
+                };
+                return Err(self.error(format!("[[support]] '{}': give {keys}", s.group)));
             }
-            for (key, value) in [("ux", s.ux), ("uy", s.uy)] {
+            for (key, value) in values {
                 if let Some(v) = value.filter(|v| !v.is_finite()) {
                     return Err(self.invalid(format!("support[{i}].{key}"), v, "must be finite"));
                 }
+            }
+            for (key, value) in &values[2..] {
+                if let Some(v) = value.filter(|_| !twist) {
+                    return Err(self.invalid(format!("support[{i}].{key}"), v, NEEDS_TWIST));
+                }
+            }
+            if let (Some(_), Some(phi)) = (s.utheta, s.rotation) {
+                return Err(self.invalid(
+                    format!("support[{i}].rotation"),
+                    phi,
+                    format!(
+                        "support '{}' gives both `utheta` and `rotation`, which both prescribe \
+                         u_θ: give one",
+                        s.name()
+                    ),
+                ));
             }
         }
         Ok(())
     }
 
-    /// Every `[[load]]` is one finite pressure, traction or force.
+    /// Every `[[load]]` is one finite pressure, traction, force or torque; a torque and a
+    /// traction of three components only with twist.
     fn check_loads(&self) -> Result<()> {
+        let twist = self.analysis.has_twist();
         for (i, l) in self.loads.iter().enumerate() {
             let given = [
                 l.pressure.is_some(),
                 l.traction.is_some(),
                 l.force.is_some(),
+                l.torque.is_some(),
             ]
             .iter()
             .filter(|&&b| b)
             .count();
             if given != 1 {
+                let keys = if twist {
+                    "pressure, traction, force, torque"
+                } else {
+                    "pressure, traction, force"
+                };
                 return Err(self.error(format!(
-                    "[[load]] '{}': give exactly one of pressure, traction, force",
+                    "[[load]] '{}': give exactly one of {keys}",
                     l.group
                 )));
             }
+            if let Some(t) = &l.traction {
+                let key = format!("load[{i}].traction");
+                match t.len() {
+                    2 => {}
+                    3 if twist => {}
+                    3 => return Err(self.invalid(key, format!("{t:?}"), NEEDS_TWIST_TRACTION)),
+                    n => {
+                        return Err(self.invalid(
+                            key,
+                            format!("{t:?}"),
+                            format!(
+                                "a traction has two components (t_x, t_y), or with twist three \
+                                 (t_r, t_z, t_θ); got {n}"
+                            ),
+                        ));
+                    }
+                }
+            }
+            if let Some(t) = l.torque.filter(|_| !twist) {
+                return Err(self.invalid(format!("load[{i}].torque"), t, NEEDS_TWIST));
+            }
             let values = [
                 ("pressure", l.pressure.map(|p| vec![p])),
-                ("traction", l.traction.map(Vec::from)),
+                ("traction", l.traction.clone()),
                 ("force", l.force.map(Vec::from)),
+                ("torque", l.torque.map(|t| vec![t])),
             ];
             for (key, value) in values {
                 if let Some(v) = value.filter(|v| v.iter().any(|x| !x.is_finite())) {
@@ -412,29 +528,6 @@ impl Case {
             }
         }
         Ok(())
-    }
-
-    /// In axisymmetric analyses `[analysis]` has no other key than `type` (serde ignores the
-    /// keys of a unit variant, so they are checked on the raw table).
-    pub(super) fn check_analysis_keys(&self, text: &str) -> Result<()> {
-        if !self.analysis.is_axisymmetric() {
-            return Ok(());
-        }
-        let table: toml::Table = toml::from_str(text).map_err(|e| self.error(e.to_string()))?;
-        let extra = table
-            .get("analysis")
-            .and_then(toml::Value::as_table)
-            .and_then(|t| t.keys().find(|k| k.as_str() != "type"));
-        match extra {
-            Some(key) if key == "thickness" => Err(self.error(
-                "[analysis]: `thickness` is not used in axisymmetric analyses (forces and \
-                 reactions are totals over the full ring); remove it",
-            )),
-            Some(key) => Err(self.error(format!(
-                "[analysis]: unknown key `{key}` (an axisymmetric analysis has only `type`)"
-            ))),
-            None => Ok(()),
-        }
     }
 
     /// `[steps]`: `count` or `factors`, finite factors, bounded counts.

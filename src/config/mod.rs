@@ -131,13 +131,25 @@ pub enum AnalysisSpec {
         thickness: f64,
     },
     /// Axisymmetric about the y axis: x = r, y = z.
-    Axisymmetric,
+    Axisymmetric {
+        /// Twist (Abaqus' CGAX elements): every node also has the circumferential
+        /// displacement u_θ (mm), so that the bodies can carry a torque about the axis
+        /// (`utheta`, `rotation`, `torque`, a third `traction` component).
+        /// See docs/guide/torque.md.
+        #[serde(default)]
+        twist: bool,
+    },
 }
 
 impl AnalysisSpec {
-    /// Whether this is an axisymmetric analysis.
+    /// Whether this is an axisymmetric analysis (with or without twist).
     pub fn is_axisymmetric(&self) -> bool {
-        matches!(self, AnalysisSpec::Axisymmetric)
+        matches!(self, AnalysisSpec::Axisymmetric { .. })
+    }
+
+    /// Whether the nodes carry the circumferential displacement u_θ (`twist = true`).
+    pub fn has_twist(&self) -> bool {
+        matches!(self, AnalysisSpec::Axisymmetric { twist: true })
     }
 }
 
@@ -299,6 +311,13 @@ pub struct SupportSpec {
     /// y (or z) displacement.
     #[serde(alias = "uz")]
     pub uy: Option<f64>,
+    /// Circumferential displacement u_θ in mm (axisymmetric analyses with `twist` only;
+    /// exclusive with `rotation`).
+    pub utheta: Option<f64>,
+    /// Rigid rotation φ about the axis in radians: u_θ = φ r at every node of the group
+    /// (axisymmetric analyses with `twist` only; exclusive with `utheta`). Positive
+    /// counter-clockwise seen from +z.
+    pub rotation: Option<f64>,
     /// This support's own history: one factor per step (default: the `[steps]` factors).
     pub factors: Option<Vec<f64>>,
 }
@@ -313,9 +332,14 @@ pub struct LoadSpec {
     pub group: String,
     /// Normal pressure in MPa on a curve, positive pushing into the body.
     pub pressure: Option<f64>,
-    /// Traction vector (t_x, t_y) in MPa on a curve.
-    #[serde(default, deserialize_with = "two_components")]
-    pub traction: Option<[f64; 2]>,
+    /// Traction vector (t_x, t_y) in MPa on a curve; with `twist`, also (t_r, t_z, t_θ),
+    /// t_θ the circumferential shear traction.
+    #[schemars(length(min = 2, max = 3))]
+    pub traction: Option<Vec<f64>>,
+    /// Torque T in N·mm about the axis on a curve (axisymmetric analyses with `twist`
+    /// only): the circumferential traction of a rigid rotation, t_θ ∝ r, scaled so that
+    /// its moment ∫ t_θ r dA is T. Positive counter-clockwise seen from +z.
+    pub torque: Option<f64>,
     /// Force (F_x, F_y) in N applied at each node of a physical point group (in axisymmetry
     /// the total over the ring).
     #[serde(default, deserialize_with = "two_components")]
@@ -332,7 +356,8 @@ impl SupportSpec {
 
     /// Whether it prescribes a non-zero value (so that its history matters).
     pub fn is_nonzero(&self) -> bool {
-        [self.ux, self.uy].iter().flatten().any(|&v| v != 0.0)
+        let values = [self.ux, self.uy, self.utheta, self.rotation];
+        values.iter().flatten().any(|&v| v != 0.0)
     }
 }
 
@@ -595,6 +620,7 @@ impl Case {
 
     /// Parses case text; `path` is used for messages and to resolve relative paths.
     pub fn from_toml(text: &str, path: &Path) -> Result<Self> {
+        check::check_analysis_table(text, path)?;
         let mut case: Case = toml::from_str(text).map_err(|e| Error::Case {
             path: path.to_path_buf(),
             message: e.to_string().trim_end().to_string(),
@@ -602,7 +628,6 @@ impl Case {
         case.path = path.to_path_buf();
         case.base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         case.validate()?;
-        case.check_analysis_keys(text)?;
         case.check_history_form(text)?;
         Ok(case)
     }

@@ -21,6 +21,8 @@ pub struct QuantitySpec {
     pub point: Option<String>,
     /// `node_displacement`: the node's tag in the mesh file (gmsh's node number).
     pub node: Option<u64>,
+    /// `twist`: a physical curve or point (the mean u_θ / r over its nodes off the axis).
+    pub group: Option<String>,
     /// Contact kinds: the pair's name.
     pub pair: Option<String>,
     /// `"x"` (alias `"r"`) or `"y"` (alias `"z"`).
@@ -75,6 +77,9 @@ pub enum QuantityKind {
     /// Secant stiffness of a pair, −F / ū in one direction (N/mm): F the force body A exerts on
     /// body B, ū the mean relative displacement.
     Stiffness,
+    /// Twist angle of a physical curve or point about the axis: the mean of u_θ / r over its
+    /// nodes off the axis (radians; axisymmetric analyses with twist only).
+    Twist,
 }
 
 impl QuantityKind {
@@ -92,6 +97,7 @@ impl QuantityKind {
             QuantityKind::NodeDisplacement => "node_displacement",
             QuantityKind::RelativeDisplacement => "relative_displacement",
             QuantityKind::Stiffness => "stiffness",
+            QuantityKind::Twist => "twist",
         }
     }
 }
@@ -144,6 +150,7 @@ impl QuantitySpec {
             ("support", self.support.is_some()),
             ("point", self.point.is_some()),
             ("node", self.node.is_some()),
+            ("group", self.group.is_some()),
             ("pair", self.pair.is_some()),
             ("component", self.component.is_some()),
             ("statistic", self.statistic.is_some()),
@@ -161,7 +168,14 @@ impl QuantitySpec {
             | QuantityKind::MaxSlip => &["pair"],
             QuantityKind::NodeDisplacement => &["node", "component"],
             QuantityKind::RelativeDisplacement | QuantityKind::Stiffness => &["pair", "component"],
+            QuantityKind::Twist => &["group"],
         };
+        if self.kind == QuantityKind::Twist && !case.analysis.has_twist() {
+            return Err(format!(
+                "{head}: the twist angle needs an axisymmetric analysis with twist ([analysis] \
+                 type = \"axisymmetric\", twist = true)"
+            ));
+        }
         let at = self.statistic == Some(Statistic::At);
         for (key, present) in given {
             let coordinate = key == "x" || key == "y";

@@ -19,8 +19,11 @@ use serde::Deserialize;
 
 use crate::contact::ContactAlgorithm;
 
+/// Largest number of nodes of one element (quad8).
+pub const MAX_ELEMENT_NODES: usize = 8;
+
 /// Largest number of dofs of one element: 8 nodes × 3 components.
-pub const MAX_ELEMENT_DOFS: usize = 24;
+pub const MAX_ELEMENT_DOFS: usize = MAX_ELEMENT_NODES * 3;
 
 /// Element stiffness (tangent) matrix, dof order node by node, (u_x1, u_y1, u_x2, ...)
 /// or with twist (u_r1, u_z1, u_θ1, u_r2, ...): element dof D·i + c of node i, component c.

@@ -168,6 +168,13 @@ impl ContinuumSet {
         );
     }
 
+    /// Whether cell `e`'s matrix may couple the in-plane displacements with the
+    /// circumferential one (twist): not for a linear (isotropic elastic) body, whose
+    /// tangent is block diagonal in (xx, yy, xy, zz | rθ, zθ); yes for a plastic one.
+    pub fn couples_twist(&self, e: usize) -> bool {
+        !self.materials[self.cells[e].body as usize].is_linear()
+    }
+
     /// Whether every body's material is linear: the continuum stiffness is then constant
     /// (small strains) and its internal force is K_c · u.
     pub fn is_linear(&self) -> bool {
@@ -345,20 +352,21 @@ impl ElementSet for ContinuumInContext<'_> {
             nodal,
         });
         let range = self.history.as_ref().map_or(0..0, |h| h.layout.range(e));
+        let Some(h) = self.history.as_ref().filter(|_| !range.is_empty()) else {
+            // No internal variables: no scratch to zero (it was a fifth of the memset of a
+            // plain plastic run).
+            set.evaluate_cell(e, temperature.as_ref(), None, input, output);
+            return;
+        };
         let mut trial = [0.0; MAX_CELL_INTERNAL];
         let trial = &mut trial[..range.len()];
-        let history = match &self.history {
-            Some(h) if !range.is_empty() => Some(CellHistory {
-                committed: &h.committed[range.clone()],
-                trial: &mut *trial,
-            }),
-            _ => None,
+        let history = CellHistory {
+            committed: &h.committed[range.clone()],
+            trial: &mut *trial,
         };
-        set.evaluate_cell(e, temperature.as_ref(), history, input, output);
-        if let Some(h) = &self.history {
-            for (slot, value) in h.trial[range].iter().zip(trial.iter()) {
-                slot.store(value.to_bits(), Ordering::Relaxed);
-            }
+        set.evaluate_cell(e, temperature.as_ref(), Some(history), input, output);
+        for (slot, value) in h.trial[range].iter().zip(trial.iter()) {
+            slot.store(value.to_bits(), Ordering::Relaxed);
         }
     }
 

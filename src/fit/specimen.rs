@@ -80,7 +80,7 @@ impl Specimen {
             .collect::<Result<Vec<_>>>()?;
         case.output.vtu = false;
         let tmp = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
-        let mesh = run::load_mesh(&case, &OutputFolder::scratch(tmp.path())?)?;
+        let mesh = run::load_mesh(&case, &OutputFolder::scratch(tmp.path())?)?.0;
         let tree = toml::from_str(&text).map_err(|e| Error::Case {
             path: path.to_path_buf(),
             message: e.to_string(),
@@ -147,7 +147,14 @@ impl Specimen {
         };
         let tmp = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
         let folder = OutputFolder::scratch(tmp.path())?;
-        run::run_mesh(&case, self.mesh.clone(), 0.0, &folder, false, |_, _| Ok(()))?;
+        run::run_mesh(
+            &case,
+            self.mesh.clone(),
+            run::MeshTime::default(),
+            &folder,
+            false,
+            |_, _| Ok(()),
+        )?;
         let file = folder.dir().join(RunFile::Summary.name());
         let text = std::fs::read_to_string(&file).map_err(|e| Error::io(&file, e))?;
         let summary: serde_json::Value =

@@ -38,12 +38,12 @@
 //! w = Σ γ_k e_k α_k,n, c = √(3/2) and D = −F′(Δp)):
 //! dΔp = (2Gc/D) n:dε, dn = (I − n⊗n)(2G dev dε + w dΔp)/‖ξ̃‖,
 //! dσ = C dε − 2Gc (n dΔp + Δp dn). It is unsymmetric when a backstress with γ_k > 0 is not
-//! parallel to the flow direction (non-proportional loading); the bodies' solvers need a
-//! symmetric matrix, so [`Material::update_with_history`] returns its symmetric part, which is
-//! the exact tangent along proportional paths (and for Prager hardening always), and
-//! [`CyclicPlasticity::return_map`] the exact one (tested by finite differences). Under
-//! non-proportional flow Newton then converges linearly (about two digits per iteration,
-//! measured in docs/guide/plasticity.md) instead of quadratically.
+//! parallel to the flow direction (non-proportional loading). [`Material::update_with_history`]
+//! returns it as it is when some γ_k > 0 ([`Material::has_unsymmetric_tangent`]: the bodies'
+//! solvers then factor the tangent by sparse LU while such a point yields, and Newton stays
+//! quadratic, tests/cyclic_newton.rs), and its symmetric part for Prager hardening (γ = 0),
+//! where it is symmetric up to rounding, so that those bodies keep the Cholesky path.
+//! [`CyclicPlasticity::return_map`] gives the exact one (tested by finite differences).
 //!
 //! Plane stress solves σ_zz(ε_zz) = 0 around the same return by Newton's method on ε_zz with
 //! the consistent tangent's zz entry, and condenses the tangent onto the in-plane components
@@ -439,12 +439,20 @@ impl Material for CyclicPlasticity {
         {
             chunk.copy_from_slice(alpha.as_slice());
         }
-        let tangent = if result.state.yielding {
+        // Prager hardening's exact tangent is symmetric up to rounding: symmetrised, so that
+        // its bodies keep the Cholesky path.
+        let tangent = if result.state.yielding && !self.has_unsymmetric_tangent() {
             (result.tangent + result.tangent.transpose()) * 0.5
         } else {
             result.tangent
         };
         (result.state, tangent)
+    }
+
+    /// Armstrong–Frederick recovery (some γ_k > 0) makes the tangent unsymmetric under
+    /// non-proportional flow (module docs).
+    fn has_unsymmetric_tangent(&self) -> bool {
+        self.kinematic.iter().any(|term| term.gamma > 0.0)
     }
 
     fn internal_variables(&self) -> usize {

@@ -146,6 +146,14 @@ pub trait Material: Send + Sync + std::fmt::Debug {
         false
     }
 
+    /// Whether the consistent tangent of a yielding point may be unsymmetric (kinematic
+    /// hardening with dynamic recovery). The bodies' solvers then factor the tangent by LU
+    /// while a point of such a material yields, and by Cholesky otherwise. `false` (the
+    /// default): the tangent is always symmetric.
+    fn has_unsymmetric_tangent(&self) -> bool {
+        false
+    }
+
     /// Number of internal variables per integration point beyond [`PointState`] (the UMAT
     /// "NSTATV"): the backstress components of kinematic hardening. 0 (the default) for a
     /// material without them, which then costs no storage.

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
+use super::cache::{CacheKey, MeshCache};
 use crate::error::MeshProblem;
 use crate::{Error, Result};
 
@@ -37,12 +38,10 @@ const RELIABLE_PROBE: u64 = 4000;
 /// mesh size factor `size` (`-clscale`) and `-setnumber` values for the script's
 /// `DefineConstant` parameters. The number of elements is estimated first
 /// ([`estimate_elements`]); a mesh above [`MAX_MESH_ELEMENTS`] is refused before it is made.
-pub fn mesh_geo(
-    geo: &Path,
-    size: f64,
-    parameters: &[(String, f64)],
-    out: &Path,
-) -> Result<PathBuf> {
+///
+/// With a mesh cache ([`MeshCache::from_env`]), a mesh gmsh made before from the same script,
+/// gmsh version, size factor and parameters is copied to `out` instead (see [`cache`](super::cache)).
+pub fn mesh_geo(geo: &Path, size: f64, parameters: &[(String, f64)], out: &Path) -> Result<Meshed> {
     if !geo.is_file() {
         return Err(Error::mesh(
             geo,
@@ -51,6 +50,72 @@ pub fn mesh_geo(
             "the .geo script does not exist",
         ));
     }
+    if let Some(dir) = out.parent() {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    }
+    // An earlier mesh at `out` must not pass for this one when gmsh writes none.
+    match std::fs::remove_file(out) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(Error::io(out, e)),
+        _ => {}
+    }
+    let cached = MeshCache::from_env().and_then(|cache| {
+        let key = cache_key(geo, size, parameters)?;
+        Some((cache, key))
+    });
+    if let Some((cache, key)) = &cached
+        && cache.fetch(key, out)
+    {
+        tracing::info!(
+            "mesh of {} (size factor {size}) from the mesh cache",
+            geo.display()
+        );
+        return Ok(Meshed {
+            path: out.to_path_buf(),
+            gmsh_seconds: 0.0,
+            cached: true,
+        });
+    }
+    let start = Instant::now();
+    make_mesh(geo, size, parameters, out)?;
+    let gmsh_seconds = start.elapsed().as_secs_f64();
+    if let Some((cache, key)) = &cached {
+        cache.store(key, out);
+    }
+    Ok(Meshed {
+        path: out.to_path_buf(),
+        gmsh_seconds,
+        cached: false,
+    })
+}
+
+/// A mesh [`mesh_geo`] made or found in the cache.
+#[derive(Clone, Debug)]
+pub struct Meshed {
+    /// The MSH file.
+    pub path: PathBuf,
+    /// Seconds spent in gmsh (its element-count probes and the mesh itself; 0 from the cache).
+    pub gmsh_seconds: f64,
+    /// Whether the mesh came from the cache.
+    pub cached: bool,
+}
+
+/// The cache key of `geo` at `size` with `parameters` for the installed gmsh, or `None`
+/// (a script that reads other files, or one that is not text, or no gmsh version).
+fn cache_key(geo: &Path, size: f64, parameters: &[(String, f64)]) -> Option<CacheKey> {
+    let script = std::fs::read_to_string(geo).ok()?;
+    let version = Command::new("gmsh").arg("--version").output().ok()?;
+    let version = [version.stdout, version.stderr].concat();
+    CacheKey::new(
+        &script,
+        &String::from_utf8_lossy(&version),
+        size,
+        parameters,
+    )
+}
+
+/// Estimates the element count, refuses a mesh over the limit, and meshes (see
+/// [`mesh_geo`]).
+fn make_mesh(geo: &Path, size: f64, parameters: &[(String, f64)], out: &Path) -> Result<()> {
     let estimate = estimate_elements(geo, size, parameters)?;
     if let Some(Estimate {
         elements,
@@ -72,20 +137,11 @@ pub fn mesh_geo(
             ),
         ));
     }
-    if let Some(dir) = out.parent() {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    }
-    // An earlier mesh at `out` must not pass for this one when gmsh writes none.
-    match std::fs::remove_file(out) {
-        Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(Error::io(out, e)),
-        _ => {}
-    }
     tracing::info!("meshing {} (size factor {size})", geo.display());
     let mut cmd = gmsh(geo, size, parameters, out);
     cmd.args(["-order", "2"])
         .args(["-setnumber", "Mesh.SecondOrderIncomplete", "1"]);
-    run(cmd, geo, out)?;
-    Ok(out.to_path_buf())
+    run(cmd, geo, out)
 }
 
 /// The element count of a mesh of `geo` at size factor `size`, extrapolated from a coarser

@@ -11,6 +11,7 @@
 //! - tri6 (gmsh type 9, VTK 22): corners 0..3, then mid-side nodes 3 (0–1), 4 (1–2), 5 (2–0);
 //! - line3 (gmsh type 8, VTK 21): end nodes 0, 1, then the mid node 2.
 
+pub mod cache;
 pub mod gmsh;
 pub mod interface;
 pub mod msh;

@@ -1,7 +1,8 @@
-//! Supports: prescribed displacements on physical curves and points, and the automatic axis
+//! Supports: prescribed displacements on physical curves and points (with twist also the
+//! circumferential displacement u_θ, or a rigid rotation u_θ = φ r), and the automatic axis
 //! support of axisymmetric models.
 
-use super::{Prescribed, Schedule, boundary_group};
+use super::{Circumferential, Prescribed, Schedule, boundary_group};
 use crate::element::Analysis;
 use crate::error::{GroupProblem, MeshEntity};
 use crate::mesh::Mesh;
@@ -14,10 +15,13 @@ pub struct Support {
     pub name: String,
     /// The physical group it holds.
     pub group: String,
-    /// Global dofs (2·node + component) this support prescribes.
+    /// Global dofs (D·node + component, D the analysis' dofs per node) this support
+    /// prescribes.
     pub dofs: Vec<usize>,
     /// (u_x, u_y) at factor 1 (`None`: the component is free).
     pub values: [Option<f64>; 2],
+    /// u_θ or the rotation φ at factor 1, with twist (`None`: u_θ is free).
+    pub circumferential: Option<Circumferential>,
     /// The amplitude in the model's schedule the values follow.
     pub amplitude: usize,
 }
@@ -25,7 +29,20 @@ pub struct Support {
 impl Support {
     /// Whether it prescribes a non-zero displacement (drives the model).
     pub fn is_driven(&self) -> bool {
-        self.values.iter().flatten().any(|&v| v != 0.0)
+        let theta = self.circumferential.map(Circumferential::value);
+        self.values
+            .iter()
+            .chain([&theta])
+            .flatten()
+            .any(|&v| v != 0.0)
+    }
+
+    /// The value given for component `c` (0: x, 1: y, 2: u_θ or φ), if it is prescribed.
+    pub fn value(&self, c: usize) -> Option<f64> {
+        match c {
+            0 | 1 => self.values[c],
+            _ => self.circumferential.map(Circumferential::value),
+        }
     }
 }
 
@@ -41,8 +58,8 @@ pub(super) struct Constraints {
 }
 
 /// Prescribes the supports' components (adding their own histories to `schedule`, in
-/// order), then, in axisymmetry, u_r = 0 on the axis. Two supports may prescribe the same
-/// component only with the same history.
+/// order), then, in axisymmetry, u_r = 0 on the axis (and u_θ = 0 with twist). Two supports
+/// may prescribe the same component only with the same history.
 pub(super) fn prescribe(
     mesh: &Mesh,
     analysis: Analysis,
@@ -51,17 +68,27 @@ pub(super) fn prescribe(
     scale: f64,
     schedule: &mut Schedule,
 ) -> Result<Constraints> {
+    let d = analysis.dofs_per_node();
+    debug_assert!(
+        analysis.has_twist() || specs.iter().all(|s| s.circumferential.is_none()),
+        "u_θ is prescribed only with twist (checked when the case is read)"
+    );
+    let axis = 1e-9 * scale;
     // Per dof: (value, amplitude, index of the support that set it).
-    let mut prescribed: Vec<Option<(f64, usize, usize)>> = vec![None; 2 * mesh.nodes.len()];
+    let mut prescribed: Vec<Option<(f64, usize, usize)>> = vec![None; d * mesh.nodes.len()];
     let mut supports = Vec::new();
     for (i, spec) in specs.iter().enumerate() {
         let amplitude = schedule.add(&spec.factors);
         let nodes = support_nodes(mesh, spec, in_body)?;
         let mut dofs = Vec::new();
         for n in nodes {
-            for (c, value) in spec.values.into_iter().enumerate() {
+            // A node on the axis turns with no circumferential displacement.
+            let r = mesh.nodes[n as usize][0];
+            let r = if r.abs() <= axis { 0.0 } else { r };
+            let theta = spec.circumferential.map(|t| t.at(r));
+            for (c, value) in spec.values.into_iter().chain([theta]).enumerate() {
                 let Some(value) = value else { continue };
-                let dof = 2 * n as usize + c;
+                let dof = d * n as usize + c;
                 match prescribed[dof] {
                     Some((v, k, j))
                         if (v != 0.0 || value != 0.0)
@@ -90,12 +117,14 @@ pub(super) fn prescribe(
             group: spec.group.clone(),
             dofs,
             values: spec.values,
+            circumferential: spec.circumferential,
             amplitude,
         });
     }
     if analysis.is_axisymmetric() {
         supports.push(axis_support(
             mesh,
+            analysis,
             in_body,
             scale,
             &mut prescribed,
@@ -139,16 +168,20 @@ fn support_nodes(mesh: &Mesh, spec: &Prescribed, in_body: &[bool]) -> Result<Vec
     Ok(nodes)
 }
 
-/// In axisymmetry nodes on the axis (r = 0 within a relative tolerance) have u_r = 0; nodes
-/// at negative r are an input error.
+/// In axisymmetry nodes on the axis (r = 0 within a relative tolerance) have u_r = 0, and
+/// with twist u_θ = 0 (a circumferential displacement on the axis would tear the material
+/// there: γ_rθ = ∂u_θ/∂r − u_θ/r); nodes at negative r are an input error.
 fn axis_support(
     mesh: &Mesh,
+    analysis: Analysis,
     in_body: &[bool],
     scale: f64,
     prescribed: &mut [Option<(f64, usize, usize)>],
     index: usize,
 ) -> Result<Support> {
     let tol = 1e-9 * scale;
+    let (d, twist) = (analysis.dofs_per_node(), analysis.has_twist());
+    let held: &[usize] = if twist { &[0, 2] } else { &[0] };
     let mut dofs = Vec::new();
     for (n, p) in mesh.nodes.iter().enumerate().filter(|&(n, _)| in_body[n]) {
         if p[0] < -tol {
@@ -157,12 +190,16 @@ fn axis_support(
                 radius: p[0],
             });
         }
-        if p[0] <= tol {
-            let dof = 2 * n;
+        if p[0] > tol {
+            continue;
+        }
+        for &c in held {
+            let dof = d * n + c;
             if let Some((v, _, _)) = prescribed[dof] {
                 if v != 0.0 {
                     return Err(Error::AxisDisplacement {
                         node: mesh.node_tags[n],
+                        component: c,
                         value: v,
                     });
                 }
@@ -177,6 +214,7 @@ fn axis_support(
         group: AXIS_SUPPORT.into(),
         dofs,
         values: [Some(0.0), None],
+        circumferential: twist.then_some(Circumferential::Displacement(0.0)),
         amplitude: 0,
     })
 }

@@ -1,5 +1,5 @@
 //! Loads: the load histories (amplitudes over the analysis steps) and the consistent nodal
-//! forces of pressures, tractions and point forces.
+//! forces of pressures, tractions, torques and point forces.
 
 use super::timeline::{StepPlan, Timeline};
 use super::{LineLoad, Load, LoadKind, Model, boundary_group};
@@ -346,7 +346,7 @@ pub(super) fn nodal_loads(
         &wanted,
     );
     let mut nodal_loads = Vec::new();
-    let mut load = vec![0.0; 2 * mesh.nodes.len()];
+    let mut load = vec![0.0; analysis.dofs_per_node() * mesh.nodes.len()];
     for spec in specs {
         load.fill(0.0);
         add_load(mesh, analysis, &edges, spec, in_body, &mut load)?;
@@ -390,8 +390,9 @@ fn add_load(
                         position: mesh.nodes[n as usize],
                     });
                 }
-                load[2 * n as usize] += force[0];
-                load[2 * n as usize + 1] += force[1];
+                let d = analysis.dofs_per_node() * n as usize;
+                load[d] += force[0];
+                load[d + 1] += force[1];
             }
             return Ok(());
         }
@@ -415,12 +416,52 @@ fn add_load(
         let problem = GroupProblem::Empty;
         return Err(mesh.group_error("load", &spec.group, GroupKind::Curve, problem));
     }
+    if let LineLoad::Torque(torque) = line_load {
+        scale_to_torque(mesh, analysis, &spec.group, torque, load)?;
+    }
+    Ok(())
+}
+
+/// Scales the circumferential nodal forces of the unit distribution t_θ = r on a curve
+/// (`load`, this load's forces alone) so that their moment about the axis, Σ r_n F_θn, is
+/// exactly `torque`. The moment of the consistent forces equals ∫ t_θ r dA (r interpolated
+/// by the same shape functions, integrated by the same rule), so the traction's moment is
+/// `torque` too.
+fn scale_to_torque(
+    mesh: &Mesh,
+    analysis: Analysis,
+    group: &str,
+    torque: f64,
+    load: &mut [f64],
+) -> Result<()> {
+    let d = analysis.dofs_per_node();
+    let moment: f64 = mesh
+        .nodes
+        .iter()
+        .zip(load.chunks_exact(d))
+        .map(|(x, f)| x[0] * f[2])
+        .sum();
+    if moment <= 0.0 {
+        return Err(Error::InvalidParameter {
+            path: std::path::PathBuf::new(),
+            key: format!("load '{group}' torque"),
+            value: torque.to_string(),
+            reason: "the curve lies on the axis (r = 0), where a circumferential traction has no \
+                     moment: apply the torque on a curve off the axis"
+                .into(),
+        });
+    }
+    let factor = torque / moment;
+    for f in load.chunks_exact_mut(d) {
+        f[2] *= factor;
+    }
     Ok(())
 }
 
 /// Consistent nodal forces f_i = ∫ N_i t dA on one line, with dA = (thickness or 2πr) ds,
 /// integrated by 3-point Gauss (exact for a pressure on a curved quadratic edge in
-/// axisymmetry: degree 5).
+/// axisymmetry: degree 5). A torque adds the unit circumferential traction t_θ = r, which
+/// [`scale_to_torque`] scales once the whole curve is loaded.
 fn add_line_load(
     mesh: &Mesh,
     analysis: Analysis,
@@ -439,17 +480,19 @@ fn add_line_load(
         }
         // Tangent (dx, dy) runs counter-clockwise around the body, so (dy, −dx) is the
         // outward normal scaled by ds/dξ.
+        let ds = || (dx * dx + dy * dy).sqrt();
         let t = match line_load {
-            LineLoad::Pressure(p) => [-p * dy, p * dx],
-            LineLoad::Traction([tx, ty]) => {
-                let ds = (dx * dx + dy * dy).sqrt();
-                [tx * ds, ty * ds]
-            }
+            LineLoad::Pressure(p) => [-p * dy, p * dx, 0.0],
+            LineLoad::Traction([tx, ty, tt]) => [tx, ty, tt].map(|c| c * ds()),
+            LineLoad::Torque(_) => [0.0, 0.0, px * ds()],
         };
         let m = w * analysis.measure(px);
+        let d = analysis.dofs_per_node();
         for i in 0..3 {
-            load[2 * nodes[i] as usize] += n[i] * t[0] * m;
-            load[2 * nodes[i] as usize + 1] += n[i] * t[1] * m;
+            let dof = d * nodes[i] as usize;
+            for c in 0..d {
+                load[dof + c] += n[i] * t[c] * m;
+            }
         }
     }
 }

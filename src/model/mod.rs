@@ -19,13 +19,13 @@ pub use loads::{History, Schedule, Table};
 pub use penalty::{PENALTY_FACTOR, PenaltyDefault};
 pub use rigid::Hold;
 pub use spec::{
-    ArcLength, Body, Contact, Control, LineLoad, Load, LoadKind, ModelSpec, PairLaw, Prescribed,
-    load_factors,
+    ArcLength, Body, Circumferential, Contact, Control, LineLoad, Load, LoadKind, ModelSpec,
+    PairLaw, Prescribed, load_factors,
 };
 pub use thermal::{Thermal, UniformTemperature};
 pub use thermal_spec::{BodyHeatSource, BodyTemperature, ThermalBoundary, ThermalSpec};
 
-use crate::assembly::{Coloring, DofMap, SparsityPattern};
+use crate::assembly::{Coloring, DofMap, ElementNodes, SparsityPattern};
 use crate::contact::laws::{self, LawDescriptor};
 use crate::element::Analysis;
 use crate::element::continuum::min_jacobian;
@@ -122,7 +122,7 @@ impl Model {
             pattern,
             continuum_coloring,
             interface_coloring,
-        } = numbering(&prescribed, &in_body, &continuum, &interface)?;
+        } = numbering(analysis, &prescribed, &in_body, &continuum, &interface)?;
         let model = Self {
             mesh,
             analysis,
@@ -240,20 +240,21 @@ struct Numbering {
 /// Numbers the free dofs (nodes outside every body carry no stiffness and are held, so the
 /// system stays regular) and makes the sparsity pattern and element colourings.
 fn numbering(
+    analysis: Analysis,
     prescribed: &[(usize, f64, usize)],
     in_body: &[bool],
     continuum: &ContinuumSet,
     interface: &InterfaceSet,
 ) -> Result<Numbering> {
     let node_count = in_body.len();
-    let mut fixed = vec![false; 2 * node_count];
+    let d = analysis.dofs_per_node();
+    let mut fixed = vec![false; d * node_count];
     for &(dof, _, _) in prescribed {
         fixed[dof] = true;
     }
     for (n, &used) in in_body.iter().enumerate() {
         if !used {
-            fixed[2 * n] = true;
-            fixed[2 * n + 1] = true;
+            fixed[d * n..d * (n + 1)].fill(true);
         }
     }
     let dofs = DofMap::new(&fixed);
@@ -261,8 +262,11 @@ fn numbering(
         return Err(Error::NothingToSolve);
     }
     let connectivity = (0..continuum.len())
-        .map(|e| continuum.nodes(e))
-        .chain((0..interface.len()).map(|e| interface.nodes(e)));
+        .map(|e| ElementNodes {
+            nodes: continuum.nodes(e),
+            couples_twist: continuum.couples_twist(e),
+        })
+        .chain((0..interface.len()).map(|e| interface.nodes(e).into()));
     let pattern = SparsityPattern::new(node_count, &dofs, connectivity);
     Ok(Numbering {
         pattern,

@@ -2,13 +2,15 @@
 //! rigid-body motions its stiffness does not resist. In a plane model those are the
 //! translations in x and y and the in-plane rotation; in an axisymmetric one only the axial
 //! translation (a radial translation strains the hoop direction, and the axis holds a body
-//! on it radially).
+//! on it radially), and with twist also the rotation about the axis, u_θ = φ r.
 //!
 //! A body's rigid motions are the amplitudes q = (t_x, t_y, θ) of u(x) = t + θ ẑ × (x − c) / L
-//! (c its centroid, L the model size, so that all columns have one scale). Every restraint
+//! (c its centroid, L the model size, so that all columns have one scale); in axisymmetry
+//! with twist q = (t_z, φ) of u = t_z ẑ + φ (r / L) θ̂. Every restraint
 //! is a linear condition on them: a prescribed displacement component at a node, two bodies
 //! sharing a node, and at each node pair of a contact the relative displacement normal to
-//! the contact (and along it when the pair holds tangentially). The free motions are the
+//! the contact (and along it, in both tangential directions with twist, when the pair holds
+//! tangentially). The free motions are the
 //! null space of these conditions, found by a singular value decomposition per connected
 //! group of bodies. The conditions of each body and of each pair of bodies are first reduced
 //! to the triangular factor R of their QR decomposition, which has the same singular values,
@@ -93,16 +95,18 @@ impl Model {
         let mut blocks = Blocks::default();
         let node_bodies = self.node_bodies();
         let x = |n: usize| self.mesh.nodes[n];
+        let dofs = self.analysis.dofs_per_node();
+        let unit = |c: usize| [c == 0, c == 1, c == 2].map(f64::from);
         for &(dof, _, _) in &self.prescribed {
-            let (n, c) = (dof / 2, dof % 2);
+            let (n, c) = (dof / dofs, dof % dofs);
             for &b in &node_bodies[n] {
-                blocks.add(&modes, (b, x(n), [c == 0, c == 1].map(f64::from)), None);
+                blocks.add(&modes, (b, x(n), unit(c)), None);
             }
         }
         for (n, bodies) in node_bodies.iter().enumerate() {
             for &other in bodies.iter().skip(1) {
-                for d in [[1.0, 0.0], [0.0, 1.0]] {
-                    blocks.add(&modes, (bodies[0], x(n), d), Some((other, x(n))));
+                for c in 0..dofs {
+                    blocks.add(&modes, (bodies[0], x(n), unit(c)), Some((other, x(n))));
                 }
             }
         }
@@ -128,9 +132,12 @@ impl Model {
                 if length == 0.0 {
                     continue;
                 }
-                let t = [t[0] / length, t[1] / length];
-                let normal = [-t[1], t[0]];
-                let directions: &[[f64; 2]] = match hold {
+                let t = [t[0] / length, t[1] / length, 0.0];
+                let normal = [-t[1], t[0], 0.0];
+                // Friction holds in both tangential directions (isotropic).
+                let circumferential = [0.0, 0.0, 1.0];
+                let directions: &[[f64; 3]] = match hold {
+                    Hold::Full if dofs == 3 => &[normal, t, circumferential],
                     Hold::Full => &[normal, t],
                     _ => &[normal],
                 };
@@ -164,7 +171,8 @@ impl Model {
 
 /// The rigid motions of the bodies: their number per body, centroids and the length scale.
 struct Modes {
-    /// 3 in a plane model (t_x, t_y, θ), 1 in an axisymmetric one (t_z).
+    /// 3 in a plane model (t_x, t_y, θ), 1 in an axisymmetric one (t_z), 2 with twist
+    /// (t_z, φ).
     per_body: usize,
     centroids: Vec<[f64; 2]>,
     scale: f64,
@@ -182,10 +190,10 @@ impl Modes {
             }
         }
         Self {
-            per_body: if model.analysis.is_axisymmetric() {
-                1
-            } else {
-                3
+            per_body: match model.analysis {
+                a if a.has_twist() => 2,
+                a if a.is_axisymmetric() => 1,
+                _ => 3,
             },
             centroids: sums
                 .iter()
@@ -198,10 +206,13 @@ impl Modes {
         }
     }
 
-    /// The displacement along `d` at `x` of each rigid motion of `body` at unit amplitude.
-    fn along(&self, body: usize, x: [f64; 2], d: [f64; 2]) -> [f64; 3] {
-        if self.per_body == 1 {
-            return [d[1], 0.0, 0.0];
+    /// The displacement along `d` (x, y and the circumferential component) at `x` of each
+    /// rigid motion of `body` at unit amplitude.
+    fn along(&self, body: usize, x: [f64; 2], d: [f64; 3]) -> [f64; 3] {
+        match self.per_body {
+            1 => return [d[1], 0.0, 0.0],
+            2 => return [d[1], d[2] * x[0] / self.scale, 0.0],
+            _ => {}
         }
         let c = self.centroids[body];
         let rotation = (-(x[1] - c[1]) * d[0] + (x[0] - c[0]) * d[1]) / self.scale;
@@ -225,7 +236,7 @@ impl Blocks {
     fn add(
         &mut self,
         modes: &Modes,
-        (b, x, d): (usize, [f64; 2], [f64; 2]),
+        (b, x, d): (usize, [f64; 2], [f64; 3]),
         other: Option<(usize, [f64; 2])>,
     ) {
         let m = modes.per_body;
@@ -347,11 +358,14 @@ fn free_in_group(
 /// rotating, whether it can rotate, and about which point when it cannot also translate.
 fn describe(model: &Model, modes: &Modes, b: usize, motions: &DMatrix<f64>) -> FreeBody {
     let body = model.bodies[b].clone();
-    if modes.per_body == 1 {
+    if modes.per_body < 3 {
+        // Axisymmetry: the axial translation t_z, and with twist the turn φ about the axis.
+        let free = |k: usize| k < modes.per_body && motions.row(k).norm() > PARTICIPATION;
         return FreeBody {
             body,
-            translations: vec![[0.0, 1.0]],
+            translations: if free(0) { vec![[0.0, 1.0]] } else { vec![] },
             rotates: false,
+            twists: free(1),
             centre: None,
         };
     }
@@ -395,6 +409,7 @@ fn describe(model: &Model, modes: &Modes, b: usize, motions: &DMatrix<f64>) -> F
         body,
         translations,
         rotates,
+        twists: false,
         centre,
     }
 }

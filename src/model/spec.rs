@@ -110,9 +110,37 @@ pub struct Prescribed {
     pub group: String,
     /// (u_x, u_y); `None` leaves the component free.
     pub values: [Option<f64>; 2],
+    /// The circumferential component (with twist); `None` leaves u_θ free.
+    pub circumferential: Option<Circumferential>,
     /// The support's history: the global factor, or its own (`factors` of `[steps]`, its
     /// `[[step]]` tables).
     pub factors: History,
+}
+
+/// What a support prescribes in the circumferential direction (axisymmetry with twist).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Circumferential {
+    /// u_θ in mm at every node (`utheta`).
+    Displacement(f64),
+    /// A rigid rotation φ about the axis in radians (`rotation`): u_θ = φ r.
+    Rotation(f64),
+}
+
+impl Circumferential {
+    /// The value given: u_θ (mm) or φ (radians).
+    pub fn value(self) -> f64 {
+        match self {
+            Circumferential::Displacement(v) | Circumferential::Rotation(v) => v,
+        }
+    }
+
+    /// u_θ at radius `r`.
+    pub fn at(self, r: f64) -> f64 {
+        match self {
+            Circumferential::Displacement(v) => v,
+            Circumferential::Rotation(phi) => phi * r,
+        }
+    }
 }
 
 /// A load at load factor 1.
@@ -139,8 +167,10 @@ pub enum LoadKind {
 pub enum LineLoad {
     /// Normal pressure in MPa, positive pushing into the body.
     Pressure(f64),
-    /// Traction vector (t_x, t_y) in MPa.
-    Traction([f64; 2]),
+    /// Traction vector (t_x, t_y, t_θ) in MPa (t_θ = 0 without twist).
+    Traction([f64; 3]),
+    /// Torque about the axis in N·mm: a circumferential traction ∝ r whose moment is this.
+    Torque(f64),
 }
 
 /// A contact pair: how its faces are found, the integration rule, the initial interference,
@@ -254,6 +284,11 @@ impl ModelSpec {
                 name: s.name().to_string(),
                 group: s.group.clone(),
                 values: [s.ux, s.uy],
+                circumferential: match (s.utheta, s.rotation) {
+                    (Some(u), _) => Some(Circumferential::Displacement(u)),
+                    (None, Some(phi)) => Some(Circumferential::Rotation(phi)),
+                    (None, None) => None,
+                },
                 factors: history(case, Role::Support, s.name(), s.factors.as_deref()),
             })
             .collect();
@@ -261,11 +296,16 @@ impl ModelSpec {
             .loads
             .iter()
             .map(|l| {
-                let kind = match (l.pressure, l.traction, l.force) {
-                    (Some(p), _, _) => LoadKind::Line(LineLoad::Pressure(p)),
-                    (None, Some(t), _) => LoadKind::Line(LineLoad::Traction(t)),
-                    (None, None, Some(f)) => LoadKind::Point(f),
-                    (None, None, None) => {
+                let traction = l.traction.as_deref().map(|t| {
+                    // Two or three components (checked when the case was read).
+                    [t[0], t[1], t.get(2).copied().unwrap_or(0.0)]
+                });
+                let kind = match (l.pressure, traction, l.force, l.torque) {
+                    (Some(p), ..) => LoadKind::Line(LineLoad::Pressure(p)),
+                    (None, Some(t), ..) => LoadKind::Line(LineLoad::Traction(t)),
+                    (None, None, Some(f), _) => LoadKind::Point(f),
+                    (None, None, None, Some(t)) => LoadKind::Line(LineLoad::Torque(t)),
+                    (None, None, None, None) => {
                         return Err(Error::Case {
                             path: case.path.clone(),
                             message: format!("[[load]] '{}': no load is given", l.group),
@@ -376,10 +416,10 @@ fn arc_length(case: &Case, supports: &[Prescribed]) -> Result<Option<ArcLength>>
         return Ok(None);
     }
     let control = "steps.control";
-    if let Some(s) = supports
-        .iter()
-        .find(|s| s.values.iter().flatten().any(|&v| v != 0.0))
-    {
+    if let Some(s) = supports.iter().find(|s| {
+        let theta = s.circumferential.map(Circumferential::value);
+        s.values.iter().chain([&theta]).flatten().any(|&v| v != 0.0)
+    }) {
         return Err(case.invalid(
             control,
             "\"arc_length\"",
@@ -552,7 +592,8 @@ impl From<AnalysisSpec> for Analysis {
         match spec {
             AnalysisSpec::PlaneStress { thickness } => Analysis::PlaneStress { thickness },
             AnalysisSpec::PlaneStrain { thickness } => Analysis::PlaneStrain { thickness },
-            AnalysisSpec::Axisymmetric => Analysis::Axisymmetric,
+            AnalysisSpec::Axisymmetric { twist: false } => Analysis::Axisymmetric,
+            AnalysisSpec::Axisymmetric { twist: true } => Analysis::AxisymmetricTwist,
         }
     }
 }

@@ -205,6 +205,22 @@ pub fn tensor_component_names(axisymmetric: bool) -> [&'static str; 6] {
     }
 }
 
+/// A stress-like Voigt vector (xx, yy, xy, zz, xθ, yθ) in VTK's symmetric-tensor order
+/// (xx, yy, zz, xy, yz, xz), its shear components times `shear` (1 for tensor components,
+/// ½ for a strain's engineering shear). In axisymmetry x, y, z are r, z, θ, so yz is zθ and
+/// xz is rθ ([`tensor_component_names`]); both are zero without twist.
+pub fn vtk_tensor(v: &crate::material::Voigt, shear: f64) -> [f64; 6] {
+    use crate::material::{R_THETA, Z_THETA, ZZ};
+    [
+        v[0],
+        v[1],
+        v[ZZ],
+        shear * v[2],
+        shear * v[Z_THETA],
+        shear * v[R_THETA],
+    ]
+}
+
 /// VTK cell type of a quadratic body cell (23 quadratic quad, 22 quadratic triangle); VTK's
 /// node order of these cells is gmsh's.
 pub fn vtk_cell_type(kind: CellKind) -> u8 {

@@ -37,8 +37,9 @@ use crate::{Error, Result};
 
 /// First bytes of a record; the trailing digit is the format version (3: `postcard`; 4: the
 /// growing files' lengths and checksums instead of their rows; 5: the continuum's internal
-/// variables, the backstresses of kinematic hardening, and the energy ledger's thermal work).
-const MAGIC: &[u8; 16] = b"asperity-rst-v5\n";
+/// variables, the backstresses of kinematic hardening, and the energy ledger's thermal work;
+/// 6: six-component stresses and strains and three-component interface states, for twist).
+const MAGIC: &[u8; 16] = b"asperity-rst-v6\n";
 /// Bytes of [`MAGIC`] before the format version.
 const MAGIC_NAME: usize = 14;
 

@@ -33,6 +33,9 @@ pub struct Summary {
     pub error: Option<String>,
     /// `plane_stress`, `plane_strain` or `axisymmetric`, once the model is built.
     pub analysis: Option<&'static str>,
+    /// Whether the axisymmetric analysis has twist (written only when it has).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub twist: bool,
     /// Size of the model, once it is built.
     pub model: Option<ModelSize>,
     /// Every converged step, in order.
@@ -122,6 +125,12 @@ pub struct HeatFlows {
 pub struct Displacement {
     pub x: Option<f64>,
     pub y: Option<f64>,
+    /// Circumferential displacement u_θ (mm) of a support with `utheta` (with twist only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub theta: Option<f64>,
+    /// Rotation φ about the axis (radians) of a support with `rotation` (with twist only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rotation: Option<f64>,
 }
 
 /// A force in the analysis plane (in axisymmetry x is r, y is z, totals over the circle).
@@ -129,6 +138,9 @@ pub struct Displacement {
 pub struct Force {
     pub x: f64,
     pub y: f64,
+    /// Torque about the axis (N·mm), with twist only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub torque: Option<f64>,
 }
 
 /// The resultants and state of a contact pair (the `<pair>_*` columns of `history.csv`).
@@ -149,6 +161,9 @@ pub struct ContactResultant {
     /// Friction dissipated on the pair since the start and since the previous step (N·mm).
     pub dissipation: f64,
     pub dissipation_increment: f64,
+    /// The torque body A exerts on body B about the axis (N·mm), with twist only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub torque: Option<f64>,
 }
 
 /// Counters of the whole run. For a failed run they count the converged steps, and the
@@ -169,8 +184,11 @@ pub struct Totals {
 /// for a whole run (the solver's, when a run fails), is `null`.
 #[derive(Clone, Copy, Debug, Default, Serialize)]
 pub struct Seconds {
-    /// Reading the mesh, or meshing the `.geo` script with gmsh.
+    /// Reading the mesh, or meshing the `.geo` script with gmsh (all of the mesh phase).
     pub mesh: f64,
+    /// The part of `mesh` spent in gmsh (its element-count probes and the mesh); 0 when the
+    /// mesh came from the mesh cache, `null` when the case names a `.msh` file.
+    pub gmsh: Option<f64>,
     /// Building the model (numbering, constraints, interface elements).
     pub model: Option<f64>,
     /// Fill-reducing ordering and symbolic Cholesky factorisation.
@@ -428,6 +446,7 @@ impl Summary {
             status: Status::Failed,
             error: None,
             analysis: None,
+            twist: false,
             model: None,
             steps: Vec::new(),
             totals: Totals::default(),
@@ -536,7 +555,14 @@ mod tests {
             iterations: 7,
             residual: f64::NAN,
             reactions: Named(vec![
-                ("z_support".into(), Force { x: 1.0, y: -2.0 }),
+                (
+                    "z_support".into(),
+                    Force {
+                        x: 1.0,
+                        y: -2.0,
+                        torque: None,
+                    },
+                ),
                 ("a_support".into(), Force::default()),
             ]),
             displacements: Named::default(),

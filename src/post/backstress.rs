@@ -6,10 +6,10 @@
 //! A model without kinematic hardening has neither field.
 
 use super::{BodyPoints, extrapolation};
+use crate::material::Voigt;
 use crate::material::cyclic::centre_norm;
-use crate::material::{Voigt, ZZ};
 use crate::model::Model;
-use crate::output::{Field, tensor_component_names};
+use crate::output::{Field, tensor_component_names, vtk_tensor};
 use crate::solver::state::InternalVariables;
 
 /// The backstress fields of the bodies' grid at the committed internal variables (none
@@ -19,11 +19,8 @@ pub fn fields(model: &Model, points: &BodyPoints, internal: &InternalVariables) 
         return Vec::new();
     }
     let nodal = nodal_backstress(model, points, internal);
-    // Solver order (xx, yy, xy, zz) → VTK order (xx, yy, zz, xy, yz, xz), tensor shear.
-    let tensor = nodal
-        .iter()
-        .flat_map(|a| [a[0], a[1], a[ZZ], a[2], 0.0, 0.0])
-        .collect();
+    // Solver order → VTK order, tensor shear.
+    let tensor = nodal.iter().flat_map(|a| vtk_tensor(a, 1.0)).collect();
     let names = tensor_component_names(model.analysis.is_axisymmetric());
     vec![
         Field::tensor("backstress", tensor, names),

@@ -1,6 +1,6 @@
 //! Post-processing of a converged step: nodal stresses and strains recovered from the
 //! integration points, the output grids of the bodies and the interface ([`step_grids`]),
-//! nodal and support reaction forces.
+//! nodal and support reaction forces, and with twist the supports' reaction torques.
 //!
 //! Gauss-point values are extrapolated to the nodes of each cell by the least-squares fit
 //! of the cell's own shape functions to its integration-point values (exact for stress fields
@@ -14,10 +14,10 @@ use nalgebra::DMatrix;
 
 use crate::element::quadrature::cell_rule;
 use crate::element::shape::cell_shape;
-use crate::material::{PointState, Voigt, ZZ, von_mises};
+use crate::material::{PointState, Voigt, von_mises};
 use crate::mesh::CellKind;
 use crate::model::Model;
-use crate::output::{Field, FieldValues, Grid, tensor_component_names, vtk_cell_type};
+use crate::output::{Field, FieldValues, Grid, tensor_component_names, vtk_cell_type, vtk_tensor};
 use crate::solver::state::StepResult;
 use interface::InterfaceOutput;
 
@@ -132,9 +132,10 @@ pub fn nodal_values(model: &Model, points: &BodyPoints, states: &[PointState]) -
     out
 }
 
-/// The bodies' output grid of a step: quadratic cells; point data `displacement`, `stress`
-/// and `strain` (symmetric tensors in VTK's order xx, yy, zz, xy, yz, xz with component names;
-/// axisymmetric rr, zz, θθ, rz; the strain with tensor shear ε_xy = γ_xy / 2, as ParaView's
+/// The bodies' output grid of a step: quadratic cells; point data `displacement` (with twist
+/// u_θ as its third component), `stress` and `strain` (symmetric tensors in VTK's order xx,
+/// yy, zz, xy, yz, xz with component names; axisymmetric rr, zz, θθ, rz, zθ, rθ, the last two
+/// zero without twist; the strain with tensor shear ε_xy = γ_xy / 2, as ParaView's
 /// tensor filters expect), `von_mises` and `equivalent_plastic_strain`; cell data `body`
 /// (index into the case's bodies) and `plastic` (1 if any integration point yielded in the
 /// step); field data `body_names` (so `body` k is `body_names[k]`) and `analysis`.
@@ -157,12 +158,12 @@ pub fn body_grid(model: &Model, points: &BodyPoints, u: &[f64], states: &[PointS
         );
     }
     let nodes: Vec<u32> = points.points.iter().map(|&(_, n)| n).collect();
-    // Solver order (xx, yy, xy, zz) → VTK order (xx, yy, zz, xy, yz, xz); `shear` scales xy.
+    // Solver order → VTK order, the circumferential direction θ as VTK's z (the twist shears
+    // are zero without twist); `shear` scales the shears.
     let tensor = |of: fn(&NodalValues) -> &Voigt, shear: f64| -> Vec<f64> {
         nodal
             .iter()
-            .map(of)
-            .flat_map(|s| [s[0], s[1], s[ZZ], shear * s[2], 0.0, 0.0])
+            .flat_map(|v| vtk_tensor(of(v), shear))
             .collect()
     };
     let names = tensor_component_names(model.analysis.is_axisymmetric());
@@ -170,8 +171,9 @@ pub fn body_grid(model: &Model, points: &BodyPoints, u: &[f64], states: &[PointS
     let plastic = (0..model.continuum.cells.len())
         .map(|e| states[e * ppe..(e + 1) * ppe].iter().any(|s| s.yielding) as i32)
         .collect();
+    let dofs = model.analysis.dofs_per_node();
     grid.point_data = vec![
-        nodal_vector("displacement", &nodes, u),
+        nodal_vector("displacement", &nodes, u, dofs),
         Field::tensor("stress", tensor(|v| &v.stress, 1.0), names),
         Field::tensor("strain", tensor(|v| &v.strain, 0.5), names),
         Field::scalar(
@@ -195,12 +197,17 @@ pub fn body_grid(model: &Model, points: &BodyPoints, u: &[f64], states: &[PointS
     grid
 }
 
-/// A 3-component point field (z = 0) of the nodal values of the dof vector `v` (2 per mesh
-/// node) at the mesh nodes `nodes`.
-pub fn nodal_vector(name: &str, nodes: &[u32], v: &[f64]) -> Field {
+/// A 3-component point field of the nodal values of the dof vector `v` (`dofs` per mesh
+/// node) at the mesh nodes `nodes`: the third component is the circumferential one with
+/// twist (`dofs` = 3), zero otherwise.
+pub fn nodal_vector(name: &str, nodes: &[u32], v: &[f64], dofs: usize) -> Field {
     let values = nodes
         .iter()
-        .flat_map(|&n| [v[2 * n as usize], v[2 * n as usize + 1], 0.0])
+        .flat_map(|&n| {
+            let d = dofs * n as usize;
+            let theta = if dofs == 3 { v[d + 2] } else { 0.0 };
+            [v[d], v[d + 1], theta]
+        })
         .collect();
     Field::new(name, 3, FieldValues::F64(values))
 }
@@ -257,14 +264,15 @@ pub fn step_grids(
     let mut bodies = body_grid(model, points, &solution.u, &solution.committed);
     let rf = nodal_reactions(model, step.internal_force, step.external_force);
     let mut written = vec![false; model.mesh.nodes.len()];
+    let dofs = model.analysis.dofs_per_node();
     let values = points
         .points
         .iter()
         .flat_map(|&(_, n)| {
             let first = !std::mem::replace(&mut written[n as usize], true);
-            let d = 2 * n as usize;
+            let d = dofs * n as usize;
             if first {
-                [rf[d], rf[d + 1], 0.0]
+                [rf[d], rf[d + 1], if dofs == 3 { rf[d + 2] } else { 0.0 }]
             } else {
                 [0.0; 3]
             }
@@ -286,6 +294,7 @@ pub fn step_grids(
             "displacement",
             &interface.nodes(),
             &solution.u,
+            model.analysis.dofs_per_node(),
         ));
         grid.field_data.extend(info.field_data());
         grid
@@ -296,15 +305,33 @@ pub fn step_grids(
 /// Reaction force (sum over the support's prescribed dofs of internal minus external force)
 /// of each support, as (F_x, F_y); in axisymmetry totals over the full circle.
 pub fn reactions(model: &Model, internal: &[f64], external: &[f64]) -> Vec<[f64; 2]> {
+    let dofs = model.analysis.dofs_per_node();
     model
         .supports
         .iter()
         .map(|s| {
             let mut r = [0.0; 2];
-            for &d in &s.dofs {
-                r[d % 2] += internal[d] - external[d];
+            for &d in s.dofs.iter().filter(|&&d| d % dofs < 2) {
+                r[d % dofs] += internal[d] - external[d];
             }
             r
+        })
+        .collect()
+}
+
+/// Reaction torque about the axis of each support, Σ r (f_int − f_ext)_θ over its prescribed
+/// u_θ (N·mm, signed as the reaction forces: a support holding a shaft twisted by a torque T
+/// reacts with −T); zero for every support without twist.
+pub fn reaction_torques(model: &Model, internal: &[f64], external: &[f64]) -> Vec<f64> {
+    let dofs = model.analysis.dofs_per_node();
+    model
+        .supports
+        .iter()
+        .map(|s| {
+            let theta = s.dofs.iter().filter(|&&d| dofs == 3 && d % dofs == 2);
+            theta
+                .map(|&d| model.mesh.nodes[d / dofs][0] * (internal[d] - external[d]))
+                .sum()
         })
         .collect()
 }

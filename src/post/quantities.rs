@@ -31,6 +31,7 @@ pub fn evaluate(quantities: &[QuantitySpec], model: &Model, step: &StepResult) -
             .ok_or_else(|| quantity_error(q, format!("no contact pair '{name}'")))
     };
     let comp = |q: &QuantitySpec| q.component.map_or(0, Component::index);
+    let dofs = model.analysis.dofs_per_node();
     let mut values = Vec::with_capacity(quantities.len());
     for q in quantities {
         let value = match q.kind {
@@ -59,7 +60,7 @@ pub fn evaluate(quantities: &[QuantitySpec], model: &Model, step: &StepResult) -
                     ));
                 }
                 let c = comp(q);
-                nodes.iter().map(|&n| u[2 * n as usize + c]).sum::<f64>() / nodes.len() as f64
+                nodes.iter().map(|&n| u[dofs * n as usize + c]).sum::<f64>() / nodes.len() as f64
             }
             QuantityKind::ContactPressure => {
                 let p = pair_index(q)?;
@@ -128,7 +129,11 @@ pub fn evaluate(quantities: &[QuantitySpec], model: &Model, step: &StepResult) -
                     .iter()
                     .position(|&t| t == tag)
                     .ok_or_else(|| quantity_error(q, format!("no node {tag} in the mesh")))?;
-                u[2 * n + comp(q)]
+                u[dofs * n + comp(q)]
+            }
+            QuantityKind::Twist => {
+                let name = q.group.as_deref().unwrap_or_default();
+                twist_angle(model, u, name).map_err(|reason| quantity_error(q, reason))?
             }
             QuantityKind::RelativeDisplacement | QuantityKind::Stiffness => {
                 let p = pair_index(q)?;
@@ -141,7 +146,7 @@ pub fn evaluate(quantities: &[QuantitySpec], model: &Model, step: &StepResult) -
                     let relative: f64 = (0..3)
                         .map(|i| {
                             let (a, b) = (element.nodes[i] as usize, element.nodes[3 + i] as usize);
-                            n[i] * (u[2 * b + c] - u[2 * a + c])
+                            n[i] * (u[dofs * b + c] - u[dofs * a + c])
                         })
                         .sum();
                     integral += relative * dl;
@@ -164,6 +169,41 @@ pub fn evaluate(quantities: &[QuantitySpec], model: &Model, step: &StepResult) -
         values.push(value);
     }
     Ok(values)
+}
+
+/// The twist angle of the physical curve or point `name`: the mean of u_θ / r over its nodes
+/// off the axis (radians), or why there is none.
+fn twist_angle(model: &Model, u: &[f64], name: &str) -> std::result::Result<f64, String> {
+    if !model.analysis.has_twist() {
+        return Err("the twist angle needs [analysis] twist = true".into());
+    }
+    let mesh = &model.mesh;
+    let nodes: Vec<u32> = match (mesh.group(1, name), mesh.group(0, name)) {
+        (Some(curve), _) => mesh.lines_in(curve).flat_map(|l| l.nodes).collect(),
+        (None, Some(point)) => mesh.points_in(point).collect(),
+        (None, None) => {
+            return Err(format!(
+                "no physical curve or point '{name}' in the mesh (curves: {}; points: {})",
+                mesh.group_names(1),
+                mesh.group_names(0)
+            ));
+        }
+    };
+    let mut nodes = nodes;
+    nodes.sort_unstable();
+    nodes.dedup();
+    // On the axis u_θ = 0 and u_θ / r means nothing.
+    let axis = 1e-9 * model.size;
+    let angles: Vec<f64> = nodes
+        .iter()
+        .map(|&n| (n as usize, mesh.nodes[n as usize][0]))
+        .filter(|&(_, r)| r > axis)
+        .map(|(n, r)| u[3 * n + 2] / r)
+        .collect();
+    if angles.is_empty() {
+        return Err(format!("'{name}' has no node off the axis"));
+    }
+    Ok(angles.iter().sum::<f64>() / angles.len() as f64)
 }
 
 /// What a contact pair does at a state: the extent of its sticking, slipping and open parts

@@ -5,16 +5,22 @@
 //! energy balance, the prescribed displacements of the driven supports and per contact pair
 //! its stick, slip and open extent and its dissipation. Supports, loads and pairs are named
 //! by the user's `name` (their group where they have none), as in `summary.json` and the log.
+//! With twist every support's reaction and every pair's resultants also have their torque
+//! about the axis (`reaction_<support>_torque`, `<pair>_torque`, N·mm), and a driven support
+//! its `displacement_<support>_theta` or `rotation_<support>`.
 
 use std::io::BufRead;
 use std::path::Path;
 
 use crate::config::Case;
-use crate::model::Model;
+use crate::contact::InterfaceState;
+use crate::element::set::INTERFACE_POINTS;
+use crate::model::{Circumferential, Model};
 use crate::output::summary::{
     ContactResultant, Displacement, Force, HeatFlows, Named, StepSummary,
 };
 use crate::post::quantities::PairQuantities;
+use crate::post::reaction_torques;
 use crate::solver::state::StepResult;
 use crate::{Error, Result};
 
@@ -25,7 +31,10 @@ pub(super) struct HistoryLayout {
     load_factors: Vec<usize>,
     supports: usize,
     pairs: usize,
-    /// The prescribed components of the driven supports: (support, component).
+    /// Whether the reactions and resultants have their torque column (twist).
+    twist: bool,
+    /// The prescribed components of the driven supports: (support, component), component 2
+    /// being u_θ or the rotation φ.
     driven: Vec<(usize, usize)>,
     /// Index of the first per-pair quantity ([`PAIR_QUANTITIES`]).
     pair_start: usize,
@@ -73,9 +82,13 @@ impl HistoryLayout {
             load_factors.push(*amplitude);
         }
         columns.extend(COUNTERS.map(String::from));
+        let twist = model.analysis.has_twist();
         for s in &model.supports {
             columns.push(format!("reaction_{}_x", s.name));
             columns.push(format!("reaction_{}_y", s.name));
+            if twist {
+                columns.push(format!("reaction_{}_torque", s.name));
+            }
         }
         for p in &model.interface.pairs {
             for quantity in [
@@ -83,7 +96,11 @@ impl HistoryLayout {
                 "tangential_force",
                 "force_on_b_x",
                 "force_on_b_y",
-            ] {
+                "torque",
+            ]
+            .iter()
+            .take(if twist { 5 } else { 4 })
+            {
                 columns.push(format!("{}_{quantity}", p.name));
             }
         }
@@ -112,9 +129,12 @@ impl HistoryLayout {
         columns.extend(ENERGY_COLUMNS.map(String::from));
         let mut driven = Vec::new();
         for (i, s) in model.supports.iter().enumerate() {
-            for (c, value) in s.values.iter().enumerate() {
-                if s.is_driven() && value.is_some() {
-                    columns.push(format!("displacement_{}_{}", s.name, ["x", "y"][c]));
+            for c in 0..3 {
+                if s.is_driven() && s.value(c).is_some() {
+                    columns.push(match (c, s.circumferential) {
+                        (2, Some(Circumferential::Rotation(_))) => format!("rotation_{}", s.name),
+                        _ => format!("displacement_{}_{}", s.name, ["x", "y", "theta"][c]),
+                    });
                     driven.push((i, c));
                 }
             }
@@ -139,6 +159,7 @@ impl HistoryLayout {
             load_factors,
             supports: model.supports.len(),
             pairs: model.interface.pairs.len(),
+            twist,
             driven,
             pair_start,
             conducting_pairs,
@@ -207,8 +228,21 @@ impl HistoryLayout {
             step.newton.iterations as f64,
             residual,
         ]);
-        row.extend(reactions);
-        row.extend(resultants);
+        if self.twist {
+            let torques = reaction_torques(model, step.internal_force, step.external_force);
+            for (r, torque) in reactions.chunks_exact(2).zip(torques) {
+                row.extend(r);
+                row.push(torque);
+            }
+            let torques = pair_torques(model, &step.solution.interface_committed);
+            for (r, torque) in resultants.chunks_exact(4).zip(torques) {
+                row.extend(r);
+                row.push(torque);
+            }
+        } else {
+            row.extend(reactions);
+            row.extend(resultants);
+        }
         row.extend(requested);
         match &step.solution.thermal.heat {
             Some(heat) => {
@@ -234,7 +268,7 @@ impl HistoryLayout {
         ]);
         row.extend(self.driven.iter().map(|&(i, c)| {
             let support = &model.supports[i];
-            support.values[c].unwrap_or_default() * schedule.value(support.amplitude, time)
+            support.value(c).unwrap_or_default() * schedule.value(support.amplitude, time)
         }));
         for (q, increment) in pairs {
             row.extend([q.stick, q.slip, q.open, q.dissipation, *increment]);
@@ -248,7 +282,11 @@ impl HistoryLayout {
         let [increments, cutbacks, iterations, residual] =
             std::array::from_fn(|i| row[counters + i]);
         let reactions = &row[counters + COUNTERS.len()..];
-        let resultants = &reactions[2 * self.supports..2 * self.supports + 4 * self.pairs];
+        let twist = usize::from(self.twist);
+        let (reaction, resultant) = (2 + twist, 4 + twist);
+        let start = reaction * self.supports;
+        let resultants = &reactions[start..start + resultant * self.pairs];
+        let torque = |r: &[f64], i: usize| self.twist.then(|| r[i]);
         let states = &row[self.pair_start..];
         StepSummary {
             step: row[0] as usize,
@@ -261,8 +299,15 @@ impl HistoryLayout {
                 model
                     .supports
                     .iter()
-                    .zip(reactions.chunks_exact(2))
-                    .map(|(s, r)| (s.name.clone(), Force { x: r[0], y: r[1] }))
+                    .zip(reactions.chunks_exact(reaction))
+                    .map(|(s, r)| {
+                        let force = Force {
+                            x: r[0],
+                            y: r[1],
+                            torque: torque(r, 2),
+                        };
+                        (s.name.clone(), force)
+                    })
                     .collect(),
             ),
             displacements: self.displacements(model, &row[self.pair_start - self.driven.len()..]),
@@ -271,7 +316,7 @@ impl HistoryLayout {
                     .interface
                     .pairs
                     .iter()
-                    .zip(resultants.chunks_exact(4))
+                    .zip(resultants.chunks_exact(resultant))
                     .zip(states.chunks_exact(PAIR_QUANTITIES.len()))
                     .map(|((p, r), q)| {
                         let resultant = ContactResultant {
@@ -284,6 +329,7 @@ impl HistoryLayout {
                             open: q[2],
                             dissipation: q[3],
                             dissipation_increment: q[4],
+                            torque: torque(r, 4),
                         };
                         (p.name.clone(), resultant)
                     })
@@ -331,10 +377,41 @@ impl HistoryLayout {
                 out.push((name.clone(), Displacement::default()));
             }
             let d = &mut out.last_mut().expect("pushed above").1;
-            *[&mut d.x, &mut d.y][c] = Some(v);
+            let theta = match model.supports[i].circumferential {
+                Some(Circumferential::Rotation(_)) => &mut d.rotation,
+                _ => &mut d.theta,
+            };
+            *[&mut d.x, &mut d.y, theta][c] = Some(v);
         }
         Named(out)
     }
+}
+
+/// The torque body A exerts on body B about the axis, −∫ τ_θ r dA, of every contact pair
+/// (N·mm, signed as the pair's `force_on_b`).
+///
+/// CALL SITE FOR THE CONTACT HELPER: this stands in for the pair torque resultant of
+/// `post::interface` until the interface states carry the circumferential traction (their
+/// `stress[2]`); until then no interface law transmits a torque and every value is 0.
+fn pair_torques(model: &Model, states: &[InterfaceState]) -> Vec<f64> {
+    let mut out = vec![0.0; model.interface.pairs.len()];
+    for (e, element) in model.interface.elements.iter().enumerate() {
+        for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
+            let p = crate::element::interface6::interface_point(
+                &model.analysis,
+                &element.b_coords,
+                xi,
+                w,
+            );
+            let circumferential = states[e * INTERFACE_POINTS + g]
+                .stress
+                .get(2)
+                .copied()
+                .unwrap_or(0.0);
+            out[element.pair as usize] -= circumferential * p.x[0] * p.da;
+        }
+    }
+    out
 }
 
 /// Calls `row` with every row of the `history.csv` at `path` (whose rows have `columns`

@@ -79,6 +79,8 @@ pub struct RunSummary {
     /// Unknowns (free degrees of freedom).
     pub dofs: usize,
     pub mesh_seconds: f64,
+    /// The part of `mesh_seconds` spent in gmsh (`None`: the case names a `.msh` file).
+    pub gmsh_seconds: Option<f64>,
     pub model_seconds: f64,
     pub stats: RunStatistics,
     /// Reaction of each support at the last step: (name, [F_x, F_y]).
@@ -107,8 +109,10 @@ impl std::fmt::Display for RunSummary {
         )?;
         writeln!(
             f,
-            "time [s]: mesh {:.3}, model {:.3}, ordering+symbolic {:.3}, assembly {:.3}, factorisation {:.3}, solve {:.3}, output {:.3}",
+            "time [s]: mesh {:.3}{}, model {:.3}, ordering+symbolic {:.3}, assembly {:.3}, factorisation {:.3}, solve {:.3}, output {:.3}",
             self.mesh_seconds,
+            self.gmsh_seconds
+                .map_or(String::new(), |g| format!(" (gmsh {g:.3})")),
             self.model_seconds,
             s.symbolic_seconds,
             s.assembly_seconds,
@@ -128,11 +132,20 @@ impl std::fmt::Display for RunSummary {
     }
 }
 
+/// How long obtaining a run's mesh took: in all (gmsh, reading, interface insertion) and in
+/// gmsh (`None` when the case names a `.msh` file; 0 when the mesh came from the mesh cache).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MeshTime {
+    pub seconds: f64,
+    pub gmsh: Option<f64>,
+}
+
 /// Obtains the case's mesh: reads its `.msh` file, or meshes its `.geo` script with gmsh into
-/// the folder's `mesh.msh` first.
-pub fn load_mesh(case: &Case, folder: &OutputFolder) -> Result<Mesh> {
-    let path = match (&case.mesh.file, &case.mesh.geo) {
-        (Some(file), _) => case.resolve(file),
+/// the folder's `mesh.msh` first (or copies it there from the mesh cache,
+/// [`crate::mesh::cache`]). Returns the mesh and the seconds spent in gmsh, if it ran.
+pub fn load_mesh(case: &Case, folder: &OutputFolder) -> Result<(Mesh, Option<f64>)> {
+    let (path, gmsh_seconds) = match (&case.mesh.file, &case.mesh.geo) {
+        (Some(file), _) => (case.resolve(file), None),
         (None, Some(geo)) => {
             let params: Vec<(String, f64)> = case
                 .mesh
@@ -140,12 +153,13 @@ pub fn load_mesh(case: &Case, folder: &OutputFolder) -> Result<Mesh> {
                 .iter()
                 .map(|(k, v)| (k.clone(), *v))
                 .collect();
-            gmsh::mesh_geo(
+            let meshed = gmsh::mesh_geo(
                 &case.resolve(geo),
                 case.mesh.size,
                 &params,
                 &folder.path(RunFile::Mesh)?,
-            )?
+            )?;
+            (meshed.path, Some(meshed.gmsh_seconds))
         }
         (None, None) => {
             return Err(Error::Case {
@@ -154,7 +168,7 @@ pub fn load_mesh(case: &Case, folder: &OutputFolder) -> Result<Mesh> {
             });
         }
     };
-    msh::read_msh(&path)
+    Ok((msh::read_msh(&path)?, gmsh_seconds))
 }
 
 /// The output folder of `case` when the command line names none: its `[output] dir`
@@ -232,14 +246,14 @@ pub fn run_with(
         case_text,
         resume: folder.resumable(),
     };
-    let result = mesh_case(case, &folder).and_then(|(mesh, mesh_seconds)| {
+    let result = mesh_case(case, &folder).and_then(|(mesh, mesh_time)| {
         let session = Session {
             folder: &folder,
             progress: options.progress,
             restart: Some(&restart),
             info: Some(&info),
         };
-        run_session(case, spec, mesh, mesh_seconds, &session, |_, _| Ok(()))
+        run_session(case, spec, mesh, mesh_time, &session, |_, _| Ok(()))
     });
     let mut info = info.into_inner();
     info.finish(&result);
@@ -251,10 +265,16 @@ pub fn run_with(
 
 /// Obtains the case's mesh into `folder` ([`load_mesh`]) and the seconds it took. If that
 /// fails, the folder's `summary.json` says so (status `failed`, the error, no model).
-pub fn mesh_case(case: &Case, folder: &OutputFolder) -> Result<(Mesh, f64)> {
+pub fn mesh_case(case: &Case, folder: &OutputFolder) -> Result<(Mesh, MeshTime)> {
     let t = Instant::now();
     match load_mesh(case, folder) {
-        Ok(mesh) => Ok((mesh, t.elapsed().as_secs_f64())),
+        Ok((mesh, gmsh)) => Ok((
+            mesh,
+            MeshTime {
+                seconds: t.elapsed().as_secs_f64(),
+                gmsh,
+            },
+        )),
         Err(e) => {
             let mut summary = Summary::new(&case.path);
             summary.seconds.mesh = t.elapsed().as_secs_f64();
@@ -266,7 +286,7 @@ pub fn mesh_case(case: &Case, folder: &OutputFolder) -> Result<(Mesh, f64)> {
     }
 }
 
-/// Runs `case` on an already loaded `mesh` (from [`load_mesh`], which took `mesh_seconds`),
+/// Runs `case` on an already loaded `mesh` (from [`load_mesh`], which took `mesh_time`),
 /// writing results to `folder`, and calls `on_step` with the model and every converged step
 /// once its files are committed to the background writer (e.g. to evaluate quantities in
 /// memory; an error stops the run).
@@ -275,13 +295,13 @@ pub fn mesh_case(case: &Case, folder: &OutputFolder) -> Result<(Mesh, f64)> {
 pub fn run_mesh(
     case: &Case,
     mesh: Mesh,
-    mesh_seconds: f64,
+    mesh_time: MeshTime,
     folder: &OutputFolder,
     progress: bool,
     on_step: impl FnMut(&Model, &StepResult) -> Result<()>,
 ) -> Result<RunSummary> {
     let spec = ModelSpec::new(case)?;
-    run_model(case, spec, mesh, mesh_seconds, folder, progress, on_step)
+    run_model(case, spec, mesh, mesh_time, folder, progress, on_step)
 }
 
 /// [`run_mesh`] with the model's spec already made from `case` (by [`ModelSpec::new`]).
@@ -289,7 +309,7 @@ pub fn run_model(
     case: &Case,
     spec: ModelSpec,
     mesh: Mesh,
-    mesh_seconds: f64,
+    mesh_time: MeshTime,
     folder: &OutputFolder,
     progress: bool,
     on_step: impl FnMut(&Model, &StepResult) -> Result<()>,
@@ -301,7 +321,7 @@ pub fn run_model(
         restart: None,
         info: None,
     };
-    run_session(case, spec, mesh, mesh_seconds, &session, on_step)
+    run_session(case, spec, mesh, mesh_time, &session, on_step)
 }
 
 /// Where and how a run writes: its folder, the progress bar, the restart records (none
@@ -326,16 +346,17 @@ fn run_session(
     case: &Case,
     spec: ModelSpec,
     mesh: Mesh,
-    mesh_seconds: f64,
+    mesh_time: MeshTime,
     session: &Session,
     on_step: impl FnMut(&Model, &StepResult) -> Result<()>,
 ) -> Result<RunSummary> {
     let start = Instant::now();
     let mut summary = Summary::new(&case.path);
-    summary.seconds.mesh = mesh_seconds;
+    summary.seconds.mesh = mesh_time.seconds;
+    summary.seconds.gmsh = mesh_time.gmsh;
     let steps = analysis_steps(&spec.schedule);
     let result = solve(case, spec, mesh, session, &mut summary, on_step);
-    summary.seconds.total = mesh_seconds + start.elapsed().as_secs_f64();
+    summary.seconds.total = mesh_time.seconds + start.elapsed().as_secs_f64();
     match &result {
         Ok(run) => {
             complete_summary(&mut summary, run);
@@ -401,6 +422,7 @@ fn solve(
         cells: model.continuum.cells.len(),
         dofs: model.dofs.free_count(),
         mesh_seconds: writer.summary.seconds.mesh,
+        gmsh_seconds: writer.summary.seconds.gmsh,
         model_seconds,
         stats,
         reactions: model

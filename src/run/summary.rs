@@ -16,6 +16,7 @@ pub(super) fn describe_model(summary: &mut Summary, model: &Model, model_seconds
         Analysis::Axisymmetric | Analysis::AxisymmetricTwist => ("axisymmetric", None),
     };
     summary.analysis = Some(analysis);
+    summary.twist = model.analysis.has_twist();
     summary.model = Some(ModelSize {
         nodes: model.mesh.nodes.len(),
         elements: model.continuum.cells.len(),

@@ -34,6 +34,16 @@
 //! where the dense LU runs on all threads; measured: no allocation at all in solves with
 //! n_I = 835.)
 //!
+//! # An unsymmetric bulk
+//! Kinematic hardening with dynamic recovery makes the continuum's tangent unsymmetric where
+//! it yields non-proportionally (`material::cyclic`). [`CondensedSolver::factor_bulk_unsymmetric`]
+//! then factors K_BB alone by sparse LU ([`SparseLu`]) and forms
+//! S_c = K_II − K_IB (K_BB⁻¹ K_BI) with [`SCHUR_BLOCK`] right-hand sides per LU solve (the
+//! pivoting LU cannot keep the interface rows last, so S_c does not fall out of the factor);
+//! solves substitute twice through the LU around the same dense interface LU. It costs n_I
+//! sparse substitutions per factorisation more than the Cholesky path, which stays as it is
+//! for symmetric bulks. Its structures are made by its first call.
+//!
 //! # Use
 //! ```text
 //! let mut s = CondensedSolver::new(&pattern, &interface_equations)?;  // once per model
@@ -67,6 +77,7 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRe
 use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 
 use crate::assembly::SparsityPattern;
+use crate::solver::linear::SparseLu;
 use crate::{Error, Result};
 
 /// Marker for a bulk equation in the equation → interface-index map.
@@ -86,6 +97,11 @@ const DENSE_PARALLEL_FROM: usize = 1024;
 /// increment change the plastic tangent by 1e-4..1e-7 in this measure, where the chord step
 /// costs nothing in convergence; the first ones by 0.1..0.6, which are refactored.
 pub const DEFAULT_REUSE_THRESHOLD: f64 = 0.01;
+
+/// Right-hand sides per LU solve when S_c of an unsymmetric bulk is formed (columns of K_BI
+/// at a time): wide enough for the substitutions' dense kernels, small enough that the block
+/// (n_B × this) stays a few megabytes.
+const SCHUR_BLOCK: usize = 32;
 
 /// Exact solver for continuum-plus-interface tangents by condensation onto the interface
 /// unknowns (see the module documentation).
@@ -149,6 +165,34 @@ pub struct CondensedSolver {
     /// Whether the bulk, and the interface system, are factored.
     factored: bool,
     interface_factored: bool,
+    /// The LU path of an unsymmetric bulk, made by the first
+    /// [`Self::factor_bulk_unsymmetric`], and whether the bulk factor is its LU.
+    unsymmetric: Option<Box<UnsymmetricBulk>>,
+    lu_bulk: bool,
+}
+
+/// The structures of [`CondensedSolver::factor_bulk_unsymmetric`]: the bulk block K_BB (in
+/// elimination order) and its LU, the couplings K_BI, K_IB and the block K_II as positions in
+/// the continuum's value array, and the values factored last (for the change test).
+struct UnsymmetricBulk {
+    /// The continuum pattern (of the values compared by the change test).
+    pattern: SymbolicSparseColMat<u32>,
+    bulk: SymbolicSparseColMat<u32>,
+    bulk_values: Vec<f64>,
+    bulk_source: Vec<u32>,
+    lu: SparseLu,
+    /// K_BI by interface column: `bi_ptr[k]..bi_ptr[k + 1]` index `bi_rows` (bulk positions)
+    /// and `bi_source`.
+    bi_ptr: Vec<usize>,
+    bi_rows: Vec<u32>,
+    bi_source: Vec<u32>,
+    /// K_IB and K_II entries: (interface row, bulk position or interface column, position).
+    ib: Vec<(u32, u32, u32)>,
+    ii: Vec<(u32, u32, u32)>,
+    factored_values: Vec<f64>,
+    /// Right-hand sides of the S_c formation (n_B × [`SCHUR_BLOCK`]), also the bulk
+    /// substitution's buffer of solves.
+    block: Mat<f64>,
 }
 
 impl std::fmt::Debug for CondensedSolver {
@@ -359,6 +403,8 @@ impl CondensedSolver {
             symbolic,
             factored: false,
             interface_factored: false,
+            unsymmetric: None,
+            lu_bulk: false,
         })
     }
 
@@ -478,33 +524,12 @@ impl CondensedSolver {
     /// [`Self::set_reuse_threshold`] (always when it is unchanged, e.g. a plastic body whose
     /// points all stayed elastic). Returns whether it factored.
     pub fn factor_bulk(&mut self, continuum: SparseColMatRef<'_, u32, f64>) -> Result<bool> {
-        let n = self.n;
-        if continuum.nrows() != n
-            || continuum.ncols() != n
-            || continuum.row_idx().len() != self.pattern_nnz
-        {
-            return Err(Error::Linear(
-                "the continuum matrix does not have the pattern of the condensed solver".into(),
-            ));
-        }
-        if self.factored {
-            let change = self.change_from_factored(continuum.val());
-            self.last_change = change;
-            let threshold = if self.increment_started {
-                0.0
-            } else {
-                self.reuse_threshold
-            };
-            self.increment_started = false;
-            if change <= threshold {
-                self.reuses += 1;
-                tracing::debug!(change, "bulk factorisation kept");
-                return Ok(false);
-            }
-            tracing::debug!(change, "bulk refactored");
+        if self.keeps_factor(continuum, false)? {
+            return Ok(false);
         }
         self.factored = false;
         self.interface_factored = false;
+        self.lu_bulk = false;
         // Reordered lower triangle.
         let values = &mut self.lower_values;
         for (v, &p) in values.iter_mut().zip(&self.source) {
@@ -589,6 +614,203 @@ impl CondensedSolver {
         Ok(true)
     }
 
+    /// Checks that `continuum` has the pattern of this solver and decides whether the last
+    /// bulk factorisation is kept for it (see [`Self::factor_bulk`]): only a factorisation of
+    /// the same kind (`lu`: of an unsymmetric bulk) is.
+    fn keeps_factor(&mut self, continuum: SparseColMatRef<'_, u32, f64>, lu: bool) -> Result<bool> {
+        let n = self.n;
+        if continuum.nrows() != n
+            || continuum.ncols() != n
+            || continuum.row_idx().len() != self.pattern_nnz
+        {
+            return Err(Error::Linear(
+                "the continuum matrix does not have the pattern of the condensed solver".into(),
+            ));
+        }
+        if !self.factored {
+            return Ok(false);
+        }
+        let change = match (lu, self.lu_bulk) {
+            (false, false) => self.change_from_factored(continuum.val()),
+            (true, true) => self.change_from_factored_lu(continuum.val()),
+            _ => f64::INFINITY,
+        };
+        self.last_change = change;
+        let threshold = if self.increment_started {
+            0.0
+        } else {
+            self.reuse_threshold
+        };
+        self.increment_started = false;
+        if change <= threshold {
+            self.reuses += 1;
+            tracing::debug!(change, "bulk factorisation kept");
+            return Ok(true);
+        }
+        tracing::debug!(change, "bulk refactored");
+        Ok(false)
+    }
+
+    /// [`Self::change_from_factored`] over both triangles, against the last matrix factored
+    /// by [`Self::factor_bulk_unsymmetric`].
+    fn change_from_factored_lu(&self, values: &[f64]) -> f64 {
+        let u = self.unsymmetric.as_ref().expect("LU made");
+        let factored = &u.factored_values;
+        let scale = |eq: usize| self.inverse_scale[self.position[eq] as usize];
+        let (col_ptr, row_idx) = (u.pattern.col_ptr(), u.pattern.row_idx());
+        let mut largest = 0.0f64;
+        for col in 0..self.n {
+            for k in col_ptr[col] as usize..col_ptr[col + 1] as usize {
+                let difference = (values[k] - factored[k]).abs();
+                if difference == 0.0 {
+                    continue;
+                }
+                let relative = difference * scale(row_idx[k] as usize) * scale(col);
+                if !relative.is_finite() {
+                    return f64::INFINITY;
+                }
+                largest = largest.max(relative);
+            }
+        }
+        largest
+    }
+
+    /// [`Self::factor_bulk`] for an unsymmetric continuum matrix (both triangles read): LU
+    /// of K_BB and S_c = K_II − K_IB K_BB⁻¹ K_BI (module docs). The factorisation is kept
+    /// under the same rule as [`Self::factor_bulk`]'s, for a matrix last factored by this
+    /// method. Returns whether it factored.
+    pub fn factor_bulk_unsymmetric(
+        &mut self,
+        continuum: SparseColMatRef<'_, u32, f64>,
+    ) -> Result<bool> {
+        if self.unsymmetric.is_none() {
+            self.unsymmetric = Some(Box::new(self.unsymmetric_structures(continuum.symbolic())?));
+        }
+        if self.keeps_factor(continuum, true)? {
+            return Ok(false);
+        }
+        self.factored = false;
+        self.interface_factored = false;
+        self.lu_bulk = true;
+        let values = continuum.val();
+        for (d, &slot) in self.inverse_scale.iter_mut().zip(&self.diagonal) {
+            *d = values[self.source[slot as usize] as usize]
+                .abs()
+                .sqrt()
+                .recip();
+        }
+        let u = self.unsymmetric.as_deref_mut().expect("made above");
+        u.factored_values.copy_from_slice(values);
+        for (v, &p) in u.bulk_values.iter_mut().zip(&u.bulk_source) {
+            *v = values[p as usize];
+        }
+        u.lu
+            .factorize(SparseColMatRef::new(u.bulk.as_ref(), &u.bulk_values), self.par)
+            .map_err(|_| {
+                Error::Linear(
+                    "the bodies' stiffness with the interface unknowns held is singular: a body is neither \
+                     supported nor in contact, or the bulk tangent lost definiteness"
+                        .into(),
+                )
+            })?;
+        let n_i = self.interface.len();
+        let schur = &mut self.schur;
+        schur.fill(0.0);
+        for &(i, j, p) in &u.ii {
+            schur[(i as usize, j as usize)] += values[p as usize];
+        }
+        for first in (0..n_i).step_by(SCHUR_BLOCK) {
+            let width = SCHUR_BLOCK.min(n_i - first);
+            let mut y = u.block.as_mut().subcols_mut(0, width);
+            y.fill(0.0);
+            for c in 0..width {
+                let range = u.bi_ptr[first + c]..u.bi_ptr[first + c + 1];
+                for (&row, &p) in u.bi_rows[range.clone()].iter().zip(&u.bi_source[range]) {
+                    y[(row as usize, c)] = values[p as usize];
+                }
+            }
+            u.lu.solve_in_place(y.rb_mut(), self.par);
+            for &(i, b, p) in &u.ib {
+                let v = values[p as usize];
+                for c in 0..width {
+                    schur[(i as usize, first + c)] -= v * y[(b as usize, c)];
+                }
+            }
+        }
+        self.shift.fill(0.0);
+        self.factored = true;
+        self.factorizations += 1;
+        Ok(true)
+    }
+
+    /// The structures of the LU path for the continuum pattern `pattern` (the one given to
+    /// [`Self::new`]).
+    fn unsymmetric_structures(
+        &self,
+        pattern: SymbolicSparseColMatRef<'_, u32>,
+    ) -> Result<UnsymmetricBulk> {
+        let (n_bulk, n_i) = (self.n_bulk, self.interface.len());
+        let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
+        let entries = |j: usize| (cp[j] as usize..cp[j + 1] as usize).map(|p| (ri[p] as usize, p));
+        // K_BB in elimination order, columns sorted.
+        let mut col_ptr = Vec::with_capacity(n_bulk + 1);
+        col_ptr.push(0u32);
+        let (mut rows, mut bulk_source) = (Vec::new(), Vec::new());
+        let mut column: Vec<(u32, u32)> = Vec::new();
+        for &old in &self.order[..n_bulk] {
+            column.clear();
+            column.extend(
+                entries(old as usize)
+                    .map(|(i, p)| (self.position[i], p as u32))
+                    .filter(|&(row, _)| (row as usize) < n_bulk),
+            );
+            column.sort_unstable();
+            rows.extend(column.iter().map(|&(row, _)| row));
+            bulk_source.extend(column.iter().map(|&(_, p)| p));
+            col_ptr.push(rows.len() as u32);
+        }
+        let bulk = SymbolicSparseColMat::new_checked(n_bulk, n_bulk, col_ptr, None, rows);
+        let lu = SparseLu::new(bulk.as_ref(), SCHUR_BLOCK, self.par)?;
+        let mut bi_ptr = vec![0usize];
+        let (mut bi_rows, mut bi_source, mut ii) = (Vec::new(), Vec::new(), Vec::new());
+        for (k, &eq) in self.interface.iter().enumerate() {
+            for (i, p) in entries(eq) {
+                match self.local_index(i) {
+                    Some(ki) => ii.push((ki as u32, k as u32, p as u32)),
+                    None => {
+                        bi_rows.push(self.position[i]);
+                        bi_source.push(p as u32);
+                    }
+                }
+            }
+            bi_ptr.push(bi_rows.len());
+        }
+        let mut ib = Vec::new();
+        for &old in &self.order[..n_bulk] {
+            for (i, p) in entries(old as usize) {
+                if let Some(ki) = self.local_index(i) {
+                    ib.push((ki as u32, self.position[old as usize], p as u32));
+                }
+            }
+        }
+        Ok(UnsymmetricBulk {
+            bulk_values: vec![0.0; bulk_source.len()],
+            bulk,
+            bulk_source,
+            lu,
+            bi_ptr,
+            bi_rows,
+            bi_source,
+            ib,
+            ii,
+            factored_values: vec![0.0; ri.len()],
+            block: Mat::zeros(n_bulk, SCHUR_BLOCK.min(n_i).max(1)),
+            pattern: pattern
+                .to_owned()
+                .map_err(|e| Error::Linear(format!("out of memory for the pattern: {e:?}")))?,
+        })
+    }
+
     /// Exact solve of (K_c + K_if) x = `rhs` in place, with K_c the matrix of the last
     /// [`Self::factor_bulk`] and K_if the (possibly unsymmetric) interface contribution given
     /// as the dense n_I × n_I block `interface_block` over [`Self::interface_equations`]
@@ -643,15 +865,28 @@ impl CondensedSolver {
             self.interface_factored,
             "solve_in_place before factor_interface"
         );
-        let (n_bulk, n_i) = (self.n_bulk, self.interface.len());
         assert_eq!(rhs.len(), self.n);
+        for (x, &old) in self.x.iter_mut().zip(&self.order) {
+            *x = rhs[old as usize];
+        }
+        if self.lu_bulk {
+            self.solve_lu_in_place();
+        } else {
+            self.solve_cholesky_in_place();
+        }
+        for (r, &new) in rhs.iter_mut().zip(&self.position) {
+            *r = self.x[new as usize];
+        }
+    }
+
+    /// The solve of [`Self::solve_in_place`] in elimination order (in `self.x`) with the
+    /// bulk's Cholesky factor.
+    fn solve_cholesky_in_place(&mut self) {
+        let (n_bulk, n_i) = (self.n_bulk, self.interface.len());
         let SymbolicCholeskyRaw::Supernodal(symbolic) = self.symbolic.raw() else {
             unreachable!("forced supernodal in `new`");
         };
         let llt = SupernodalLltRef::new(symbolic, &self.factor);
-        for (x, &old) in self.x.iter_mut().zip(&self.order) {
-            *x = rhs[old as usize];
-        }
         forward_bulk(llt, n_bulk, &mut self.x, &mut self.gather);
         // Now x_I = r_I − K_IB K_BB⁻¹ r_B, the condensed right-hand side.
         let perm = PermRef::new_checked(&self.lu_perm, &self.lu_perm_inv, n_i);
@@ -664,9 +899,43 @@ impl CondensedSolver {
             MemStack::new(&mut self.workspace),
         );
         backward_bulk(llt, n_bulk, &mut self.x, &mut self.gather);
-        for (r, &new) in rhs.iter_mut().zip(&self.position) {
-            *r = self.x[new as usize];
+    }
+
+    /// The solve of [`Self::solve_in_place`] in elimination order (in `self.x`) with the
+    /// bulk's LU: x_I ← (S_c + K_if)⁻¹ (r_I − K_IB K_BB⁻¹ r_B), then
+    /// x_B ← K_BB⁻¹ (r_B − K_BI x_I).
+    fn solve_lu_in_place(&mut self) {
+        let (n_bulk, n_i) = (self.n_bulk, self.interface.len());
+        let u = self.unsymmetric.as_deref_mut().expect("LU made");
+        let (x_b, x_i) = self.x.split_at_mut(n_bulk);
+        let mut z = u.block.as_mut().subcols_mut(0, 1);
+        z.rb_mut()
+            .col_mut(0)
+            .copy_from(faer::ColRef::from_slice(x_b));
+        u.lu.solve_in_place(z.rb_mut(), Par::Seq);
+        let values = &u.factored_values;
+        for &(i, b, p) in &u.ib {
+            x_i[i as usize] -= values[p as usize] * z[(b as usize, 0)];
         }
+        let perm = PermRef::new_checked(&self.lu_perm, &self.lu_perm_inv, n_i);
+        lu_solve::solve_in_place(
+            self.lu.as_ref(),
+            self.lu.as_ref(),
+            perm,
+            MatMut::from_column_major_slice_mut(x_i, n_i, 1),
+            self.dense_par,
+            MemStack::new(&mut self.workspace),
+        );
+        for (k, &xk) in x_i.iter().enumerate() {
+            let range = u.bi_ptr[k]..u.bi_ptr[k + 1];
+            for (&row, &p) in u.bi_rows[range.clone()].iter().zip(&u.bi_source[range]) {
+                x_b[row as usize] -= values[p as usize] * xk;
+            }
+        }
+        u.lu.solve_in_place(
+            MatMut::from_column_major_slice_mut(x_b, n_bulk, 1),
+            Par::Seq,
+        );
     }
 
     /// Gathers the interface block of `matrix` (over the pattern given to [`Self::new`], e.g.
@@ -1008,13 +1277,22 @@ mod tests {
     /// Solves with the condensed solver and with dense LU of the assembled matrix; returns
     /// the relative difference and the relative residual of the condensed solution.
     fn compare(t: &TestSystem, relax: Option<&[(usize, f64)]>) -> (f64, f64) {
+        let mut solver =
+            CondensedSolver::with_relaxation(&t.pattern, &t.interface_eqs, relax).unwrap();
+        compare_with(&mut solver, t, false)
+    }
+
+    /// [`compare`] with `solver`, its bulk factored by LU if `lu`.
+    fn compare_with(solver: &mut CondensedSolver, t: &TestSystem, lu: bool) -> (f64, f64) {
         let n = t.dofs.free_count();
         let sym = t.pattern.symbolic().as_ref();
         let kc = SparseColMatRef::new(sym, &t.continuum);
         let ki = SparseColMatRef::new(sym, &t.interface);
-        let mut solver =
-            CondensedSolver::with_relaxation(&t.pattern, &t.interface_eqs, relax).unwrap();
-        solver.factor_bulk(kc).unwrap();
+        if lu {
+            solver.factor_bulk_unsymmetric(kc).unwrap();
+        } else {
+            solver.factor_bulk(kc).unwrap();
+        }
         let n_i = solver.interface_equations().len();
         let mut block = Mat::<f64>::zeros(n_i, n_i);
         solver.gather_interface_block(ki, block.as_mut()).unwrap();
@@ -1036,6 +1314,55 @@ mod tests {
         let difference = (&xm - &reference).norm_l2() / reference.norm_l2();
         let residual = (&rhs - &dense * &xm).norm_l2() / rhs.norm_l2();
         (difference, residual)
+    }
+
+    /// Adds to every off-diagonal continuum entry `scale` times a random number, independently
+    /// of its mirror: an unsymmetric bulk (as kinematic hardening's tangent).
+    fn make_bulk_unsymmetric(t: &mut TestSystem, scale: f64) {
+        let mut rng = Rng(4242);
+        let sym = t.pattern.symbolic();
+        for j in 0..sym.ncols() {
+            for p in sym.col_range(j) {
+                if sym.row_idx()[p] as usize != j {
+                    t.continuum[p] += scale * rng.next();
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn condensed_with_an_unsymmetric_bulk_matches_dense_lu() {
+        // Bulk and interface both unsymmetric; body A held only through the interface.
+        let mut t = test_system(20, 4, 1.0, &[]);
+        make_bulk_unsymmetric(&mut t, 0.3);
+        let mut solver = CondensedSolver::new(&t.pattern, &t.interface_eqs).unwrap();
+        // More interface unknowns than one block of S_c's right-hand sides.
+        assert!(solver.interface_equations().len() > SCHUR_BLOCK);
+        let (d, r) = compare_with(&mut solver, &t, true);
+        assert!(d < 1e-10 && r < 1e-12, "difference {d:e}, residual {r:e}");
+        // The same matrix again keeps the LU; a symmetric bulk next goes back to Cholesky,
+        // and an unsymmetric one after it to a fresh LU.
+        let sym = t.pattern.symbolic().as_ref();
+        let kc = SparseColMatRef::new(sym, &t.continuum);
+        assert!(
+            !solver.factor_bulk_unsymmetric(kc).unwrap(),
+            "unchanged: kept"
+        );
+        let symmetric = test_system(20, 4, 1.0, &[]);
+        let (d, r) = compare_with(&mut solver, &symmetric, false);
+        assert!(d < 1e-10 && r < 1e-12, "Cholesky after LU: {d:e}, {r:e}");
+        let (d, r) = compare_with(&mut solver, &t, true);
+        assert!(d < 1e-10 && r < 1e-12, "LU after Cholesky: {d:e}, {r:e}");
+        assert_eq!(solver.factorizations(), (3, 1));
+    }
+
+    #[test]
+    fn condensed_unsymmetric_bulk_with_prescribed_interface_dofs() {
+        let mut t = test_system(8, 3, 1.0, &[0, 3, 8]);
+        make_bulk_unsymmetric(&mut t, 0.5);
+        let mut solver = CondensedSolver::new(&t.pattern, &t.interface_eqs).unwrap();
+        let (d, r) = compare_with(&mut solver, &t, true);
+        assert!(d < 1e-10 && r < 1e-12, "difference {d:e}, residual {r:e}");
     }
 
     #[test]

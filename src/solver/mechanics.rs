@@ -5,7 +5,7 @@
 use faer::MatMut;
 
 use crate::assembly::{
-    AssemblyInput, DenseBlock, DenseScatter, DofMap, GlobalSystem, SparsityPattern,
+    AssemblyInput, DenseBlock, DenseScatter, DofMap, ElementNodes, GlobalSystem, SparsityPattern,
 };
 use crate::contact::{ContactAlgorithm, InterfaceState};
 use crate::element::interface6::evaluate_interface;
@@ -139,9 +139,29 @@ impl Problem for Mechanics<'_> {
         self.model.continuum.is_linear()
     }
 
+    /// Unsymmetric while a point of a body whose material has an unsymmetric tangent
+    /// ([`Material::has_unsymmetric_tangent`]) yields; a model without such a material never
+    /// looks at its states.
+    fn bulk_is_symmetric(&self) -> bool {
+        let continuum = &self.model.continuum;
+        let unsymmetric = |body: u32| continuum.materials[body as usize].has_unsymmetric_tangent();
+        if !(0..continuum.materials.len() as u32).any(unsymmetric) {
+            return true;
+        }
+        let points = continuum.points_per_element();
+        !continuum
+            .cells
+            .iter()
+            .zip(self.trial.chunks_exact(points))
+            .any(|(cell, states)| unsymmetric(cell.body) && states.iter().any(|s| s.yielding))
+    }
+
     fn bulk_pattern(&self, dofs: &DofMap) -> SparsityPattern {
         let continuum = &self.model.continuum;
-        let connectivity = (0..continuum.len()).map(|e| continuum.nodes(e));
+        let connectivity = (0..continuum.len()).map(|e| ElementNodes {
+            nodes: continuum.nodes(e),
+            couples_twist: continuum.couples_twist(e),
+        });
         SparsityPattern::new(self.model.mesh.nodes.len(), dofs, connectivity)
     }
 

@@ -140,6 +140,12 @@ pub trait Problem {
         local: &dyn Fn(usize) -> Option<usize>,
     ) -> DenseScatter;
 
+    /// Whether the bulk's tangent of the last assembly is symmetric (else it is factored by
+    /// LU); by default it always is.
+    fn bulk_is_symmetric(&self) -> bool {
+        true
+    }
+
     /// Adds the bulk's internal force (and, if `input.tangent`, its tangent) into `system`.
     fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput);
 
@@ -260,6 +266,9 @@ pub struct Newton<'a> {
     condensed: Option<Condensed>,
     /// Whether the problem was found to have no interface (then Cholesky is used).
     no_interface: bool,
+    /// Whether the bulk's tangent of the last tangent assembly is symmetric
+    /// ([`Problem::bulk_is_symmetric`]): Cholesky, else LU.
+    bulk_symmetric: bool,
     /// The workspaces of arc-length increments, made by [`Self::set_arc_reference`].
     arc: Option<arc::ArcWork>,
 }
@@ -289,6 +298,7 @@ impl<'a> Newton<'a> {
             predictor: Predictor::new(dofs.dof_count()),
             condensed: None,
             no_interface: false,
+            bulk_symmetric: true,
             arc: None,
         })
     }
@@ -374,6 +384,9 @@ impl<'a> Newton<'a> {
         let Some(c) = self.condensed.as_mut() else {
             self.system.clear(tangent);
             let symmetric = problem.assemble(&mut self.system, &input);
+            if tangent {
+                self.bulk_symmetric = problem.bulk_is_symmetric();
+            }
             self.flux = Flux::of(&self.system.internal_force);
             return symmetric;
         };
@@ -382,7 +395,10 @@ impl<'a> Newton<'a> {
         if !c.linear_bulk {
             system.clear(tangent);
             problem.assemble_bulk(system, &input);
-            c.bulk_dirty |= tangent;
+            if tangent {
+                c.bulk_dirty = true;
+                self.bulk_symmetric = problem.bulk_is_symmetric();
+            }
         } else if !c.bulk_ready || fresh {
             // The continuum's elements: its force (and states) at u, K_c the first time.
             let first = !c.bulk_ready;
@@ -526,7 +542,8 @@ impl<'a> Newton<'a> {
             if log.iterations == settings.max_iterations || !residual.is_finite() {
                 return Ok(log);
             }
-            if self.condensed.is_some() || symmetric {
+            // An unsymmetric bulk is factored by LU, exactly, whatever the interface.
+            if self.condensed.is_some() || symmetric || !self.bulk_symmetric {
                 self.factor(&mut log)?;
                 let t = std::time::Instant::now();
                 solve_factored(&mut self.condensed, &mut self.linear, &mut self.residual);
@@ -579,17 +596,25 @@ impl<'a> Newton<'a> {
     }
 
     /// Factors the tangent of the last evaluation: on the condensed path the bulk (when its
-    /// tangent changed) and the interface block, otherwise by Cholesky (a symmetric tangent).
+    /// tangent changed) and the interface block, otherwise by Cholesky (a symmetric tangent);
+    /// an unsymmetric bulk tangent by LU.
     fn factor(&mut self, log: &mut NewtonLog) -> Result<()> {
         let t = std::time::Instant::now();
+        let matrix = self.system.matrix();
         if let Some(c) = self.condensed.as_mut() {
             if c.bulk_dirty {
-                c.solver.factor_bulk(self.system.matrix())?;
+                if self.bulk_symmetric {
+                    c.solver.factor_bulk(matrix)?;
+                } else {
+                    c.solver.factor_bulk_unsymmetric(matrix)?;
+                }
                 c.bulk_dirty = false;
             }
             c.solver.factor_interface(c.block.as_ref())?;
+        } else if self.bulk_symmetric {
+            self.linear.factorize(matrix)?;
         } else {
-            self.linear.factorize(self.system.matrix())?;
+            self.linear.factorize_unsymmetric(matrix)?;
         }
         log.factorization_seconds += t.elapsed().as_secs_f64();
         Ok(())

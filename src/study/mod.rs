@@ -245,7 +245,7 @@ struct Meshed {
     spec: ModelSpec,
     folder: OutputFolder,
     mesh: Mesh,
-    mesh_seconds: f64,
+    mesh_time: run::MeshTime,
 }
 
 /// Meshes level `k` into `level_k/`.
@@ -260,14 +260,14 @@ fn mesh_level(case: &Case, options: &Options, k: usize) -> Result<Meshed> {
     let dir = options.out.join(format!("level_{k}"));
     let spec = ModelSpec::new(&case)?; // bad parameters fail before gmsh runs
     let folder = OutputFolder::scratch(&dir)?;
-    let (mesh, mesh_seconds) = run::mesh_case(&case, &folder)?;
+    let (mesh, mesh_time) = run::mesh_case(&case, &folder)?;
     Ok(Meshed {
         level: k,
         case,
         spec,
         folder,
         mesh,
-        mesh_seconds,
+        mesh_time,
     })
 }
 
@@ -281,14 +281,14 @@ fn solve_level(meshed: Meshed, quantities: &[QuantitySpec]) -> Result<Level> {
         spec,
         folder,
         mesh,
-        mesh_seconds,
+        mesh_time,
     } = meshed;
     let mut values = None;
     let summary = run::run_model(
         &case,
         spec,
         mesh,
-        mesh_seconds,
+        mesh_time,
         &folder,
         false,
         |model, step| {
@@ -302,7 +302,7 @@ fn solve_level(meshed: Meshed, quantities: &[QuantitySpec]) -> Result<Level> {
         level,
         size: case.mesh.size,
         unknowns: summary.dofs,
-        seconds: mesh_seconds + start.elapsed().as_secs_f64(),
+        seconds: mesh_time.seconds + start.elapsed().as_secs_f64(),
         values: values.expect("the last step was evaluated"),
     })
 }

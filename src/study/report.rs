@@ -194,6 +194,7 @@ fn describe(q: &QuantitySpec) -> String {
             )
         }
         QuantityKind::Stiffness => format!("stiffness of '{}', {comp} [N/mm]", get(&q.pair)),
+        QuantityKind::Twist => format!("twist angle of '{}' [rad]", get(&q.group)),
     }
 }
 
