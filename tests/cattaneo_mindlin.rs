@@ -236,7 +236,7 @@ fn points(model: &Model, states: &[asperity::contact::InterfaceState]) -> Vec<Po
                 weight: p.da,
                 pressure: -s.stress[1],
                 shear: s.stress[0] * along_x,
-                slip: s.plastic_slip * along_x,
+                slip: s.plastic_slip[0] * along_x,
                 status: s.status,
             });
         }

@@ -130,22 +130,22 @@ fn cyclic_history_at_constant_pressure_matches_the_closed_form_at_any_step_size(
     for steps in [1usize, 50] {
         let mut state = InterfaceState::default();
         // Close the contact first (no tangential motion).
-        state = l.update([0.0, u_n], &state).0;
+        state = l.update([0.0, u_n, 0.0], &state).0;
         let mut from = 0.0;
         for (k, &to) in path.iter().enumerate() {
             for i in 1..=steps {
                 let u = from + (to - from) * i as f64 / steps as f64;
-                state = l.update([u, u_n], &state).0;
+                state = l.update([u, u_n, 0.0], &state).0;
             }
             from = to;
             let (tau, up, slip) = reference[k];
             let rel = |a: f64, b: f64| (a - b).abs() / b.abs().max(1e-12);
             println!(
                 "{steps:>2} steps/segment, u_T = {to:+.3}: p_T = {:+.9} (exact {tau:+.9}), u_T^p = {:+.9} ({up:+.9}), ū = {:.9} ({slip:.9})",
-                state.stress[0], state.plastic_slip, state.accumulated_slip
+                state.stress[0], state.plastic_slip[0], state.accumulated_slip
             );
             assert!(rel(state.stress[0], tau) < 1e-8, "stress");
-            assert!(rel(state.plastic_slip, up) < 1e-8, "plastic slip");
+            assert!(rel(state.plastic_slip[0], up) < 1e-8, "plastic slip");
             assert!(rel(state.accumulated_slip, slip) < 1e-8, "accumulated slip");
             assert!(
                 (state.stress[1] + p).abs() < 1e-9 * p,
@@ -184,6 +184,7 @@ fn normal_law_is_the_total_power_law_with_an_optional_unloading_curve() {
 }
 
 fn tangent_fd_check(l: &RoughJoint, u: [f64; 2], committed: &InterfaceState) {
+    let u = [u[0], u[1], 0.0];
     let (state, k) = l.update(u, committed);
     for j in 0..2 {
         let h = 1e-9 * (1.0 + u[j].abs() * 1e3);
@@ -229,19 +230,19 @@ proptest! {
         let (mu_committed, _) = l.friction(slip_n);
         let u_n0 = -1e-4 * p_n.powf(0.5);
         let committed = InterfaceState {
-            relative: [0.003, u_n0],
-            stress: [tau_fraction * mu_committed * p_n, -p_n],
-            plastic_slip: 0.001,
+            relative: [0.003, u_n0, 0.0],
+            stress: [tau_fraction * mu_committed * p_n, -p_n, 0.0],
+            plastic_slip: [0.001, 0.0],
             accumulated_slip: slip_n,
             max_closure: -u_n0,
             ..InterfaceState::default()
         };
         let p_new = p_n * (1.0 + dp);
         let u = [0.003 + du_t, -1e-4 * p_new.powf(0.5)];
-        let (s, _) = l.update(u, &committed);
+        let (s, _) = l.update([u[0], u[1], 0.0], &committed);
         let limit = l.friction(s.accumulated_slip).0 * -s.stress[1];
         prop_assert!(s.stress[0].abs() <= limit * (1.0 + 1e-12) + 1e-12, "outside the slip surface");
-        let dup = s.plastic_slip - committed.plastic_slip;
+        let dup = s.plastic_slip[0] - committed.plastic_slip[0];
         prop_assert!(s.stress[0] * dup >= -1e-14 * limit, "negative dissipation");
         prop_assert!((s.accumulated_slip - slip_n - dup.abs()).abs() < 1e-15, "ū grows by |Δu^p|");
         if s.status == ContactStatus::Slip {

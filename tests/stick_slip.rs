@@ -104,7 +104,7 @@ fn near_rigid_punch_answer_is_physical() {
     for (e, element) in model.interface.elements.iter().enumerate() {
         for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
             let s = &states[e * INTERFACE_POINTS + g];
-            let [pt, pn] = s.stress;
+            let [pt, pn, _] = s.stress;
             // The Coulomb cone (the return map is exact up to round-off).
             assert!(
                 pt.abs() <= MU * pn.abs() * (1.0 + 1e-9) + 1e-9,

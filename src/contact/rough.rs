@@ -36,10 +36,22 @@
 //!   the law itself, so stress update and tangent agree.
 //!
 //! Stresses of the normal law always come from the exact total law.
+//!
+//! **With twist** (two tangential directions, see [`super`]): k_T(p) acts in both, the trial
+//! shear is the vector p_τ^tr = p_τ,n + k_T(p) (u_τ − u_τ,n), F = |p_τ^tr| − μ_F(ū) p, and the
+//! return is radial: g(Δλ) above with |p_τ^tr|, p_τ = μ_F(ū_n + Δλ) p n, n = p_τ^tr/|p_τ^tr|,
+//! u_τ^p += Δλ n, ū += Δλ: the slip hardening is driven by the length of the slip path,
+//! whatever its direction. The consistent tangent: ∂p_τ/∂u_τ = k_T H/(k_T + H) n nᵀ +
+//! μ_F p k_T/|p_τ^tr| (I − n nᵀ) (the direction turns with the trial shear), and
+//! ∂p_τ/∂u_N = (H ∂Δλ/∂u_N − μ_F k_N) n − μ_F p k_T' k_N/|p_τ^tr| (I − n nᵀ)(u_τ − u_τ,n),
+//! the second term because k_T(p) scales the trial increment too. Without twist n = sign(p_T^tr)
+//! and the (I − n nᵀ) terms vanish: the scalar law above, number for number.
 
 use super::laws::{Bound, Built, LawDescriptor, ParameterDefault, ParameterDescriptor, check};
 use super::{
-    ContactStatus, InterfaceLaw, InterfaceState, InterfaceTangent, OPEN_TANGENT_FRACTION, sticks,
+    CIRCUMFERENTIAL, ContactStatus, InterfaceLaw, InterfaceState, InterfaceTangent, MERIDIONAL,
+    NORMAL, OPEN_TANGENT_FRACTION, diagonal_tangent, direction, length, slip_tangent, sticks,
+    tangential,
 };
 use crate::error::ParameterError;
 
@@ -296,11 +308,10 @@ impl RoughJoint {
 impl InterfaceLaw for RoughJoint {
     fn update(
         &self,
-        relative: [f64; 2],
+        relative: [f64; 3],
         committed: &InterfaceState,
     ) -> (InterfaceState, InterfaceTangent) {
-        let [u_t, u_n] = relative;
-        let closure = -u_n;
+        let closure = -relative[NORMAL];
         let loading_max = committed.max_closure.max(closure);
         let (p, kn) = self.normal(closure, committed.max_closure);
         let mut s = InterfaceState {
@@ -318,39 +329,55 @@ impl InterfaceLaw for RoughJoint {
             // Open (or unloaded below the permanent set): no stress.
             s.status = ContactStatus::Open;
             let k0 = self.starting_stiffness();
-            return (
-                s,
-                InterfaceTangent::new(kt, 0.0, 0.0, k0) * OPEN_TANGENT_FRACTION,
-            );
+            return (s, diagonal_tangent([kt, k0]) * OPEN_TANGENT_FRACTION);
         }
-        let du = u_t - committed.relative[0];
-        let trial = committed.stress[0] + kt * du;
-        let f = trial.abs() - mu_n * p;
+        let (u, u_n) = (tangential(relative), tangential(committed.relative));
+        let du = [u[0] - u_n[0], u[1] - u_n[1]];
+        let shear_n = tangential(committed.stress);
+        let trial = [shear_n[0] + kt * du[0], shear_n[1] + kt * du[1]];
+        let norm = length(trial);
+        let f = norm - mu_n * p;
         if sticks(f, mu_n * p, committed) {
-            s.stress = [trial, -p];
+            s.stress = [trial[0], -p, trial[1]];
             s.status = ContactStatus::Stick;
-            // ∂p_T/∂u_N through k_T(p): dk_T/du_N = k_T'(p) · dp/du_N = −k_T' k_N.
-            return (s, InterfaceTangent::new(kt, -dkt * kn * du, 0.0, kn));
+            // ∂p_τ/∂u_N through k_T(p): dk_T/du_N = k_T'(p) · dp/du_N = −k_T' k_N.
+            let mut k = diagonal_tangent([kt, kn]);
+            k[(MERIDIONAL, NORMAL)] = -dkt * kn * du[0];
+            k[(CIRCUMFERENTIAL, NORMAL)] = -dkt * kn * du[1];
+            return (s, k);
         }
-        let sign = trial.signum();
+        let n = direction(trial, norm);
         // On the cone (see `sticks`) the slip increment is zero.
         let dl = if f > 0.0 {
-            self.slip_increment(trial.abs(), kt, p, committed.accumulated_slip)
+            self.slip_increment(norm, kt, p, committed.accumulated_slip)
         } else {
             0.0
         };
         let (mu, dmu) = self.friction(committed.accumulated_slip + dl);
-        s.stress = [sign * mu * p, -p];
-        s.plastic_slip = committed.plastic_slip + sign * dl;
+        s.stress = [n[0] * mu * p, -p, n[1] * mu * p];
+        let up = committed.plastic_slip;
+        s.plastic_slip = [up[0] + n[0] * dl, up[1] + n[1] * dl];
         s.accumulated_slip = committed.accumulated_slip + dl;
         s.friction = mu;
         s.status = ContactStatus::Slip;
         let h = dmu * p;
-        // Consistent tangent from g(Δλ; u_T, u_N) = 0 (Eq. 21 completed; docs/theory.md, "The consistent tangent").
-        let dg_dun = -kn * dkt * (sign * du - dl) + mu * kn;
-        let dpt_dut = kt * h / (kt + h);
-        let dpt_dun = sign * (h * dg_dun / (kt + h) - mu * kn);
-        (s, InterfaceTangent::new(dpt_dut, dpt_dun, 0.0, kn))
+        // Consistent tangent from g(Δλ; u_τ, u_N) = 0 (Eq. 21 completed; docs/theory.md, "The
+        // consistent tangent"), along n; across n the direction of the trial shear turns.
+        let along_du = n[0] * du[0] + n[1] * du[1];
+        let dg_dun = -kn * dkt * (along_du - dl) + mu * kn;
+        let along = kt * h / (kt + h);
+        let turn = if norm > 0.0 { mu * p / norm } else { 0.0 };
+        let radial = h * dg_dun / (kt + h) - mu * kn;
+        // (I − n nᵀ) du: the part of the increment across the slip direction.
+        let across_du = [
+            (1.0 - n[0] * n[0]) * du[0] - n[0] * n[1] * du[1],
+            (1.0 - n[1] * n[1]) * du[1] - n[0] * n[1] * du[0],
+        ];
+        let coupling = [
+            radial * n[0] - turn * dkt * kn * across_du[0],
+            radial * n[1] - turn * dkt * kn * across_du[1],
+        ];
+        (s, slip_tangent(n, along, turn * kt, coupling, kn))
     }
 
     fn carries_shear(&self) -> bool {

@@ -15,6 +15,8 @@
 //!
 //! Each surface has its own coefficient (0: that surface does not wear).
 
+use super::{NORMAL, dot, length, tangential};
+
 /// Default stability limit of a wear jump: the depth a jump adds at a point may be at most
 /// this fraction of the point's elastic closure |p_N| (1/k_N + ℓ/(π E*)), the interface and
 /// the bodies' surfaces in series (see [`crate::solver::cycles`]).
@@ -43,13 +45,13 @@ pub struct WearModel {
 }
 
 impl WearModel {
-    /// Depth increments (h_A, h_B) of a closed point with stress (p_T, p_N) that slipped by
-    /// `slip` = Δu_T^p.
+    /// Depth increments (h_A, h_B) of a closed point with stress (p_T, p_N, p_θ) that slipped
+    /// by `slip` = Δu_τ^p = (Δu_T^p, Δu_θ^p).
     #[inline]
-    pub fn increment(&self, stress: [f64; 2], slip: f64) -> [f64; 2] {
+    pub fn increment(&self, stress: [f64; 3], slip: [f64; 2]) -> [f64; 2] {
         let intensity = match self.law {
-            WearLaw::Archard => stress[1].abs() * slip.abs(),
-            WearLaw::Energy => (stress[0] * slip).abs(),
+            WearLaw::Archard => stress[NORMAL].abs() * length(slip),
+            WearLaw::Energy => dot(tangential(stress), slip).abs(),
         };
         [
             self.coefficients[0] * intensity,
@@ -83,10 +85,33 @@ mod tests {
             jump_limit: DEFAULT_JUMP_LIMIT,
         };
         // p_T = -30 MPa, p_N = -100 MPa, backward slip 1e-3 mm.
-        let stress = [-30.0, -100.0];
-        let a = model(WearLaw::Archard).increment(stress, -1e-3);
+        let stress = [-30.0, -100.0, 0.0];
+        let a = model(WearLaw::Archard).increment(stress, [-1e-3, 0.0]);
         assert_eq!(a, [2e-8 * 100.0 * 1e-3, 0.0]);
-        let e = model(WearLaw::Energy).increment(stress, -1e-3);
+        let e = model(WearLaw::Energy).increment(stress, [-1e-3, 0.0]);
         assert_eq!(e, [2e-8 * 30.0 * 1e-3, 0.0]);
+    }
+
+    #[test]
+    fn wear_follows_the_slip_vector() {
+        let model = |law| WearModel {
+            law,
+            coefficients: [1e-8, 3e-8],
+            max_depth: None,
+            jump_limit: DEFAULT_JUMP_LIMIT,
+        };
+        // Slip (3, 4) µm, length 5 µm, at p_N = −100 MPa with the shear (24, 32) MPa along it
+        // (|p_τ| = 40 MPa): Archard |p_N| · 5e-3, energy p_τ·Δu = 40 · 5e-3.
+        let (stress, slip) = ([24.0, -100.0, 32.0], [3e-3, 4e-3]);
+        let a = model(WearLaw::Archard).increment(stress, slip);
+        let e = model(WearLaw::Energy).increment(stress, slip);
+        for (got, intensity) in [(a, 100.0 * 5e-3), (e, 40.0 * 5e-3)] {
+            for (g, k) in got.iter().zip([1e-8, 3e-8]) {
+                assert!(
+                    (g - k * intensity).abs() <= 1e-15 * k * intensity,
+                    "{got:?}"
+                );
+            }
+        }
     }
 }

@@ -7,17 +7,25 @@
 //! (Eqs. 26–31); here u_N also includes the initial normal gap g₀ (from the geometry of
 //! non-coincident faces) minus the interference δ, so that closure is −u_N.
 //!
+//! With twist (axisymmetry with u_θ, [`Analysis::AxisymmetricTwist`]) every node has three
+//! dofs (element dof 3i + c) and the relative displacement gains its third component, the
+//! circumferential slide u_θ = Σ N_i (u_θ,B,i − u_θ,A,i): e_θ is normal to the meridian
+//! plane, hence to both t and n, so it needs no rotation. The interface vectors are then
+//! (u_T, u_N, u_θ) and (p_T, p_N, p_θ) (see [`crate::contact`]); without twist the element
+//! computes exactly the 2-component operator of the paper.
+//!
 //! Stiffness and internal force are K = ∫ Bᵀ E B dA, F = ∫ Bᵀ p dA (Eqs. 35–36) with
 //! dA = w · det j · (2πr or thickness) (Eqs. 37–38). The default rule is 3-point
 //! Newton-Cotes (Lobatto, Eqs. 39–40): its points are the nodes, so the element matrices are
 //! lumped (node pairs uncoupled), which avoids the stress oscillations of full Gauss
 //! integration (§3.3.1). 3-point Gauss is available for comparison.
 
+use nalgebra::{SMatrix, SVector};
 use serde::Deserialize;
 
 use super::quadrature::{GAUSS3, LOBATTO3};
 use super::shape::line3;
-use super::{Analysis, ElementInput, ElementOutput};
+use super::{Analysis, ElementInput, ElementOutput, ElementVector};
 use crate::contact::wear::WearModel;
 use crate::contact::{InterfaceLaw, InterfaceState};
 
@@ -112,24 +120,61 @@ pub fn surface_compliance(surface_moduli: [f64; 2], wavelength: f64) -> f64 {
     wavelength / std::f64::consts::PI * (1.0 / surface_moduli[0] + 1.0 / surface_moduli[1])
 }
 
-/// Relative displacement operator row for point `p`: u_T = Σ N_i (u_B,i − u_A,i)·t and the
-/// same with n. Returns the 2×12 matrix B (in a 2×16 to match
-/// [`ElementVector`](super::ElementVector)).
-pub fn relative_operator(p: &InterfacePoint) -> nalgebra::SMatrix<f64, 2, 16> {
-    let mut b = nalgebra::SMatrix::<f64, 2, 16>::zeros();
+/// Relative displacement operator of point `p` for an element whose nodes carry `D` dofs,
+/// with `R` components (2: u_T, u_N; 3: and u_θ when `D` = 3) and `W` ≥ 6·D columns in
+/// element dof order D·i + c: u_T = Σ N_i (u_B,i − u_A,i)·t, u_N the same with n, u_θ = Σ N_i
+/// (u_θ,B,i − u_θ,A,i).
+fn operator<const D: usize, const R: usize, const W: usize>(
+    p: &InterfacePoint,
+) -> SMatrix<f64, R, W> {
+    let mut b = SMatrix::<f64, R, W>::zeros();
     for i in 0..3 {
+        let (a_dof, b_dof) = (D * i, D * (3 + i));
         for c in 0..2 {
-            b[(0, 2 * i + c)] = -p.n[i] * p.tangent[c];
-            b[(1, 2 * i + c)] = -p.n[i] * p.normal[c];
-            b[(0, 6 + 2 * i + c)] = p.n[i] * p.tangent[c];
-            b[(1, 6 + 2 * i + c)] = p.n[i] * p.normal[c];
+            b[(0, a_dof + c)] = -p.n[i] * p.tangent[c];
+            b[(1, a_dof + c)] = -p.n[i] * p.normal[c];
+            b[(0, b_dof + c)] = p.n[i] * p.tangent[c];
+            b[(1, b_dof + c)] = p.n[i] * p.normal[c];
+        }
+        if R == 3 {
+            b[(2, a_dof + 2)] = -p.n[i];
+            b[(2, b_dof + 2)] = p.n[i];
         }
     }
     b
 }
 
+/// Relative displacement operator of point `p` without twist: (u_T, u_N) from the 12 dofs
+/// (in a 2×16, the leading columns of [`ElementVector`](super::ElementVector)).
+pub fn relative_operator(p: &InterfacePoint) -> SMatrix<f64, 2, 16> {
+    operator::<2, 2, 16>(p)
+}
+
+/// Relative displacement operator of point `p` with twist: (u_T, u_N, u_θ) from the 18 dofs
+/// (3 per node).
+pub fn twist_relative_operator(p: &InterfacePoint) -> SMatrix<f64, 3, 18> {
+    operator::<3, 3, 18>(p)
+}
+
+/// The relative displacement (u_T, u_N, u_θ) at point `p` of element nodal displacements `u`
+/// (dof order of `analysis`), u_θ = 0 without twist; without the gap and wear terms.
+pub fn relative_displacement(
+    analysis: &Analysis,
+    p: &InterfacePoint,
+    u: &ElementVector,
+) -> [f64; 3] {
+    if analysis.has_twist() {
+        let jump = twist_relative_operator(p) * u.fixed_rows::<18>(0);
+        [jump[0], jump[1], jump[2]]
+    } else {
+        let jump = relative_operator(p) * u.fixed_rows::<16>(0);
+        [jump[0], jump[1], 0.0]
+    }
+}
+
 /// Tangent and internal force of one interface element for nodal displacements `input.u`
-/// (dofs of [a0, a1, a_mid, b0, b1, b_mid]), updating the trial states from the committed
+/// (dofs of [a0, a1, a_mid, b0, b1, b_mid], `analysis.dofs_per_node()` per node), updating the
+/// trial states from the committed
 /// ones, with their fretting and wear history ([`crate::contact::PointHistory`]; `wear` is the
 /// pair's wear model); the law sees the gap opened by the committed wear. The tangent is the one of `input.algorithm`
 /// (the consistent one, Buczkowski & Kleiber (1994), Eq. 21, for Newton).
@@ -142,6 +187,41 @@ pub fn evaluate_interface(
     input: &ElementInput<InterfaceState>,
     output: ElementOutput<InterfaceState>,
 ) {
+    let pair = PairOfElement {
+        element,
+        interference,
+        law,
+        wear,
+    };
+    if analysis.has_twist() {
+        evaluate_points::<3, 3, 18>(analysis, &pair, input, output);
+    } else {
+        evaluate_points::<2, 2, 16>(analysis, &pair, input, output);
+    }
+}
+
+/// An element with what its pair gives it.
+struct PairOfElement<'a> {
+    element: &'a InterfaceElement,
+    interference: f64,
+    law: &'a dyn InterfaceLaw,
+    wear: Option<&'a WearModel>,
+}
+
+/// [`evaluate_interface`] for `D` dofs per node, `R` relative components and `W` operator
+/// columns (see [`operator`]).
+fn evaluate_points<const D: usize, const R: usize, const W: usize>(
+    analysis: &Analysis,
+    pair: &PairOfElement,
+    input: &ElementInput<InterfaceState>,
+    output: ElementOutput<InterfaceState>,
+) {
+    let PairOfElement {
+        element,
+        interference,
+        law,
+        wear,
+    } = *pair;
     let ElementInput {
         u,
         committed,
@@ -150,8 +230,8 @@ pub fn evaluate_interface(
     let ElementOutput { trial, mut k, f } = output;
     for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
         let p = interface_point(analysis, &element.b_coords, xi, w);
-        let b = relative_operator(&p);
-        let jump = b * u.fixed_rows::<16>(0);
+        let b = operator::<D, R, W>(&p);
+        let jump = b * u.fixed_rows::<W>(0);
         let mut gap = [0.0; 2];
         for i in 0..3 {
             gap[0] += p.n[i] * element.offsets[i][0];
@@ -162,17 +242,19 @@ pub fn evaluate_interface(
         // law's tangent needs no wear term.
         let before = &committed[g];
         let worn = before.history.depth();
-        let relative = [jump[0], jump[1] + g0 - interference + worn];
+        let circumferential = if R == 3 { jump[2] } else { 0.0 };
+        let relative = [jump[0], jump[1] + g0 - interference + worn, circumferential];
         let (state, tangent) = law.update(relative, before);
-        let stress = nalgebra::Vector2::new(state.stress[0], state.stress[1]);
-        f.fixed_rows_mut::<16>(0).gemv_tr(p.da, &b, &stress, 1.0);
+        let stress = SVector::<f64, R>::from_fn(|i, _| state.stress[i]);
+        f.fixed_rows_mut::<W>(0).gemv_tr(p.da, &b, &stress, 1.0);
         let used = algorithm.tangent(law, &state, tangent);
+        let used: SMatrix<f64, R, R> = used.fixed_view::<R, R>(0, 0).into_owned();
         if let Some(k) = k.as_deref_mut() {
             let eb = used * b;
-            k.fixed_view_mut::<16, 16>(0, 0).gemm_tr(p.da, &b, &eb, 1.0);
+            k.fixed_view_mut::<W, W>(0, 0).gemm_tr(p.da, &b, &eb, 1.0);
         }
         let mut state = state;
-        state.unsymmetric = used[(0, 1)] != used[(1, 0)];
+        state.unsymmetric = used != used.transpose();
         state.history = before.history.advanced(
             before.plastic_slip,
             &state,
@@ -295,7 +377,7 @@ mod tests {
             ..element(InterfaceRule::Gauss)
         };
         let committed = [InterfaceState {
-            plastic_slip: 1e-4,
+            plastic_slip: [1e-4, 0.0],
             ..Default::default()
         }; 3];
         let cases: [(f64, f64); 3] = [(5e-5, -1e-3), (3e-3, -1e-3), (1e-3, 2e-3)];
@@ -329,6 +411,106 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn twist_tangent_matches_finite_differences_with_circumferential_slip() {
+        let law = LinearCoulomb::new(2e4, 1e4, 0.3).unwrap();
+        let analysis = Analysis::AxisymmetricTwist;
+        let e = InterfaceElement {
+            b_coords: [[1.0, 0.0], [2.0, 0.5], [1.5, 0.3]],
+            ..element(InterfaceRule::Gauss)
+        };
+        let committed = [InterfaceState {
+            plastic_slip: [1e-4, -2e-4],
+            ..Default::default()
+        }; 3];
+        // (x slide, y approach, circumferential slide of B): stick, slip mostly
+        // circumferential, slip in both, open. (Away from u_N = 0, where the stress has its
+        // open/closed kink: the element is tilted, n = (−0.45, 0.89).)
+        let cases: [[f64; 3]; 4] = [
+            [5e-5, -1e-3, -1e-4],
+            [1e-4, -1e-3, 3e-3],
+            [-1e-3, -2e-3, 2e-3],
+            [1e-3, 2e-3, 1e-3],
+        ];
+        for [slide, press, turn] in cases {
+            let mut u = ElementVector::zeros();
+            for i in 3..6 {
+                u[3 * i] = slide;
+                u[3 * i + 1] = press;
+                u[3 * i + 2] = turn * (1.0 + 0.1 * i as f64);
+            }
+            u[10] += 1e-4;
+            let mut k = ElementMatrix::zeros();
+            let mut f = ElementVector::zeros();
+            newton(&analysis, &e, &law, &u, &committed, Some(&mut k), &mut f);
+            let h = 1e-9;
+            for j in 0..18 {
+                let (mut up, mut um) = (u, u);
+                up[j] += h;
+                um[j] -= h;
+                let (mut fp, mut fm) = (ElementVector::zeros(), ElementVector::zeros());
+                newton(&analysis, &e, &law, &up, &committed, None, &mut fp);
+                newton(&analysis, &e, &law, &um, &committed, None, &mut fm);
+                for i in 0..18 {
+                    let fd = (fp[i] - fm[i]) / (2.0 * h);
+                    // As in the plane test: entries ~k_N × area ≈ 1e5.
+                    assert!(
+                        (fd - k[(i, j)]).abs() < 1e-6 * 1e5,
+                        "state ({slide},{press},{turn}) K[{i},{j}] = {} vs fd {fd}",
+                        k[(i, j)]
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn twist_element_without_circumferential_motion_is_the_axisymmetric_one() {
+        let law = LinearCoulomb::new(2e4, 1e4, 0.3).unwrap();
+        let e = element(InterfaceRule::NewtonCotes);
+        let committed = [InterfaceState::default(); 3];
+        let (mut u2, mut u3) = (ElementVector::zeros(), ElementVector::zeros());
+        for i in 0..6 {
+            let v = [1e-4 * i as f64, -3e-4 * (i as f64 - 2.5)];
+            for c in 0..2 {
+                u2[2 * i + c] = v[c];
+                u3[3 * i + c] = v[c];
+            }
+        }
+        let (mut k2, mut f2) = (ElementMatrix::zeros(), ElementVector::zeros());
+        let (mut k3, mut f3) = (ElementMatrix::zeros(), ElementVector::zeros());
+        newton(
+            &Analysis::Axisymmetric,
+            &e,
+            &law,
+            &u2,
+            &committed,
+            Some(&mut k2),
+            &mut f2,
+        );
+        newton(
+            &Analysis::AxisymmetricTwist,
+            &e,
+            &law,
+            &u3,
+            &committed,
+            Some(&mut k3),
+            &mut f3,
+        );
+        for a in 0..12 {
+            let a3 = 3 * (a / 2) + a % 2;
+            assert_eq!(f2[a], f3[a3]);
+            for b in 0..12 {
+                assert_eq!(k2[(a, b)], k3[(a3, 3 * (b / 2) + b % 2)]);
+            }
+        }
+        // The circumferential dofs carry k_T between the node pairs and no force.
+        for i in 0..6 {
+            assert_eq!(f3[3 * i + 2], 0.0);
+        }
+        assert!(k3[(2, 2)] > 0.0 && k3[(2, 11)] < 0.0);
     }
 
     #[test]

@@ -261,7 +261,7 @@ pub fn normal(law: &dyn InterfaceLaw, closure: &[f64]) -> Vec<f64> {
     closure
         .iter()
         .map(|c| {
-            state = law.update([0.0, -c], &state).0;
+            state = law.update([0.0, -c, 0.0], &state).0;
             -state.stress[1]
         })
         .collect()
@@ -270,11 +270,13 @@ pub fn normal(law: &dyn InterfaceLaw, closure: &[f64]) -> Vec<f64> {
 /// Shear stresses along a tangential displacement history at constant `pressure`.
 pub fn tangential(law: &dyn InterfaceLaw, pressure: f64, displacement: &[f64]) -> Vec<f64> {
     let closure = closure_at(law, pressure);
-    let mut state = law.update([0.0, -closure], &InterfaceState::default()).0;
+    let mut state = law
+        .update([0.0, -closure, 0.0], &InterfaceState::default())
+        .0;
     displacement
         .iter()
         .map(|u| {
-            state = law.update([*u, -closure], &state).0;
+            state = law.update([*u, -closure, 0.0], &state).0;
             state.stress[0]
         })
         .collect()
@@ -283,7 +285,11 @@ pub fn tangential(law: &dyn InterfaceLaw, pressure: f64, displacement: &[f64]) -
 /// The closure at which `law`, loaded from the open state, carries `pressure`: bisection on
 /// the (monotonic) first-loading response, to round-off.
 fn closure_at(law: &dyn InterfaceLaw, pressure: f64) -> f64 {
-    let p = |c: f64| -law.update([0.0, -c], &InterfaceState::default()).0.stress[1];
+    let p = |c: f64| {
+        -law.update([0.0, -c, 0.0], &InterfaceState::default())
+            .0
+            .stress[1]
+    };
     let mut hi = 1e-6;
     while p(hi) < pressure && hi < 1e6 {
         hi *= 2.0;

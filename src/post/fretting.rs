@@ -6,14 +6,14 @@
 //! by row as the frames come and handed to the writer to append ([`GrowingCsv`]): no row is
 //! kept once handed over, so that memory does not grow with the frames.
 
-use crate::contact::{ContactStatus, InterfaceState};
+use crate::contact::{CIRCUMFERENTIAL, ContactStatus, InterfaceState};
 use crate::element::interface6::{chord_length, interface_point};
 use crate::element::set::INTERFACE_POINTS;
 use crate::model::Model;
 
 use crate::Result;
 use crate::output::csv::{Cell, GrowingCsv};
-use crate::post::interface::InterfaceOutput;
+use crate::post::interface::{InterfaceOutput, torques};
 use crate::solver::state::StepResult;
 
 /// A fretting table of a run; the output folder names its file
@@ -35,9 +35,10 @@ fn table_label(table: &str, pair: &str) -> std::path::PathBuf {
     format!("{table} table of contact '{pair}'").into()
 }
 
-/// An empty table of `columns`.
-fn growing(columns: &[&str]) -> GrowingCsv {
-    let columns: Vec<String> = columns.iter().map(|c| c.to_string()).collect();
+/// An empty table of `columns`, followed by `twist_columns` when `twist`.
+fn growing(columns: &[&str], twist_columns: &[&str], twist: bool) -> GrowingCsv {
+    let extra = if twist { twist_columns } else { &[] };
+    let columns: Vec<String> = columns.iter().chain(extra).map(|c| c.to_string()).collect();
     GrowingCsv::new(&columns)
 }
 
@@ -55,6 +56,12 @@ pub const HYSTERESIS: [&str; 8] = [
     "normal_force",
     "relative_slip",
 ];
+
+/// Columns `hysteresis_<pair>.csv` appends with twist: the pair's circumferential force
+/// ∫ p_θ dA (N), the area-weighted mean circumferential relative displacement u_θ of its
+/// closed points (mm) and the torque it transmits (N·mm, [`crate::post::interface::torques`]):
+/// torque against the twist is the torsional fretting loop.
+pub const HYSTERESIS_TWIST: [&str; 3] = ["tangential_force_theta", "relative_slip_theta", "torque"];
 
 /// Columns of `point_loops_<pair>.csv`: per output frame and traced point (numbered
 /// from 1 in the order of the case's `hysteresis_points`) where the frame lies in the load
@@ -74,6 +81,13 @@ pub const POINT_LOOPS: [&str; 12] = [
     "normal_stress",
     "tangential_displacement",
     "plastic_slip",
+];
+
+/// Columns `point_loops_<pair>.csv` appends with twist: p_θ (MPa), u_θ and u_θ^p (mm).
+pub const POINT_LOOPS_TWIST: [&str; 3] = [
+    "shear_stress_theta",
+    "tangential_displacement_theta",
+    "plastic_slip_theta",
 ];
 
 /// An interface integration point whose local loop is traced: its index into the interface
@@ -175,6 +189,8 @@ struct PairSums {
     normal_force: f64,
     closed_area: f64,
     slip_area: f64,
+    tangential_force_theta: f64,
+    slip_area_theta: f64,
     cycle_dissipation: f64,
     settling_dissipation: f64,
     worn_volume: f64,
@@ -192,9 +208,11 @@ fn pair_sums(model: &Model, states: &[InterfaceState], jump: f64) -> Vec<PairSum
             let s = &states[e * INTERFACE_POINTS + g];
             sums.tangential_force += s.stress[0] * da;
             sums.normal_force -= s.stress[1] * da;
+            sums.tangential_force_theta += s.stress[CIRCUMFERENTIAL] * da;
             if s.status != ContactStatus::Open {
                 sums.closed_area += da;
                 sums.slip_area += s.relative[0] * da;
+                sums.slip_area_theta += s.relative[CIRCUMFERENTIAL] * da;
             }
             let h = &s.history;
             sums.cycle_dissipation += h.last_cycle_dissipation * da;
@@ -225,12 +243,15 @@ pub struct FrettingTables {
     /// without traced points).
     traced: Vec<Vec<TracedPoint>>,
     points: Vec<Option<GrowingCsv>>,
+    /// Whether the model has twist: the tables' circumferential columns.
+    twist: bool,
 }
 
 impl FrettingTables {
     /// Empty tables for the pairs of `model`.
     pub fn new(model: &Model) -> Self {
         let pairs = &model.interface.pairs;
+        let twist = model.analysis.has_twist();
         let bodies = model.continuum.materials.iter().any(|m| !m.is_linear());
         let mut cycles: Vec<String> = CYCLES.iter().map(|c| c.to_string()).collect();
         if bodies {
@@ -239,24 +260,29 @@ impl FrettingTables {
             }
         }
         Self {
-            hysteresis: pairs.iter().map(|_| growing(&HYSTERESIS)).collect(),
+            hysteresis: pairs
+                .iter()
+                .map(|_| growing(&HYSTERESIS, &HYSTERESIS_TWIST, twist))
+                .collect(),
             cycles: GrowingCsv::new(&cycles),
             bodies,
             wear: pairs
                 .iter()
-                .map(|p| p.wear().map(|_| growing(&WEAR)))
+                .map(|p| p.wear().map(|_| growing(&WEAR, &[], false)))
                 .collect(),
             traced: vec![Vec::new(); pairs.len()],
             points: vec![None; pairs.len()],
+            twist,
         }
     }
 
     /// The tables with the local loops of `traced` points, per pair (in the model's order).
     pub fn with_points(mut self, traced: Vec<Vec<TracedPoint>>) -> Self {
         debug_assert_eq!(traced.len(), self.traced.len());
+        let twist = self.twist;
         self.points = traced
             .iter()
-            .map(|t| (!t.is_empty()).then(|| growing(&POINT_LOOPS)))
+            .map(|t| (!t.is_empty()).then(|| growing(&POINT_LOOPS, &POINT_LOOPS_TWIST, twist)))
             .collect();
         self.traced = traced;
         self
@@ -278,15 +304,23 @@ impl FrettingTables {
         let sums = pair_sums(model, &step.solution.interface_committed, jump as f64);
         let position = [frame.analysis_step as f64, frame.cycle as f64, frame.cycles];
         let pairs = &model.interface.pairs;
-        for ((table, s), pair) in self.hysteresis.iter_mut().zip(&sums).zip(pairs) {
-            let slip = if s.closed_area > 0.0 {
-                s.slip_area / s.closed_area
-            } else {
-                0.0
-            };
+        let twist = model.analysis.has_twist();
+        let torque = if twist {
+            torques(model, &step.solution.interface_committed)
+        } else {
+            Vec::new()
+        };
+        let mean = |sum: f64, area: f64| if area > 0.0 { sum / area } else { 0.0 };
+        for (p, ((table, s), pair)) in self.hysteresis.iter_mut().zip(&sums).zip(pairs).enumerate()
+        {
+            let slip = mean(s.slip_area, s.closed_area);
             let mut row = vec![time];
             row.extend(position);
             row.extend([frame.step_time, s.tangential_force, s.normal_force, slip]);
+            if twist {
+                let slip_theta = mean(s.slip_area_theta, s.closed_area);
+                row.extend([s.tangential_force_theta, slip_theta, torque[p]]);
+            }
             table.push(&table_label("hysteresis", &pair.name), &row)?;
         }
         self.record_points(model, step, time)?;
@@ -361,7 +395,7 @@ impl FrettingTables {
             let Some(table) = table else { continue };
             for (i, point) in traced.iter().enumerate() {
                 let s = &step.solution.interface_committed[point.state];
-                let row = [
+                let mut row = vec![
                     time,
                     frame.analysis_step as f64,
                     frame.cycle as f64,
@@ -373,8 +407,15 @@ impl FrettingTables {
                     s.stress[0],
                     s.stress[1],
                     s.relative[0],
-                    s.plastic_slip,
+                    s.plastic_slip[0],
                 ];
+                if model.analysis.has_twist() {
+                    row.extend([
+                        s.stress[CIRCUMFERENTIAL],
+                        s.relative[CIRCUMFERENTIAL],
+                        s.plastic_slip[1],
+                    ]);
+                }
                 table.push(&table_label("point loops", &pair.name), &row)?;
             }
         }

@@ -14,7 +14,7 @@ use std::collections::HashMap;
 
 use nalgebra::Matrix3;
 
-use crate::contact::{ContactStatus, InterfaceState};
+use crate::contact::{CIRCUMFERENTIAL, ContactStatus, InterfaceState};
 use crate::element::Analysis;
 use crate::element::interface6::{InterfaceElement, interface_point};
 use crate::element::set::INTERFACE_POINTS;
@@ -40,12 +40,45 @@ pub const FIELDS: [&str; 10] = [
     "tangential_stiffness",
 ];
 
+/// Names of the circumferential point fields of a model with twist, in the order of
+/// [`NodalContact::values`] after [`FIELDS`]: the circumferential shear stress p_θ (MPa), the
+/// circumferential relative displacement u_θ and the circumferential plastic slip u_θ^p (mm).
+/// Each is written beside its meridional partner ([`field_order`]).
+pub const TWIST_FIELDS: [&str; 3] = [
+    "contact_shear_stress_theta",
+    "tangential_slip_theta",
+    "signed_plastic_slip_theta",
+];
+
+/// Number of values of [`NodalContact::values`]: [`FIELDS`] then [`TWIST_FIELDS`].
+const VALUES: usize = FIELDS.len() + TWIST_FIELDS.len();
+
+/// The point fields a grid or table has, as indices into [`NodalContact::values`] in the
+/// order of its columns: [`FIELDS`], and with twist each of [`TWIST_FIELDS`] right after its
+/// meridional partner.
+pub fn field_order(twist: bool) -> &'static [usize] {
+    if twist {
+        &[0, 1, 2, 10, 3, 4, 11, 5, 6, 12, 7, 8, 9]
+    } else {
+        &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9]
+    }
+}
+
+/// The name of value `i` of [`NodalContact::values`].
+fn field_name(i: usize) -> &'static str {
+    FIELDS
+        .get(i)
+        .copied()
+        .unwrap_or_else(|| TWIST_FIELDS[i - FIELDS.len()])
+}
+
 /// Contact results at one side-B node.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct NodalContact {
     /// In the order of [`FIELDS`]: p_N (paper sign), −p_N, p_T, u_N, u_T, accumulated slip ū,
-    /// signed plastic slip u_T^p, μ_F, k_N, k_T.
-    pub values: [f64; 10],
+    /// signed plastic slip u_T^p, μ_F, k_N, k_T; then of [`TWIST_FIELDS`]: p_θ, u_θ, u_θ^p
+    /// (zero without twist).
+    pub values: [f64; VALUES],
     /// 0 open, 1 stick, 2 slip (the most advanced state among the contributing points).
     pub status: i32,
 }
@@ -61,7 +94,7 @@ impl NodalContact {
         }
     }
 
-    fn from_state(s: &InterfaceState) -> [f64; 10] {
+    fn from_state(s: &InterfaceState) -> [f64; VALUES] {
         [
             s.stress[1],
             -s.stress[1],
@@ -69,10 +102,13 @@ impl NodalContact {
             s.relative[1],
             s.relative[0],
             s.accumulated_slip,
-            s.plastic_slip,
+            s.plastic_slip[0],
             s.friction,
             s.stiffness[1],
             s.stiffness[0],
+            s.stress[CIRCUMFERENTIAL],
+            s.relative[CIRCUMFERENTIAL],
+            s.plastic_slip[1],
         ]
     }
 }
@@ -199,7 +235,7 @@ impl InterfaceOutput {
             let p = element.pair as usize;
             let points = &states[e * INTERFACE_POINTS..(e + 1) * INTERFACE_POINTS];
             let ex = &self.extrapolation[element.rule as usize];
-            let values: Vec<[f64; 10]> = points.iter().map(NodalContact::from_state).collect();
+            let values: Vec<[f64; VALUES]> = points.iter().map(NodalContact::from_state).collect();
             for i in 0..3 {
                 let k = self.slot[p][&element.nodes[3 + i]];
                 let target = &mut out[p][k];
@@ -250,24 +286,28 @@ impl InterfaceOutput {
     /// Contact force vectors at the side-B nodes, in grid order, like Abaqus' CNORMF and
     /// CSHEARF: the consistent nodal forces that body A exerts on body B through the normal
     /// and the shear stress, f_i = −∫ N_i p_N n dA and −∫ N_i p_T t dA (N) with the element's
-    /// own rule (in axisymmetry totals over the circle). Summed over a pair they are its
-    /// resultant `force_on_b` ([`resultants`]).
-    pub fn nodal_forces(&self, model: &Model, states: &[InterfaceState]) -> [Vec<f64>; 2] {
+    /// own rule (in axisymmetry totals over the circle); and the circumferential force
+    /// −∫ N_i p_θ dA (N, a scalar per node: the magnitude of the ring of circumferential
+    /// forces, zero without twist). Summed over a pair the first two are its resultant
+    /// `force_on_b` ([`resultants`]).
+    pub fn nodal_forces(&self, model: &Model, states: &[InterfaceState]) -> [Vec<f64>; 3] {
         let offsets = self.offsets();
         let n = offsets
             .last()
             .map_or(0, |&o| o + self.pairs.last().map_or(0, |p| p.nodes.len()));
-        let mut forces = [vec![0.0; 3 * n], vec![0.0; 3 * n]];
+        let mut forces = [vec![0.0; 3 * n], vec![0.0; 3 * n], vec![0.0; n]];
         for (e, element) in model.interface.elements.iter().enumerate() {
             for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
                 let p = interface_point(&model.analysis, &element.b_coords, xi, w);
-                let [pt, pn] = states[e * INTERFACE_POINTS + g].stress;
+                let [pt, pn, ptheta] = states[e * INTERFACE_POINTS + g].stress;
                 for k in 0..3 {
-                    let at = 3 * self.grid_point(&offsets, element, k);
+                    let node = self.grid_point(&offsets, element, k);
+                    let at = 3 * node;
                     for c in 0..2 {
                         forces[0][at + c] -= p.n[k] * pn * p.normal[c] * p.da;
                         forces[1][at + c] -= p.n[k] * pt * p.tangent[c] * p.da;
                     }
+                    forces[2][node] -= p.n[k] * ptheta * p.da;
                 }
             }
         }
@@ -275,9 +315,11 @@ impl InterfaceOutput {
     }
 
     /// Interface grid: one quadratic edge (VTK 21) per element at the side-B positions; point
-    /// data: the fields of [`FIELDS`], `contact_status`, and the contact force vectors
-    /// `contact_normal_force` and `contact_shear_force` ([`Self::nodal_forces`]); cell data
-    /// `pair`; field data `pair_names` (`pair` k is `pair_names[k]`).
+    /// data: the fields of [`field_order`] (with twist also [`TWIST_FIELDS`]),
+    /// `contact_status`, and the contact force vectors `contact_normal_force` and
+    /// `contact_shear_force` ([`Self::nodal_forces`]), with twist then the scalar
+    /// `contact_shear_force_theta`; cell data `pair`; field data `pair_names` (`pair` k is
+    /// `pair_names[k]`).
     pub fn grid(&self, model: &Model, states: &[InterfaceState]) -> Grid {
         let nodal = self.nodal(model, states);
         let offsets = self.offsets();
@@ -293,10 +335,11 @@ impl InterfaceOutput {
             );
         }
         let all: Vec<&NodalContact> = nodal.iter().flatten().collect();
-        for (f, name) in FIELDS.iter().enumerate() {
+        let twist = model.analysis.has_twist();
+        for &f in field_order(twist) {
             let values = all.iter().map(|n| n.values[f]).collect();
             grid.point_data.push(Field {
-                name: (*name).into(),
+                name: field_name(f).into(),
                 components: 1,
                 component_names: Vec::new(),
                 values: FieldValues::F64(values),
@@ -308,11 +351,15 @@ impl InterfaceOutput {
             component_names: Vec::new(),
             values: FieldValues::I32(all.iter().map(|n| n.status).collect()),
         });
-        let [normal, shear] = self.nodal_forces(model, states);
+        let [normal, shear, shear_theta] = self.nodal_forces(model, states);
         grid.point_data.extend([
             Field::new("contact_normal_force", 3, FieldValues::F64(normal)),
             Field::new("contact_shear_force", 3, FieldValues::F64(shear)),
         ]);
+        if twist {
+            grid.point_data
+                .push(Field::scalar("contact_shear_force_theta", shear_theta));
+        }
         let names = model.interface.pairs.iter().map(|p| p.name.clone());
         grid.field_data
             .push(Field::strings("pair_names", names.collect()));
@@ -332,14 +379,16 @@ impl InterfaceOutput {
         grid
     }
 
-    /// One table per pair along the curve: arc length, position, the fields and the status.
+    /// One table per pair along the curve: arc length, position, the fields
+    /// ([`field_order`]) and the status.
     pub fn tables(&self, model: &Model, states: &[InterfaceState]) -> Vec<CsvTable> {
         let nodal = self.nodal(model, states);
+        let order = field_order(model.analysis.has_twist());
         let mut columns: Vec<String> = ["arc_length", "x", "y"]
             .iter()
             .map(|s| s.to_string())
             .collect();
-        columns.extend(FIELDS.iter().map(|s| s.to_string()));
+        columns.extend(order.iter().map(|&f| field_name(f).to_string()));
         columns.push("contact_status".into());
         self.pairs
             .iter()
@@ -354,7 +403,7 @@ impl InterfaceOutput {
                     .map(|((&n, &s), v)| {
                         let x = model.mesh.nodes[n as usize];
                         let mut row = vec![s, x[0], x[1]];
-                        row.extend(v.values);
+                        row.extend(order.iter().map(|&f| v.values[f]));
                         row.push(v.status as f64);
                         row
                     })
@@ -636,12 +685,29 @@ pub fn resultants(model: &Model, states: &[InterfaceState]) -> Vec<[f64; 4]> {
         let r = &mut out[element.pair as usize];
         for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
             let p = interface_point(&model.analysis, &element.b_coords, xi, w);
-            let [pt, pn] = states[e * INTERFACE_POINTS + g].stress;
+            let [pt, pn, _] = states[e * INTERFACE_POINTS + g].stress;
             r[0] += pn * p.da;
             r[1] += pt * p.da;
             for c in 0..2 {
                 r[2 + c] -= (pt * p.tangent[c] + pn * p.normal[c]) * p.da;
             }
+        }
+    }
+    out
+}
+
+/// The torque (N·mm) about the axis that body A exerts on body B through each pair's
+/// circumferential shear: −∫ p_θ r dA, r the radius of the point (side B) and dA the area
+/// weight, which in axisymmetry already holds the 2πr of the circle, so the integral is over
+/// the whole surface of revolution. Signed like the components of [`resultants`]' force on B
+/// (positive in the sense of increasing θ, anticlockwise seen from +z); zero without twist.
+pub fn torques(model: &Model, states: &[InterfaceState]) -> Vec<f64> {
+    let mut out = vec![0.0; model.interface.pairs.len()];
+    for (e, element) in model.interface.elements.iter().enumerate() {
+        for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
+            let p = interface_point(&model.analysis, &element.b_coords, xi, w);
+            let shear = states[e * INTERFACE_POINTS + g].stress[CIRCUMFERENTIAL];
+            out[element.pair as usize] -= shear * p.x[0] * p.da;
         }
     }
     out

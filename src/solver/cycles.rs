@@ -44,7 +44,7 @@
 
 use std::collections::HashMap;
 
-use crate::contact::{ContactStatus, InterfaceState, PointHistory};
+use crate::contact::{ContactStatus, InterfaceState, PointHistory, length, tangential};
 use crate::element::interface6::interface_point;
 use crate::element::set::INTERFACE_POINTS;
 use crate::model::Model;
@@ -67,9 +67,13 @@ fn restart_trackers(s: &mut InterfaceState) {
     let h = &mut s.history;
     h.cycle_start_dissipation = h.dissipation;
     h.cycle_start_wear = h.wear;
-    h.cycle_slip = 0.0;
-    h.cycle_slip_range = [0.0; 2];
-    h.cycle_max_shear = if closed { s.stress[0].abs() } else { 0.0 };
+    h.cycle_slip = [0.0; 2];
+    h.cycle_slip_ends = [[0.0; 2]; 2];
+    h.cycle_max_shear = if closed {
+        length(tangential(s.stress))
+    } else {
+        0.0
+    };
     h.cycle_elastic_closure = 0.0;
 }
 
@@ -255,7 +259,7 @@ fn close_cycle(h: &mut PointHistory, extra: f64, added: [f64; 2]) {
     let worn = cycle_wear(h);
     let dissipated = h.dissipation - h.cycle_start_dissipation;
     h.last_cycle_dissipation = dissipated;
-    h.last_cycle_slip_amplitude = 0.5 * (h.cycle_slip_range[1] - h.cycle_slip_range[0]);
+    h.last_cycle_slip_amplitude = h.cycle_slip_amplitude();
     h.last_cycle_max_shear = h.cycle_max_shear;
     h.last_cycle_wear = worn;
     h.wear = [h.wear[0] + added[0], h.wear[1] + added[1]];

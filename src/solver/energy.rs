@@ -8,9 +8,10 @@
 //!   free dofs and the reactions (internal forces) at prescribed dofs;
 //! - elastic energy = Σ ½ σ:C⁻¹:σ dV of the bodies (a state function, from the states);
 //! - plastic dissipation += Σ σ_{n+1}:Δεᵖ dV (backward Euler's plastic work);
-//! - friction dissipation += Σ p_T,{n+1} Δu_Tᵖ dA (Buczkowski & Kleiber (1994), Eq. 6);
+//! - friction dissipation += Σ p_τ,{n+1}·Δu_τᵖ dA (Buczkowski & Kleiber (1994), Eq. 6; the
+//!   tangential vectors (T, θ) with twist);
 //! - wear work += Σ −½ (p_N,n + p_N,{n+1}) Δh dA (p_N ≤ 0: removed material takes energy out);
-//! - numerical dissipation += Σ ½ (σ_n − σ_{n+1}):Δεᵖ dV + Σ ½ (p_T,n − p_T,{n+1}) Δu_Tᵖ dA;
+//! - numerical dissipation += Σ ½ (σ_n − σ_{n+1}):Δεᵖ dV + Σ ½ (p_τ,n − p_τ,{n+1})·Δu_τᵖ dA;
 //! - thermal work += Σ ½ (σ_n + σ_{n+1}):Δε_th dV, the work of the stresses on the thermal
 //!   strains (computed as the stress work on the total strain less the stored, plastic and
 //!   numerical terms of the same point, for the bodies with an expansion coefficient);
@@ -24,10 +25,10 @@
 
 use std::ops::Sub;
 
-use crate::contact::InterfaceState;
+use crate::contact::{self, InterfaceState};
 use crate::element::ElementVector;
 use crate::element::continuum::point_kinematics;
-use crate::element::interface6::{InterfacePoint, interface_point, relative_operator};
+use crate::element::interface6::{InterfacePoint, interface_point, relative_displacement};
 use crate::element::quadrature::{MAX_CELL_POINTS, cell_rule};
 use crate::element::set::{INTERFACE_POINTS, InternalLayout};
 use crate::material::{PointState, dot};
@@ -44,7 +45,7 @@ pub struct Energy {
     pub interface_energy: f64,
     /// Plastic work of the bodies.
     pub plastic_dissipation: f64,
-    /// Frictional dissipation ∫ p_T du_T^p over the interfaces.
+    /// Frictional dissipation ∫ p_τ·du_τ^p over the interfaces.
     pub friction_dissipation: f64,
     /// Energy removed with worn material (pressure times wear depth).
     pub wear_work: f64,
@@ -337,25 +338,29 @@ impl EnergyLedger {
             .zip(increment.interface_committed.chunks_exact(INTERFACE_POINTS))
             .zip(self.weights.interface.chunks_exact(INTERFACE_POINTS));
         for (element, ((trial, committed), points)) in model.interface.elements.iter().zip(states) {
+            let d = model.analysis.dofs_per_node();
             let mut du = ElementVector::zeros();
             for (i, &node) in element.nodes.iter().enumerate() {
-                for c in 0..2 {
-                    let dof = 2 * node as usize + c;
-                    du[2 * i + c] = u[dof] - u_old[dof];
+                for c in 0..d {
+                    let dof = d * node as usize + c;
+                    du[d * i + c] = u[dof] - u_old[dof];
                 }
             }
             for ((t, c), p) in trial.iter().zip(committed).zip(points) {
-                let jump = relative_operator(p) * du.fixed_rows::<16>(0);
-                let mean = [
-                    0.5 * (c.stress[0] + t.stress[0]),
-                    0.5 * (c.stress[1] + t.stress[1]),
+                let jump = relative_displacement(&model.analysis, p, &du);
+                let mean: [f64; 3] = std::array::from_fn(|k| 0.5 * (c.stress[k] + t.stress[k]));
+                let slip = [
+                    t.plastic_slip[0] - c.plastic_slip[0],
+                    t.plastic_slip[1] - c.plastic_slip[1],
                 ];
-                let slip = t.plastic_slip - c.plastic_slip;
                 let wear =
                     t.history.wear[0] + t.history.wear[1] - c.history.wear[0] - c.history.wear[1];
-                sum.work += (mean[0] * jump[0] + mean[1] * jump[1]) * p.da;
-                sum.friction += t.stress[0] * slip * p.da;
-                sum.numerical += 0.5 * (c.stress[0] - t.stress[0]) * slip * p.da;
+                sum.work += (mean[0] * jump[0] + mean[1] * jump[1] + mean[2] * jump[2]) * p.da;
+                let (shear, shear_n) =
+                    (contact::tangential(t.stress), contact::tangential(c.stress));
+                sum.friction += contact::dot(shear, slip) * p.da;
+                let change = [shear_n[0] - shear[0], shear_n[1] - shear[1]];
+                sum.numerical += 0.5 * contact::dot(change, slip) * p.da;
                 sum.wear -= mean[1] * wear * p.da;
             }
         }
