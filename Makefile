@@ -8,6 +8,7 @@
 #   make prandtl                 Prandtl's punch on a perfectly plastic half-space (B-bar element)
 #   make shrink_fit              shrink-fit contact example
 #   make fretting                tapered joint pressed in, then 10^6 load cycles with wear -> out/fretting
+#   make taper_torque            tapered joint seated, twisted until it slips, then torsional fretting -> out/taper_torque
 #   make shrink_fit_thermal      shrink fit by heating the hub; make joint_thermal: heat through a joint
 #   make test                    all tests (Rust unit/integration tests + output checks)
 #   make convergence             mesh-convergence verification studies -> out/convergence
@@ -34,7 +35,7 @@ SIZE    ?= 1
 .PHONY: fuzz
 .PHONY: fretting
 .PHONY: reference install install-test
-.PHONY: example example-slideway example-shrink_fit example-tapered_joint example-fretting example-fit example-sweep examples-test
+.PHONY: example example-slideway example-shrink_fit example-tapered_joint example-fretting example-taper_torque example-fit example-sweep examples-test
 
 all: build
 
@@ -196,6 +197,7 @@ convergence: deps build
 bench: gmsh venv build
 	$(CARGO) bench --bench elastic
 	$(CARGO) bench --bench contact
+	$(CARGO) bench --bench twist
 	$(PYTHON) pipelines/compare_algorithms.py examples/tapered_joint/coulomb.toml examples/tapered_joint/compliant_1.toml examples/tapered_joint/compliant_2.toml
 	$(MAKE) bench-scale
 
@@ -265,7 +267,7 @@ install-test: build
 ## --- examples gallery ------------------------------------------------------------
 # examples/<NAME>/README.md says what each shows and the figures it makes. The examples that
 # existed before the gallery keep their own targets (make shrink_fit, ...); these are aliases.
-GALLERY := slideway shrink_fit tapered_joint fretting fit sweep
+GALLERY := slideway shrink_fit tapered_joint fretting taper_torque fit sweep
 example:
 	@if [ -z "$(NAME)" ] || ! echo " $(GALLERY) " | grep -q " $(NAME) "; then \
 	  echo "usage: make example NAME=<name>, one of: $(GALLERY) (examples/README.md)"; exit 2; fi
@@ -278,6 +280,7 @@ example-slideway: deps build
 example-shrink_fit: shrink_fit
 example-tapered_joint: tapered_joint
 example-fretting: fretting
+example-taper_torque: taper_torque
 example-fit: fit-example
 
 SWEEP_OUT ?= out/sweep/specimen
@@ -289,7 +292,7 @@ example-sweep: venv build
 	@echo "results: $(SWEEP_OUT) (sweep.csv, force.png, iterations.png; runs/NNNN/ one folder per run)"
 
 # `make examples-test` (part of `make test`): every gallery folder is listed in GALLERY and has
-# its README; the new slideway example runs in its quick form with its checks. The others are
+# its README; the slideway and taper_torque examples run in their quick forms with their checks. The others are
 # checked by the tests above (tapered_joint --quick, shrink_fit, the fretting scripts,
 # fit-example, sweep-test).
 examples-test: deps build
@@ -301,6 +304,21 @@ examples-test: deps build
 	@$(MAKE) --no-print-directory example-slideway QUICK=1 SLIDEWAY_OUT=build/test/slideway >/dev/null
 	@test -s build/test/slideway/force_displacement.png && test -s build/test/slideway/stick_zone.png \
 	  || { echo "example slideway: figures missing"; exit 1; }
+	@echo "example taper_torque (coarse)"
+	@$(MAKE) --no-print-directory taper_torque QUICK=1 TAPER_TORQUE_OUT=build/test/taper_torque >/dev/null
+
+## --- torque (issue 25) ------------------------------------------------------------
+# `make taper_torque`: the tapered joint seated by an axial load, twisted at its head until the
+# whole cone slips (torque-twist curve, slip torque against the friction torque of the run's
+# own pressure), then a reversed torque below the slip torque with fretting wear ->
+# out/taper_torque (REPORT.md, torque_twist.png, cone.png, fretting.png; twist/ and fretting/
+# one run folder each). The target fails when a check of REPORT.md fails; QUICK=1 runs a coarse
+# mesh and fewer cycles (make examples-test).
+.PHONY: taper_torque
+TAPER_TORQUE_OUT ?= out/taper_torque
+taper_torque: deps build
+	$(PYTHON) pipelines/taper_torque/report.py --out $(TAPER_TORQUE_OUT) $(if $(QUICK),--quick) >/dev/null
+	@echo "results: $(TAPER_TORQUE_OUT) (REPORT.md, torque_twist.png, cone.png, fretting.png; twist/ and fretting/ with results.pvd for ParaView)"
 
 ## --- cyclic plasticity (issue 27) ------------------------------------------------
 # `make cyclic_press_fit`: the press fit under cyclic external pressure with isotropic and
