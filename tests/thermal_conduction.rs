@@ -231,9 +231,8 @@ fn a_joint_conductance_makes_the_temperature_jump_flux_over_h() {
 /// `summary.json` lists every step's heat flows (W, totals over 2π) by the entries' names:
 /// the thermal supports', the sources' and the conducting pairs', the same numbers as the
 /// `heat_flow_*` columns of `history.csv`, and the series flow of the closed form.
-#[test]
-fn summary_json_lists_the_heat_flows_by_name() {
-    let (mesh, case) = concentric();
+/// Runs `case` on `mesh` into a temporary folder; the folder and its `summary.json`.
+fn run_to_summary(case: &CaseBuilder, mesh: Mesh) -> (tempfile::TempDir, serde_json::Value) {
     let dir = tempfile::tempdir().unwrap();
     let folder = asperity::run::folder::OutputFolder::scratch(dir.path()).unwrap();
     asperity::run::run_mesh(
@@ -246,7 +245,13 @@ fn summary_json_lists_the_heat_flows_by_name() {
     )
     .unwrap();
     let text = std::fs::read_to_string(dir.path().join("summary.json")).unwrap();
-    let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
+    (dir, serde_json::from_str(&text).unwrap())
+}
+
+#[test]
+fn summary_json_lists_the_heat_flows_by_name() {
+    let (mesh, case) = concentric();
+    let (dir, summary) = run_to_summary(&case, mesh);
     let heat = &summary["steps"].as_array().unwrap().last().unwrap()["heat"];
     let history = std::fs::read_to_string(dir.path().join("history.csv")).unwrap();
     let header: Vec<&str> = history.lines().next().unwrap().split(',').collect();
@@ -280,21 +285,8 @@ fn summary_json_lists_the_heat_flows_by_name() {
         .support("s0", &[("ux", 0.0)])
         .support("t0", &[("uy", 0.0)])
         .traction("s1", [1.0, 0.0]);
-    let dir = tempfile::tempdir().unwrap();
-    let folder = asperity::run::folder::OutputFolder::scratch(dir.path()).unwrap();
-    let mesh = rectangle(4.0, 2.0, 2, 1, 0.0, false);
-    asperity::run::run_mesh(
-        &plain.case(),
-        mesh,
-        Default::default(),
-        &folder,
-        false,
-        |_, _| Ok(()),
-    )
-    .unwrap();
-    let text = std::fs::read_to_string(dir.path().join("summary.json")).unwrap();
-    let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
-    assert!(summary["steps"][0].get("heat").is_none(), "{text}");
+    let (_dir, summary) = run_to_summary(&plain, rectangle(4.0, 2.0, 2, 1, 0.0, false));
+    assert!(summary["steps"][0].get("heat").is_none(), "{summary}");
 }
 
 /// A block pressed by `p` on a base of the same size, the bottom at 0 and the top at T_a,

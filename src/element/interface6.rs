@@ -388,27 +388,42 @@ mod tests {
                 u[2 * i + 1] = press;
             }
             u[7] += 1e-4;
-            let mut k = ElementMatrix::zeros();
-            let mut f = ElementVector::zeros();
-            newton(&analysis, &e, &law, &u, &committed, Some(&mut k), &mut f);
-            let h = 1e-9;
-            for j in 0..12 {
-                let (mut up, mut um) = (u, u);
-                up[j] += h;
-                um[j] -= h;
-                let (mut fp, mut fm) = (ElementVector::zeros(), ElementVector::zeros());
-                newton(&analysis, &e, &law, &up, &committed, None, &mut fp);
-                newton(&analysis, &e, &law, &um, &committed, None, &mut fm);
-                for i in 0..12 {
-                    let fd = (fp[i] - fm[i]) / (2.0 * h);
-                    // Absolute scale of the closed-state entries (k_N × area ≈ 1e5); the open
-                    // state's regularising tangent (1e-9 of it) is far below the tolerance.
-                    assert!(
-                        (fd - k[(i, j)]).abs() < 1e-6 * 1e5,
-                        "state ({slide},{press}) K[{i},{j}] = {} vs fd {fd}",
-                        k[(i, j)]
-                    );
-                }
+            let label = format!("state ({slide},{press})");
+            assert_tangent_is_differences(&analysis, &e, &law, &u, &committed, 12, &label);
+        }
+    }
+
+    /// The element's Newton tangent at `u` against central differences of its force over
+    /// its first `dofs` dofs.
+    fn assert_tangent_is_differences(
+        analysis: &Analysis,
+        e: &InterfaceElement,
+        law: &LinearCoulomb,
+        u: &ElementVector,
+        committed: &[InterfaceState; 3],
+        dofs: usize,
+        label: &str,
+    ) {
+        let mut k = ElementMatrix::zeros();
+        let mut f = ElementVector::zeros();
+        newton(analysis, e, law, u, committed, Some(&mut k), &mut f);
+        let h = 1e-9;
+        for j in 0..dofs {
+            let (mut up, mut um) = (*u, *u);
+            up[j] += h;
+            um[j] -= h;
+            let (mut fp, mut fm) = (ElementVector::zeros(), ElementVector::zeros());
+            newton(analysis, e, law, &up, committed, None, &mut fp);
+            newton(analysis, e, law, &um, committed, None, &mut fm);
+            for i in 0..dofs {
+                let fd = (fp[i] - fm[i]) / (2.0 * h);
+                // Absolute scale of the closed-state entries (k_N × area ≈ 1e5); the open
+                // state's regularising tangent (1e-9 of it) is far below the tolerance.
+                assert!(
+                    (fd - k[(i, j)]).abs() < 1e-6 * 1e5,
+                    "{label} K[{i},{j}] = {} vs fd {fd}",
+                    k[(i, j)]
+                );
             }
         }
     }
@@ -442,27 +457,8 @@ mod tests {
                 u[3 * i + 2] = turn * (1.0 + 0.1 * i as f64);
             }
             u[10] += 1e-4;
-            let mut k = ElementMatrix::zeros();
-            let mut f = ElementVector::zeros();
-            newton(&analysis, &e, &law, &u, &committed, Some(&mut k), &mut f);
-            let h = 1e-9;
-            for j in 0..18 {
-                let (mut up, mut um) = (u, u);
-                up[j] += h;
-                um[j] -= h;
-                let (mut fp, mut fm) = (ElementVector::zeros(), ElementVector::zeros());
-                newton(&analysis, &e, &law, &up, &committed, None, &mut fp);
-                newton(&analysis, &e, &law, &um, &committed, None, &mut fm);
-                for i in 0..18 {
-                    let fd = (fp[i] - fm[i]) / (2.0 * h);
-                    // As in the plane test: entries ~k_N × area ≈ 1e5.
-                    assert!(
-                        (fd - k[(i, j)]).abs() < 1e-6 * 1e5,
-                        "state ({slide},{press},{turn}) K[{i},{j}] = {} vs fd {fd}",
-                        k[(i, j)]
-                    );
-                }
-            }
+            let label = format!("state ({slide},{press},{turn})");
+            assert_tangent_is_differences(&analysis, &e, &law, &u, &committed, 18, &label);
         }
     }
 
