@@ -574,7 +574,12 @@ fn case_values_out_of_range_are_named() {
         (
             "force with three components",
             case_edit("pressure = 1.0", "force = [0.0, 1.0, 2.0]"),
-            Case,
+            Invalid("load[0].force"),
+        ),
+        (
+            "force with one component",
+            case_edit("pressure = 1.0", "force = [1.0]"),
+            Invalid("load[0].force"),
         ),
         (
             "pressure NaN",

@@ -166,6 +166,32 @@ fn a_circumferential_traction_is_a_torque_of_its_moment() {
 }
 
 #[test]
+fn a_circumferential_ring_force_on_a_point_is_a_torque_of_f_theta_times_r() {
+    // A ring force F_θ (N, total over the circle) at the top's outer corner r = b: its
+    // moment about the axis is F_θ b, which the base reacts exactly.
+    let f_theta = 2.0e3;
+    let mut mesh = tube();
+    add_point_group(&mut mesh, "corner", [B, L]);
+    let mut load = table(&[("group", "corner".into())]);
+    load.insert("force".into(), list(&[0.0, 0.0, f_theta]));
+    let case = twisted().push("load", load).case();
+    let model = model(mesh, &case).expect("the tube's model builds");
+    let mut torques = Vec::new();
+    run_steps(&model, &settings(&case), |step| {
+        torques = reaction_torques(&model, step.internal_force, step.external_force);
+        Ok(0.0)
+    })
+    .expect("the tube solves");
+    let moment = f_theta * B;
+    assert!(
+        (torques[0] + moment).abs() <= 1e-9 * moment,
+        "{} against {}",
+        torques[0],
+        -moment
+    );
+}
+
+#[test]
 fn twist_keys_are_refused_without_twist_and_twist_without_an_axis() {
     let message = |builder: CaseBuilder| builder.try_case().unwrap_err().to_string();
     let plain = CaseBuilder::axisymmetric().body("tube", elastic(E, NU));

@@ -32,11 +32,6 @@ pub const MAX_LATE_TOLERANCE: f64 = 0.2;
 const NEEDS_TWIST: &str = "the circumferential direction exists only in an axisymmetric \
      analysis with twist: set [analysis] type = \"axisymmetric\", twist = true";
 
-/// Why a traction of three components is refused without twist.
-const NEEDS_TWIST_TRACTION: &str = "a third (circumferential) traction component needs an \
-     axisymmetric analysis with twist: set [analysis] type = \"axisymmetric\", twist = true, \
-     or give (t_x, t_y)";
-
 /// `[analysis]` on the raw table, before the typed parse (whose messages would only say
 /// "unknown field"): an axisymmetric analysis has no `thickness`, and `twist` belongs to
 /// axisymmetric analyses only. `path` names the case file.
@@ -328,22 +323,10 @@ impl Case {
                 )));
             }
             if let Some(t) = &l.traction {
-                let key = format!("load[{i}].traction");
-                match t.len() {
-                    2 => {}
-                    3 if twist => {}
-                    3 => return Err(self.invalid(key, format!("{t:?}"), NEEDS_TWIST_TRACTION)),
-                    n => {
-                        return Err(self.invalid(
-                            key,
-                            format!("{t:?}"),
-                            format!(
-                                "a traction has two components (t_x, t_y), or with twist three \
-                                 (t_r, t_z, t_θ); got {n}"
-                            ),
-                        ));
-                    }
-                }
+                self.check_components(i, "traction", t, ("t_x, t_y", "t_r, t_z, t_θ"))?;
+            }
+            if let Some(f) = &l.force {
+                self.check_components(i, "force", f, ("F_x, F_y", "F_r, F_z, F_θ"))?;
             }
             if let Some(t) = l.torque.filter(|_| !twist) {
                 return Err(self.invalid(format!("load[{i}].torque"), t, NEEDS_TWIST));
@@ -351,7 +334,7 @@ impl Case {
             let values = [
                 ("pressure", l.pressure.map(|p| vec![p])),
                 ("traction", l.traction.clone()),
-                ("force", l.force.map(Vec::from)),
+                ("force", l.force.clone()),
                 ("torque", l.torque.map(|t| vec![t])),
             ];
             for (key, value) in values {
@@ -366,6 +349,39 @@ impl Case {
             }
         }
         Ok(())
+    }
+
+    /// A load vector `key` of `[[load]]` number `i` has two components, or three with twist
+    /// (`names`: the components' names in each case, for the message).
+    fn check_components(
+        &self,
+        i: usize,
+        key: &str,
+        v: &[f64],
+        (plane, twisted): (&str, &str),
+    ) -> Result<()> {
+        let path = format!("load[{i}].{key}");
+        match v.len() {
+            2 => Ok(()),
+            3 if self.analysis.has_twist() => Ok(()),
+            3 => Err(self.invalid(
+                path,
+                format!("{v:?}"),
+                format!(
+                    "a third (circumferential) {key} component needs an axisymmetric analysis \
+                     with twist: set [analysis] type = \"axisymmetric\", twist = true, or give \
+                     ({plane})"
+                ),
+            )),
+            n => Err(self.invalid(
+                path,
+                format!("{v:?}"),
+                format!(
+                    "a {key} has two components ({plane}), or with twist three ({twisted}); \
+                     got {n}"
+                ),
+            )),
+        }
     }
 
     /// Every `[[contact]]` gives its faces one way, and a finite interference.

@@ -341,9 +341,10 @@ pub struct LoadSpec {
     /// its moment ∫ t_θ r dA is T. Positive counter-clockwise seen from +z.
     pub torque: Option<f64>,
     /// Force (F_x, F_y) in N applied at each node of a physical point group (in axisymmetry
-    /// the total over the ring).
-    #[serde(default, deserialize_with = "two_components")]
-    pub force: Option<[f64; 2]>,
+    /// the total over the ring); with `twist`, also (F_r, F_z, F_θ), F_θ the ring's
+    /// circumferential force (its moment about the axis is F_θ r).
+    #[schemars(length(min = 2, max = 3))]
+    pub force: Option<Vec<f64>>,
     /// This load's own history: one factor per step (default: the `[steps]` factors).
     pub factors: Option<Vec<f64>>,
 }
@@ -446,20 +447,6 @@ pub enum Faces<'c> {
         body_a: &'c str,
         body_b: &'c str,
     },
-}
-
-/// A plane vector: exactly two components (a third one, say a z component, would otherwise be
-/// dropped without a word).
-fn two_components<'de, D: serde::Deserializer<'de>>(
-    d: D,
-) -> std::result::Result<Option<[f64; 2]>, D::Error> {
-    let v: Vec<f64> = Vec::deserialize(d)?;
-    <[f64; 2]>::try_from(v.as_slice()).map(Some).map_err(|_| {
-        serde::de::Error::custom(format!(
-            "a vector needs exactly two components (x, y), got {}",
-            v.len()
-        ))
-    })
 }
 
 impl ContactSpec {

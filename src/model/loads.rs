@@ -390,9 +390,10 @@ fn add_load(
                         position: mesh.nodes[n as usize],
                     });
                 }
-                let d = analysis.dofs_per_node() * n as usize;
-                load[d] += force[0];
-                load[d + 1] += force[1];
+                let per_node = analysis.dofs_per_node();
+                for (c, f) in force.iter().enumerate().take(per_node) {
+                    load[per_node * n as usize + c] += f;
+                }
             }
             return Ok(());
         }

@@ -158,8 +158,9 @@ pub struct Load {
 pub enum LoadKind {
     /// A distributed load on the lines of a physical curve.
     Line(LineLoad),
-    /// A force (F_x, F_y) in N at each node of a physical point group.
-    Point([f64; 2]),
+    /// A force (F_x, F_y, and with twist F_θ; 0 otherwise) in N at each node of a physical
+    /// point group.
+    Point([f64; 3]),
 }
 
 /// A distributed load on a curve.
@@ -296,11 +297,11 @@ impl ModelSpec {
             .loads
             .iter()
             .map(|l| {
-                let traction = l.traction.as_deref().map(|t| {
-                    // Two or three components (checked when the case was read).
-                    [t[0], t[1], t.get(2).copied().unwrap_or(0.0)]
-                });
-                let kind = match (l.pressure, traction, l.force, l.torque) {
+                // Two or three components (checked when the case was read).
+                let three = |t: &[f64]| [t[0], t[1], t.get(2).copied().unwrap_or(0.0)];
+                let traction = l.traction.as_deref().map(three);
+                let force = l.force.as_deref().map(three);
+                let kind = match (l.pressure, traction, force, l.torque) {
                     (Some(p), ..) => LoadKind::Line(LineLoad::Pressure(p)),
                     (None, Some(t), ..) => LoadKind::Line(LineLoad::Traction(t)),
                     (None, None, Some(f), _) => LoadKind::Point(f),
