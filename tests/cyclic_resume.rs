@@ -16,10 +16,8 @@ use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::Stdio;
 
-use asperity::output::restart::{OutputState, read_record};
-use asperity::output::writer::RecordWriter;
 use asperity::solver::shakedown::BodyCycles;
-use asperity::solver::state::{Observer, Progress, Resume, Solution, StepResult};
+use asperity::solver::state::{Observer, Progress, Resume, StepResult};
 use common::{asperity, file_names, fixture, run_cli};
 
 /// Frames of the cyclic step: a press step of 2 frames, then 4 cycles of 6.
@@ -150,34 +148,20 @@ fn a_kinematic_run_resumed_from_any_record_is_bit_identical() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("restart.bin");
     for resume in &reference.resumes {
-        // Through the record, as `--resume` reads it.
-        let mut writer = RecordWriter::default();
-        let (state, stats, solution) = (&resume.state, &resume.stats, &resume.solution);
-        writer
-            .write(
-                &path,
-                &text,
-                state,
-                stats,
-                solution,
-                &OutputState::default(),
-            )
-            .unwrap();
-        writer.finish().unwrap();
-        let record = read_record(&path, &text, &Solution::new(&model)).unwrap();
+        let record = common::through_record(&path, &text, resume, &model);
         assert!(record.resume.solution.internal == resume.solution.internal);
         let mut resumed = Frames::default();
         run_steps_from(&model, &settings, Some(record.resume), &mut resumed).unwrap();
         let expected: Vec<&Frame> = reference
             .frames
             .iter()
-            .filter(|f| f.step >= state.step)
+            .filter(|f| f.step >= resume.state.step)
             .collect();
         assert!(
             resumed.frames.iter().collect::<Vec<_>>() == expected,
             "resumed at step {}, time {} differs",
-            state.step,
-            state.time
+            resume.state.step,
+            resume.state.time
         );
     }
 }

@@ -402,15 +402,7 @@ fn a_multi_step_cyclic_run_resumed_from_any_frame_is_bit_identical() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("restart.bin");
     for (k, resume) in reference.resumes.iter().enumerate() {
-        // Through the record, as `--resume` reads it.
-        let mut writer = RecordWriter::default();
-        let output = OutputState::default();
-        let (state, stats, solution) = (&resume.state, &resume.stats, &resume.solution);
-        writer
-            .write(&path, &text, state, stats, solution, &output)
-            .unwrap();
-        writer.finish().unwrap();
-        let record = read_record(&path, &text, &Solution::new(&model)).unwrap();
+        let record = common::through_record(&path, &text, resume, &model);
         let mut resumed = Frames::default();
         run_steps_from(&model, &settings, Some(record.resume), &mut resumed).unwrap();
         assert!(
@@ -449,15 +441,8 @@ fn an_arc_length_run_resumed_from_any_increment_is_bit_identical() {
             .as_ref()
             .expect("the record holds the arc state");
         assert_eq!(arc.previous_increment.len(), model.dofs.free_count());
-        let mut writer = RecordWriter::default();
-        let output = OutputState::default();
-        let (state, stats, solution) = (&resume.state, &resume.stats, &resume.solution);
-        writer
-            .write(&path, &text, state, stats, solution, &output)
-            .unwrap();
-        writer.finish().unwrap();
-        let record = read_record(&path, &text, &Solution::new(&model)).unwrap();
-        assert_eq!(&record.resume.state, state);
+        let record = common::through_record(&path, &text, resume, &model);
+        assert_eq!(record.resume.state, resume.state);
         let mut resumed = Frames::default();
         run_steps_from(&model, &settings, Some(record.resume), &mut resumed).unwrap();
         assert!(

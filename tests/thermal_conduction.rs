@@ -379,9 +379,6 @@ impl asperity::solver::state::Observer for Frames {
 /// conductance, with the source's own `[steps]` factors.
 #[test]
 fn a_coupled_thermal_run_resumed_from_any_frame_is_bit_identical() {
-    use asperity::output::restart::{OutputState, read_record};
-    use asperity::output::writer::RecordWriter;
-    use asperity::solver::state::Solution;
     use asperity::solver::stepping::run_steps_from;
     let material = || with_keys(elastic(E, NU), &[("expansion", ALPHA)]);
     let part = |name: &str| {
@@ -430,20 +427,7 @@ fn a_coupled_thermal_run_resumed_from_any_frame_is_bit_identical() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("restart.bin");
     for (k, resume) in reference.resumes.iter().enumerate() {
-        let mut writer = RecordWriter::default();
-        let (state, stats, solution) = (&resume.state, &resume.stats, &resume.solution);
-        writer
-            .write(
-                &path,
-                &text,
-                state,
-                stats,
-                solution,
-                &OutputState::default(),
-            )
-            .unwrap();
-        writer.finish().unwrap();
-        let record = read_record(&path, &text, &Solution::new(&model)).unwrap();
+        let record = through_record(&path, &text, resume, &model);
         let mut resumed = Frames::default();
         run_steps_from(&model, &settings(&case), Some(record.resume), &mut resumed).unwrap();
         assert!(

@@ -17,6 +17,24 @@ use asperity::model::Model;
 use asperity::solver::state::Solution;
 use asperity::solver::stepping::run_steps;
 
+/// `resume` written as a restart record at `path` for the case whose text is `case_text`
+/// and read back for `model`, as `--resume` reads it.
+pub fn through_record(
+    path: &std::path::Path,
+    case_text: &str,
+    resume: &asperity::solver::state::Resume,
+    model: &Model,
+) -> asperity::output::restart::Record {
+    let mut writer = asperity::output::writer::RecordWriter::default();
+    let (state, stats, solution) = (&resume.state, &resume.stats, &resume.solution);
+    let output = asperity::output::restart::OutputState::default();
+    writer
+        .write(path, case_text, state, stats, solution, &output)
+        .unwrap();
+    writer.finish().unwrap();
+    asperity::output::restart::read_record(path, case_text, &Solution::new(model)).unwrap()
+}
+
 /// The `asperity` binary of this build.
 pub fn asperity() -> std::process::Command {
     std::process::Command::new(env!("CARGO_BIN_EXE_asperity"))
