@@ -99,10 +99,16 @@ impl MeshCache {
                 .join("asperity")
                 .join("meshes"),
         };
-        let limit_mb = std::env::var("ASPERITY_MESH_CACHE_MB")
-            .ok()
-            .and_then(|v| v.trim().parse::<u64>().ok())
-            .unwrap_or(DEFAULT_LIMIT_MB);
+        let limit_mb = match std::env::var("ASPERITY_MESH_CACHE_MB") {
+            Ok(v) => v.trim().parse::<u64>().unwrap_or_else(|_| {
+                tracing::warn!(
+                    "ASPERITY_MESH_CACHE_MB = {v:?} is not a whole number of MiB; using \
+                     {DEFAULT_LIMIT_MB}"
+                );
+                DEFAULT_LIMIT_MB
+            }),
+            Err(_) => DEFAULT_LIMIT_MB,
+        };
         Some(Self::new(dir, limit_mb.saturating_mul(1 << 20)))
     }
 
