@@ -366,6 +366,13 @@ impl CondensedSolver {
         let workspace = MemBuffer::try_new(req)
             .map_err(|_| Error::Linear("out of memory for the factorisation workspace".into()))?;
         let factor = vec![0.0; supernodal.len_val()];
+        tracing::debug!(
+            unknowns = n,
+            interface = n_i,
+            supernodes = supernodal.n_supernodes(),
+            factor_entries = supernodal.len_val(),
+            "condensed solver"
+        );
         Ok(Self {
             n,
             n_bulk,
