@@ -14,7 +14,9 @@
 //! the bulk is eliminated with a sparse Cholesky factorisation, leaving the small dense system
 //! (S_c + K_if) x_I = r_I − K_IB K_BB⁻¹ r_B with the continuum Schur complement
 //! S_c = K_II − K_IB K_BB⁻¹ K_BI, which is factored by dense LU with partial pivoting at every
-//! solve. No Krylov iteration: the solution is exact to rounding.
+//! solve ([`crate::solver::interface_lu`]: by blocks where S_c is block diagonal, as between
+//! two bodies or the circumferential and meridional unknowns of twist). No Krylov iteration:
+//! the solution is exact to rounding.
 //!
 //! # How S_c is obtained
 //! One supernodal Cholesky factorisation (faer) of the whole continuum matrix with the bulk
@@ -27,7 +29,8 @@
 //! of the factor does not change, the trailing block becomes S_c + D, and S_c = L_II L_IIᵀ − D.
 //!
 //! A solve then costs one sparse forward and backward substitution over the bulk part of the
-//! factor, a copy of S_c, the dense LU of S_c + K_if (⅔ n_I³ flops) and its substitutions.
+//! factor, a copy of S_c, the dense LU of S_c + K_if (at most ⅔ n_I³ flops) and its
+//! substitutions.
 //! All storage is allocated by [`CondensedSolver::new`]; [`CondensedSolver::factor_bulk`] and
 //! [`CondensedSolver::solve`] allocate none of their own. (faer's multi-threaded kernels
 //! allocate rayon's task bookkeeping: in `factor_bulk`, and in solves from n_I = 1024 on,
@@ -55,7 +58,6 @@
 //! ```
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
 use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{BlockStructure, matmul as triangular_matmul};
 use faer::linalg::triangular_solve::{
@@ -77,6 +79,7 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRe
 use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 
 use crate::assembly::SparsityPattern;
+use crate::solver::interface_lu::InterfaceLu;
 use crate::solver::linear::SparseLu;
 use crate::{Error, Result};
 
@@ -151,17 +154,14 @@ pub struct CondensedSolver {
     shift: Vec<f64>,
     /// Continuum Schur complement S_c on the interface unknowns.
     schur: Mat<f64>,
-    /// Dense LU of S_c + K_if (also holds L_II while S_c is formed).
-    lu: Mat<f64>,
-    lu_perm: Vec<usize>,
-    lu_perm_inv: Vec<usize>,
+    /// Dense LU of S_c + K_if (its buffer also holds L_II while S_c is formed).
+    dense: InterfaceLu,
     /// Right-hand side / solution in elimination order, and a gather buffer.
     x: Vec<f64>,
     gather: Vec<f64>,
     workspace: MemBuffer,
-    /// Parallelism of the sparse factorisation and S_c, and of the dense LU per solve.
+    /// Parallelism of the sparse factorisation and S_c.
     par: Par,
-    dense_par: Par,
     /// Whether the bulk, and the interface system, are factored.
     factored: bool,
     interface_factored: bool,
@@ -354,15 +354,11 @@ impl CondensedSolver {
             .map(|s| supernodal.supernode(s).pattern().len())
             .max()
             .unwrap_or(0);
-        let req = StackReq::any_of(&[
-            factorize_supernodal_numeric_llt_scratch::<u32, f64>(
-                supernodal,
-                par,
-                Default::default(),
-            ),
-            lu_factor::lu_in_place_scratch::<usize, f64>(n_i, n_i, par, Default::default()),
-            lu_solve::solve_in_place_scratch::<usize, f64>(n_i, 1, par),
-        ]);
+        let req = StackReq::any_of(&[factorize_supernodal_numeric_llt_scratch::<u32, f64>(
+            supernodal,
+            par,
+            Default::default(),
+        )]);
         let workspace = MemBuffer::try_new(req)
             .map_err(|_| Error::Linear("out of memory for the factorisation workspace".into()))?;
         let factor = vec![0.0; supernodal.len_val()];
@@ -395,18 +391,18 @@ impl CondensedSolver {
             factor,
             shift: vec![0.0; n_i],
             schur: Mat::zeros(n_i, n_i),
-            lu: Mat::zeros(n_i, n_i),
-            lu_perm: vec![0; n_i],
-            lu_perm_inv: vec![0; n_i],
+            dense: InterfaceLu::new(
+                n_i,
+                if n_i >= DENSE_PARALLEL_FROM {
+                    par
+                } else {
+                    Par::Seq
+                },
+            )?,
             x: vec![0.0; n],
             gather: vec![0.0; gather_len],
             workspace,
             par,
-            dense_par: if n_i >= DENSE_PARALLEL_FROM {
-                par
-            } else {
-                Par::Seq
-            },
             symbolic,
             factored: false,
             interface_factored: false,
@@ -421,7 +417,7 @@ impl CondensedSolver {
     /// substitutions over the bulk are sequential: one right-hand side.)
     pub fn set_parallelism(&mut self, factor: Par, dense: Par) {
         self.par = factor;
-        self.dense_par = dense;
+        self.dense.set_parallelism(dense);
     }
 
     /// Sets the reuse threshold τ of [`Self::factor_bulk`]: the last factorisation of K̃ is
@@ -586,7 +582,7 @@ impl CondensedSolver {
         // S_c = L_II L_IIᵀ − D, with L_II gathered into the LU buffer.
         let llt = SupernodalLltRef::new(symbolic, &self.factor);
         let n_bulk = self.n_bulk;
-        let mut l_ii = self.lu.as_mut();
+        let mut l_ii = self.dense.scratch();
         l_ii.fill(0.0);
         for s in first_interface_supernode(symbolic, n_bulk)..symbolic.n_supernodes() {
             let node = llt.supernode(s);
@@ -606,9 +602,9 @@ impl CondensedSolver {
             self.schur.as_mut(),
             BlockStructure::Rectangular,
             Accum::Replace,
-            self.lu.as_ref(),
+            l_ii.rb(),
             BlockStructure::TriangularLower,
-            self.lu.as_ref().transpose(),
+            l_ii.rb().transpose(),
             BlockStructure::TriangularUpper,
             1.0,
             self.par,
@@ -616,6 +612,7 @@ impl CondensedSolver {
         for k in 0..n_i {
             self.schur[(k, k)] -= self.shift[k];
         }
+        self.dense.analyse(self.schur.as_ref());
         self.factored = true;
         self.factorizations += 1;
         Ok(true)
@@ -745,6 +742,7 @@ impl CondensedSolver {
             }
         }
         self.shift.fill(0.0);
+        self.dense.analyse(self.schur.as_ref());
         self.factored = true;
         self.factorizations += 1;
         Ok(true)
@@ -839,21 +837,7 @@ impl CondensedSolver {
             (interface_block.nrows(), interface_block.ncols()),
             (n_i, n_i)
         );
-        let mut a = self.lu.as_mut();
-        a.copy_from(self.schur.as_ref());
-        a += interface_block;
-        lu_factor::lu_in_place(
-            self.lu.as_mut(),
-            &mut self.lu_perm,
-            &mut self.lu_perm_inv,
-            self.dense_par,
-            MemStack::new(&mut self.workspace),
-            Default::default(),
-        );
-        // Singular to working precision: a pivot at rounding level of the largest one.
-        let largest = (0..n_i).fold(0.0f64, |m, k| m.max(self.lu[(k, k)].abs()));
-        let tiny = n_i as f64 * f64::EPSILON * largest;
-        if !largest.is_finite() || (0..n_i).any(|k| self.lu[(k, k)].abs() <= tiny) {
+        if !self.dense.factor(self.schur.as_ref(), interface_block) {
             return Err(Error::Linear(
                 "the condensed interface system is singular: a body is held by nothing but its contact \
                  interface, and the interface does not hold it (open, or sliding freely)"
@@ -889,22 +873,14 @@ impl CondensedSolver {
     /// The solve of [`Self::solve_in_place`] in elimination order (in `self.x`) with the
     /// bulk's Cholesky factor.
     fn solve_cholesky_in_place(&mut self) {
-        let (n_bulk, n_i) = (self.n_bulk, self.interface.len());
+        let n_bulk = self.n_bulk;
         let SymbolicCholeskyRaw::Supernodal(symbolic) = self.symbolic.raw() else {
             unreachable!("forced supernodal in `new`");
         };
         let llt = SupernodalLltRef::new(symbolic, &self.factor);
         forward_bulk(llt, n_bulk, &mut self.x, &mut self.gather);
         // Now x_I = r_I − K_IB K_BB⁻¹ r_B, the condensed right-hand side.
-        let perm = PermRef::new_checked(&self.lu_perm, &self.lu_perm_inv, n_i);
-        lu_solve::solve_in_place(
-            self.lu.as_ref(),
-            self.lu.as_ref(),
-            perm,
-            MatMut::from_column_major_slice_mut(&mut self.x[n_bulk..], n_i, 1),
-            self.dense_par,
-            MemStack::new(&mut self.workspace),
-        );
+        self.dense.solve_in_place(&mut self.x[n_bulk..]);
         backward_bulk(llt, n_bulk, &mut self.x, &mut self.gather);
     }
 
@@ -912,7 +888,7 @@ impl CondensedSolver {
     /// bulk's LU: x_I ← (S_c + K_if)⁻¹ (r_I − K_IB K_BB⁻¹ r_B), then
     /// x_B ← K_BB⁻¹ (r_B − K_BI x_I).
     fn solve_lu_in_place(&mut self) {
-        let (n_bulk, n_i) = (self.n_bulk, self.interface.len());
+        let n_bulk = self.n_bulk;
         let u = self.unsymmetric.as_deref_mut().expect("LU made");
         let (x_b, x_i) = self.x.split_at_mut(n_bulk);
         let mut z = u.block.as_mut().subcols_mut(0, 1);
@@ -924,15 +900,7 @@ impl CondensedSolver {
         for &(i, b, p) in &u.ib {
             x_i[i as usize] -= values[p as usize] * z[(b as usize, 0)];
         }
-        let perm = PermRef::new_checked(&self.lu_perm, &self.lu_perm_inv, n_i);
-        lu_solve::solve_in_place(
-            self.lu.as_ref(),
-            self.lu.as_ref(),
-            perm,
-            MatMut::from_column_major_slice_mut(x_i, n_i, 1),
-            self.dense_par,
-            MemStack::new(&mut self.workspace),
-        );
+        self.dense.solve_in_place(x_i);
         for (k, &xk) in x_i.iter().enumerate() {
             let range = u.bi_ptr[k]..u.bi_ptr[k + 1];
             for (&row, &p) in u.bi_rows[range.clone()].iter().zip(&u.bi_source[range]) {

@@ -10,6 +10,7 @@ pub mod coupling;
 pub mod cycles;
 pub mod diagnosis;
 pub mod energy;
+pub mod interface_lu;
 pub mod linear;
 pub mod mechanics;
 pub mod newton;
