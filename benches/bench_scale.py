@@ -7,7 +7,9 @@ geo/bench_tapered_joint.geo: about 1 600 / s² unknowns at size factor s) on a f
 the default s = 0.0387 gives about 0.97 M unknowns. Meshes with gmsh, runs `asperity run`
 under GNU time, and prints the breakdown: gmsh, mesh reading, model building, assembly,
 factorisation, solves and output from asperity's closing summary, wall and CPU time, peak
-resident memory and the Newton iterations. With --write the table is appended to
+resident memory, the Newton iterations, and the run's floor and its ratio to it (summary.json
+`floor`: reading the mesh, one assembly, one factorisation, one solve per increment and the
+output; docs/guide/outputs.md). With --write the table is appended to
 BENCHMARKS.md with the machine, the date and the load average (a busy machine makes the
 wall times unrepresentative; the CPU time suffers less).
 
@@ -54,9 +56,18 @@ def run(size: float, work: Path, binary: Path, timeout: float) -> dict:
     return info
 
 
+def floor_of(r: dict) -> dict | None:
+    """The run's `floor` from its summary.json (None from a binary that does not write it)."""
+    floor = (r.get("summary_json") or {}).get("floor")
+    return floor if isinstance(floor, dict) else None
+
+
 def table(r: dict, load: tuple[float, float]) -> str:
     p = r.get("phases", {})
     phase = lambda k: f"{p[k]:.2f}" if k in p else "–"  # noqa: E731
+    floor = floor_of(r)
+    floor_s = f"{floor['seconds']:.2f}" if floor else "–"
+    ratio = f"{floor['ratio']:.2f}" if floor and floor.get("ratio") is not None else "–"
     now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     busy = (" (the machine was busy: wall times are not representative)" if load[0] > 1.5 * (os.cpu_count() or 1)
             else "")
@@ -70,15 +81,17 @@ def table(r: dict, load: tuple[float, float]) -> str:
         f"10 increments) on a finer mesh; asperity's defaults. Load average (1 min) before the run "
         f"{load[0]:.2f}, after it {load[1]:.2f}{busy}. *gmsh* ran beforehand and is not in *wall*; "
         "*mesh* is reading the mesh file. *CPU* is user + system time over both cores. "
+        "*floor* is the run's own floor and *run / floor* its ratio to it (summary.json `floor`). "
         f"Bar: < {WALL_LIMIT_S:.0f} s and < {MEMORY_LIMIT_MB / 1024:.0f} GB: {verdict}.",
         "",
         "| unknowns | elements | increments | Newton its (cut-backs) | gmsh [s] | mesh [s] | model [s] | assembly [s] "
-        "| factorisation [s] | solve [s] | output [s] | wall [s] | CPU [s] | peak RSS [MB] |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| factorisation [s] | solve [s] | output [s] | wall [s] | CPU [s] | peak RSS [MB] | floor [s] "
+        "| run / floor |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
         f"| {r.get('unknowns', '?')} | {r.get('elements', '?')} | {r.get('increments', '?')} | "
         f"{r.get('iterations', '?')} ({r.get('cutbacks', '?')}) | {r['gmsh_s']:.2f} | {phase('mesh')} | "
         f"{phase('model')} | {phase('assembly')} | {phase('factorisation')} | {phase('solve')} | "
-        f"{phase('output')} | {r['wall_s']:.2f} | {r['cpu_s']:.2f} | {r['rss_mb']:.0f} |",
+        f"{phase('output')} | {r['wall_s']:.2f} | {r['cpu_s']:.2f} | {r['rss_mb']:.0f} | {floor_s} | {ratio} |",
         "",
     ])
 

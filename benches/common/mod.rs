@@ -1,5 +1,6 @@
-//! Shared by the benches: the case builder of the tests (`tests/common/case.rs`) and
-//! appending a result table, with the machine and date, to BENCHMARKS.md.
+//! Shared by the benches: the case builder of the tests (`tests/common/case.rs`), a run's
+//! ratio to its floor, and appending a result table, with the machine and date, to
+//! BENCHMARKS.md.
 
 use std::io::Write;
 
@@ -7,6 +8,17 @@ use std::io::Write;
 mod case;
 
 pub use case::*;
+
+use asperity::solver::floor::Floor;
+use asperity::solver::state::RunStatistics;
+
+/// The ratio of a run to its floor (`summary.json` `floor.ratio`, docs/guide/outputs.md): the
+/// run read its mesh in `mesh_seconds` and took `run_seconds` in all (reading the mesh,
+/// building the model and solving; the benches' runs write no files).
+pub fn floor_ratio(stats: &RunStatistics, mesh_seconds: f64, run_seconds: f64) -> f64 {
+    let floor = Floor::new(&stats.work, mesh_seconds, run_seconds);
+    floor.ratio.unwrap_or(f64::NAN)
+}
 
 /// The machine: CPU model and number of cores.
 fn machine() -> String {

@@ -16,6 +16,7 @@ use crate::Result;
 use crate::model::Model;
 use crate::model::timeline::Frame;
 use crate::solver::energy::Energy;
+use crate::solver::floor::Floor;
 use crate::solver::shakedown::ShakedownVerdict;
 
 /// The contents of `summary.json`.
@@ -43,6 +44,10 @@ pub struct Summary {
     pub totals: Totals,
     /// Wall-clock seconds per phase.
     pub seconds: Seconds,
+    /// The run's floor (reading the mesh, one assembly, one factorisation, one solve per
+    /// increment, writing the frames) and its ratio to it ([`crate::solver::floor`]);
+    /// `null` until the run has converged.
+    pub floor: Option<Floor>,
     /// Support reactions at the last converged step.
     pub reactions: Named<Force>,
     /// Relative residual at the end of the last converged step.
@@ -451,6 +456,7 @@ impl Summary {
             steps: Vec::new(),
             totals: Totals::default(),
             seconds: Seconds::default(),
+            floor: None,
             reactions: Named::default(),
             final_residual: None,
             energy: EnergyReport::default(),

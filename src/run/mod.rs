@@ -418,7 +418,7 @@ fn solve(
         }
     };
     let mut stats = run_steps_from(&model, &settings, resume, &mut writer)?.1;
-    stats.output_seconds += writer.finish()?;
+    stats.add_output(writer.finish()?, false);
     writer.bar.finish();
     Ok(RunSummary {
         out_dir: folder.dir().to_path_buf(),

@@ -101,6 +101,7 @@ pub fn run_arc_length(
             }
         };
         stats.increments += 1;
+        stats.work.increments += 1;
         stats.steps += 1;
         path.load_factor += converged.load_change;
         path.largest_load_factor = path.largest_load_factor.max(path.load_factor);
@@ -154,7 +155,7 @@ pub fn run_arc_length(
             stats: &stats,
             solution: &solution,
         };
-        stats.output_seconds += observer.step(&result, &progress)?;
+        stats.add_output(observer.step(&result, &progress)?, true);
     };
     tracing::info!(
         "arc-length control stopped after {} increments ({stop}): largest load factor \
@@ -168,6 +169,7 @@ pub fn run_arc_length(
     solution.reset_trial();
     stats.symbolic_seconds = newton.linear().symbolic_seconds();
     stats.factor_nnz = newton.linear().factor_nnz();
+    stats.work.solver = *newton.work();
     Ok((solution, stats))
 }
 

@@ -2,7 +2,7 @@
 //! ([`newton`]), the mechanical problem it solves ([`mechanics`]), the run's state
 //! ([`state`]) and the drivers that advance it: load stepping ([`stepping`]) and arc-length
 //! control ([`arclength`]), with the cycle hooks ([`cycles`]), the energy ledger
-//! ([`energy`]) and the failure diagnosis ([`diagnosis`]).
+//! ([`energy`]), the failure diagnosis ([`diagnosis`]) and the run's floor ([`floor`]).
 
 pub mod arclength;
 pub mod condensed;
@@ -10,6 +10,7 @@ pub mod coupling;
 pub mod cycles;
 pub mod diagnosis;
 pub mod energy;
+pub mod floor;
 pub mod interface_lu;
 pub mod linear;
 pub mod mechanics;

@@ -50,12 +50,15 @@
 //! The same solver, with the same assembly, linear solves and workspaces, solves the
 //! increments of arc-length control, whose load factor is an unknown ([`arc`]).
 
+use std::time::Instant;
+
 use faer::{Mat, MatMut};
 
 use crate::Result;
 use crate::assembly::{AssemblyInput, DenseScatter, DofMap, GlobalSystem, SparsityPattern};
 use crate::contact::ContactAlgorithm;
 use crate::solver::condensed::CondensedSolver;
+use crate::solver::floor::SolverWork;
 use crate::solver::linear::CholeskySolver;
 
 pub mod arc;
@@ -271,6 +274,8 @@ pub struct Newton<'a> {
     bulk_symmetric: bool,
     /// The workspaces of arc-length increments, made by [`Self::set_arc_reference`].
     arc: Option<arc::ArcWork>,
+    /// The work done so far, by kind (for the run's floor).
+    work: SolverWork,
 }
 
 impl<'a> Newton<'a> {
@@ -300,6 +305,7 @@ impl<'a> Newton<'a> {
             no_interface: false,
             bulk_symmetric: true,
             arc: None,
+            work: SolverWork::default(),
         })
     }
 
@@ -311,6 +317,11 @@ impl<'a> Newton<'a> {
     /// The system of the last assembly: its internal forces are those of the last solution.
     pub fn system(&self) -> &GlobalSystem {
         &self.system
+    }
+
+    /// The work done since the solver was made, by kind.
+    pub fn work(&self) -> &SolverWork {
+        &self.work
     }
 
     /// The linear solver (for its statistics).
@@ -381,9 +392,23 @@ impl<'a> Newton<'a> {
             tangent,
             algorithm: self.settings.contact_algorithm,
         };
+        let work = &mut self.work;
+        let (bulk_work, interface_work) = if tangent {
+            (
+                &mut work.tangent_assemblies,
+                &mut work.interface_tangent_assemblies,
+            )
+        } else {
+            (
+                &mut work.force_assemblies,
+                &mut work.interface_force_assemblies,
+            )
+        };
+        let t = Instant::now();
         let Some(c) = self.condensed.as_mut() else {
             self.system.clear(tangent);
             let symmetric = problem.assemble(&mut self.system, &input);
+            bulk_work.since(t);
             if tangent {
                 self.bulk_symmetric = problem.bulk_is_symmetric();
             }
@@ -395,6 +420,7 @@ impl<'a> Newton<'a> {
         if !c.linear_bulk {
             system.clear(tangent);
             problem.assemble_bulk(system, &input);
+            bulk_work.since(t);
             if tangent {
                 c.bulk_dirty = true;
                 self.bulk_symmetric = problem.bulk_is_symmetric();
@@ -410,10 +436,18 @@ impl<'a> Newton<'a> {
                     ..input
                 },
             );
+            let kind = if first {
+                &mut work.tangent_assemblies
+            } else {
+                &mut work.force_assemblies
+            };
+            kind.since(t);
             if first && let Some((all, stiffness)) = c.stiffness.as_mut() {
+                let t = Instant::now();
                 stiffness.clear(true);
                 let input = AssemblyInput { dofs: all, ..input };
                 problem.assemble_bulk(stiffness, &input);
+                work.tangent_assemblies.since(t);
             }
             c.bulk_dirty |= first;
             c.bulk_ready = true;
@@ -431,13 +465,17 @@ impl<'a> Newton<'a> {
                 *f += f0;
             }
             c.extrapolated = true;
+            work.products.since(t);
         }
         // The bodies' nodal forces, before the interface's are added (they balance them).
         self.flux = Flux::of(&system.internal_force);
+        let t = Instant::now();
         if tangent {
             c.block.fill(0.0);
         }
-        problem.assemble_interface(system, &input, c.block.as_mut(), &c.map)
+        let symmetric = problem.assemble_interface(system, &input, c.block.as_mut(), &c.map);
+        interface_work.since(t);
+        symmetric
     }
 
     /// Solves one increment from the displacements in `u` (whose prescribed components
@@ -549,7 +587,12 @@ impl<'a> Newton<'a> {
             if self.condensed.is_some() || symmetric || !self.bulk_symmetric {
                 self.factor(&mut log)?;
                 let t = std::time::Instant::now();
-                solve_factored(&mut self.condensed, &mut self.linear, &mut self.residual);
+                solve_factored(
+                    &mut self.condensed,
+                    &mut self.linear,
+                    &mut self.residual,
+                    &mut self.work,
+                );
                 log.solve_seconds += t.elapsed().as_secs_f64();
                 log.unsymmetric_solves += usize::from(!symmetric);
             } else {
@@ -567,6 +610,7 @@ impl<'a> Newton<'a> {
                 )?;
                 log.unsymmetric_solves += 1;
                 log.solve_seconds += t.elapsed().as_secs_f64();
+                self.work.solves.since(t);
             }
             let before = norm(u);
             let step = if residual > LINE_SEARCH_ABOVE {
@@ -602,22 +646,38 @@ impl<'a> Newton<'a> {
     /// tangent changed) and the interface block, otherwise by Cholesky (a symmetric tangent);
     /// an unsymmetric bulk tangent by LU.
     fn factor(&mut self, log: &mut NewtonLog) -> Result<()> {
-        let t = std::time::Instant::now();
+        let t = Instant::now();
         let matrix = self.system.matrix();
+        let work = &mut self.work;
         if let Some(c) = self.condensed.as_mut() {
             if c.bulk_dirty {
-                if self.bulk_symmetric {
-                    c.solver.factor_bulk(matrix)?;
+                let factored = if self.bulk_symmetric {
+                    c.solver.factor_bulk(matrix)?
                 } else {
-                    c.solver.factor_bulk_unsymmetric(matrix)?;
-                }
+                    c.solver.factor_bulk_unsymmetric(matrix)?
+                };
+                let kind = if factored {
+                    &mut work.factorisations
+                } else {
+                    &mut work.kept_factorisations
+                };
+                kind.since(t);
                 c.bulk_dirty = false;
             }
+            let t = Instant::now();
             c.solver.factor_interface(c.block.as_ref())?;
-        } else if self.bulk_symmetric {
-            self.linear.factorize(matrix)?;
+            work.interface_factorisations.since(t);
         } else {
-            self.linear.factorize_unsymmetric(matrix)?;
+            // The first factorisation runs the symbolic analysis, timed on its own.
+            let symbolic = self.linear.symbolic_seconds();
+            if self.bulk_symmetric {
+                self.linear.factorize(matrix)?;
+            } else {
+                self.linear.factorize_unsymmetric(matrix)?;
+            }
+            let symbolic = self.linear.symbolic_seconds() - symbolic;
+            work.factorisations
+                .add(t.elapsed().as_secs_f64() - symbolic);
         }
         log.factorization_seconds += t.elapsed().as_secs_f64();
         Ok(())
@@ -637,6 +697,7 @@ impl<'a> Newton<'a> {
             u.copy_from_slice(&self.start);
             self.dofs.add_free(alpha, &self.residual, u);
             self.evaluate(problem, u, false, false);
+            self.work.line_search_evaluations += 1;
             let trial = &mut self.trial_residual;
             out_of_balance(
                 self.dofs,
@@ -668,12 +729,20 @@ fn out_of_balance(dofs: &DofMap, internal: &[f64], external: &[f64], out: &mut [
     }
 }
 
-/// Solves the tangent factored by [`Newton::factor`] for `x` (free dofs) in place.
-fn solve_factored(condensed: &mut Option<Condensed>, linear: &mut CholeskySolver, x: &mut [f64]) {
+/// Solves the tangent factored by [`Newton::factor`] for `x` (free dofs) in place, tallied
+/// in `work`.
+fn solve_factored(
+    condensed: &mut Option<Condensed>,
+    linear: &mut CholeskySolver,
+    x: &mut [f64],
+    work: &mut SolverWork,
+) {
+    let t = Instant::now();
     match condensed {
         Some(c) => c.solver.solve_in_place(x),
         None => linear.solve_in_place(x),
     }
+    work.solves.since(t);
 }
 
 /// ‖v‖∞.

@@ -18,6 +18,7 @@ use crate::model::Model;
 use crate::model::timeline::Frame;
 use crate::solver::cycles;
 use crate::solver::energy::{EnergyLedger, Increment};
+use crate::solver::floor::Work;
 use crate::solver::mechanics::Mechanics;
 use crate::solver::newton::{ForceAverage, NewtonLog};
 use crate::solver::shakedown::BodyCycles;
@@ -248,6 +249,10 @@ pub struct RunStatistics {
     pub factor_nnz: usize,
     /// Final relative residual of the last step.
     pub last_residual: f64,
+    /// The work of this process by kind, for the run's floor (not in the restart record: a
+    /// resumed run's floor is that of the part it ran).
+    #[serde(skip)]
+    pub work: Work,
 }
 
 impl RunStatistics {
@@ -265,6 +270,17 @@ impl RunStatistics {
         self.assembly_seconds += log.assembly_seconds;
         self.factorization_seconds += log.factorization_seconds;
         self.solve_seconds += log.solve_seconds;
+    }
+
+    /// Adds the `seconds` spent writing a `frame`'s files, or else writing without a new
+    /// frame (the last wait for the writer thread).
+    pub(crate) fn add_output(&mut self, seconds: f64, frame: bool) {
+        self.output_seconds += seconds;
+        if frame {
+            self.work.frames.add(seconds);
+        } else {
+            self.work.frames.seconds += seconds;
+        }
     }
 }
 

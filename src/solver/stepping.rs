@@ -135,6 +135,7 @@ pub fn run_steps_from(
             match attempt {
                 Ok(log) if log.converged && implausible.is_none() => {
                     stats.add(&log);
+                    stats.work.increments += 1;
                     state.iterations += log.iterations;
                     state.increments += 1;
                     state.stiffness.record(
@@ -242,6 +243,7 @@ pub fn run_steps_from(
                     )
                     .map(|log| {
                         stats.add(&log);
+                        stats.work.increments += 1;
                         state.iterations += log.iterations;
                         state.force_average = newton.force_average();
                     })
@@ -306,11 +308,12 @@ pub fn run_steps_from(
             stats: &stats,
             solution: &solution,
         };
-        stats.output_seconds += observer.step(&result, &progress)?;
+        stats.add_output(observer.step(&result, &progress)?, true);
     }
     // Read at the end: the symbolic analysis runs at the first factorisation.
     stats.symbolic_seconds = newton.linear().symbolic_seconds();
     stats.factor_nnz = newton.linear().factor_nnz();
+    stats.work.solver = *newton.work();
     Ok((solution, stats))
 }
 

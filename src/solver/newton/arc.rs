@@ -94,6 +94,7 @@ impl Newton<'_> {
             &mut self.condensed,
             &mut self.linear,
             &mut work.load_response,
+            &mut self.work,
         );
         log.solve_seconds += t.elapsed().as_secs_f64();
         Ok(norm(&work.load_response))
@@ -164,11 +165,17 @@ impl Newton<'_> {
             self.factor(log)?;
             let t = Instant::now();
             work.load_response.copy_from_slice(&work.reference);
-            solve_factored(&mut self.condensed, &mut self.linear, &mut self.residual);
+            solve_factored(
+                &mut self.condensed,
+                &mut self.linear,
+                &mut self.residual,
+                &mut self.work,
+            );
             solve_factored(
                 &mut self.condensed,
                 &mut self.linear,
                 &mut work.load_response,
+                &mut self.work,
             );
             log.solve_seconds += t.elapsed().as_secs_f64();
             let d_lambda = constraint_root(work, &self.residual, radius)?;

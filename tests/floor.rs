@@ -1,0 +1,131 @@
+//! `summary.json` `floor` (issue 29): the floor of a run is made of calls the run made, so it
+//! never exceeds the run, and its counts are those of the run's own log. No timings are
+//! asserted, only relations that hold whatever the machine's speed.
+
+mod common;
+
+use common::{CaseBuilder, run_cli, two_blocks};
+use serde_json::Value;
+
+/// The upper block of [`two_blocks`] (μ = 0.3) pressed onto the lower one and pulled sideways
+/// by less than the friction capacity, in three steps, solved with `linear_solver`.
+fn pressed_and_pulled(linear_solver: &str) -> CaseBuilder {
+    two_blocks(0.3)
+        .traction("lid", [2.0, -10.0])
+        .step_factors(&[0.25, 0.5, 1.0])
+        .set("solver", "linear_solver", linear_solver)
+}
+
+/// Runs `case` with the command line and returns its `summary.json`.
+fn summary(case: CaseBuilder) -> Value {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    run_cli(&case.write(&dir.path().join("case.toml")), &out, &[]);
+    let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+fn count(summary: &Value, key: &str) -> u64 {
+    summary["floor"]["counts"][key]
+        .as_u64()
+        .unwrap_or_else(|| panic!("floor.counts.{key} in {}", summary["floor"]))
+}
+
+fn seconds(value: &Value) -> f64 {
+    value.as_f64().unwrap_or_else(|| panic!("seconds: {value}"))
+}
+
+/// What holds for every floor: its parts add up to it, each is at most the phase it is
+/// taken from, and the floor is at most the run (gmsh left out of both), its ratio the
+/// quotient and at least 1. The counts of increments, frames and solves are the totals'.
+fn check_floor(summary: &Value) {
+    let floor = &summary["floor"];
+    let time = &summary["seconds"];
+    let parts = &floor["parts"];
+    let sum: f64 = ["mesh", "assembly", "factorisation", "solves", "output"]
+        .iter()
+        .map(|k| seconds(&parts[k]))
+        .sum();
+    let total = seconds(&floor["seconds"]);
+    // The same five numbers summed in the same order.
+    assert_eq!(total, sum, "{floor}");
+    let gmsh = time["gmsh"].as_f64().unwrap_or(0.0);
+    assert!(
+        seconds(&parts["mesh"]) <= seconds(&time["mesh"]) - gmsh,
+        "{floor}"
+    );
+    for (part, phase) in [
+        ("assembly", "assembly"),
+        ("factorisation", "factorisation"),
+        ("solves", "solve"),
+    ] {
+        assert!(
+            seconds(&parts[part]) <= seconds(&time[phase]),
+            "{part}: {floor} {time}"
+        );
+    }
+    // A fresh run's output is all its output.
+    assert_eq!(parts["output"], time["output"], "{floor} {time}");
+    let run = seconds(&time["total"]) - gmsh;
+    assert!(total > 0.0 && total <= run, "{floor} {time}");
+    let ratio = seconds(&floor["ratio"]);
+    assert!(ratio >= 1.0, "{floor}");
+    assert_eq!(ratio, run / total);
+    let totals = &summary["totals"];
+    assert_eq!(totals["cutbacks"], 0, "the counts below assume no cut-back");
+    assert_eq!(count(summary, "increments"), totals["increments"]);
+    assert_eq!(
+        count(summary, "frames"),
+        summary["steps"].as_array().unwrap().len() as u64
+    );
+    // Load control: one linear solve per Newton iteration.
+    assert_eq!(count(summary, "solves"), totals["iterations"]);
+}
+
+/// On the condensed path the elastic bulk is assembled with its tangent twice (into the free
+/// equations and over all dofs for K·u) and factored once; every Newton iteration factors
+/// the interface system by LU.
+#[test]
+fn the_condensed_floor_counts_what_its_log_says() {
+    let summary = summary(pressed_and_pulled("condensed"));
+    check_floor(&summary);
+    let iterations = summary["totals"]["iterations"].as_u64().unwrap();
+    assert!(iterations >= 3, "{summary}");
+    assert_eq!(count(&summary, "assemblies"), 2);
+    assert_eq!(count(&summary, "factorisations"), 1);
+    assert_eq!(count(&summary, "kept_factorisations"), 0);
+    assert_eq!(count(&summary, "interface_factorisations"), iterations);
+    // Every evaluation after the first takes the bulk's force from K·u or its elements,
+    // and the interface's from its elements.
+    assert!(count(&summary, "products") > 0);
+    assert!(count(&summary, "interface_assemblies") > iterations);
+}
+
+/// Off the condensed path every pass of the Newton loop assembles the whole model with its
+/// tangent (one per iteration and the last one that finds the increment converged), and
+/// every iteration factors it; there is no interface system and no K·u.
+#[test]
+fn the_cholesky_floor_counts_what_its_log_says() {
+    let summary = summary(pressed_and_pulled("krylov"));
+    check_floor(&summary);
+    let totals = &summary["totals"];
+    let iterations = totals["iterations"].as_u64().unwrap();
+    let increments = totals["increments"].as_u64().unwrap();
+    assert_eq!(count(&summary, "assemblies"), iterations + increments);
+    let bicgstab = totals["unsymmetric_solves"].as_u64().unwrap();
+    assert_eq!(count(&summary, "factorisations"), iterations - bicgstab);
+    for key in [
+        "interface_assemblies",
+        "interface_force_assemblies",
+        "interface_factorisations",
+        "products",
+        "kept_factorisations",
+    ] {
+        assert_eq!(count(&summary, key), 0, "{key}");
+    }
+    // Line-search trials are the only force-only assemblies here.
+    assert_eq!(
+        count(&summary, "force_assemblies"),
+        count(&summary, "line_search_evaluations")
+    );
+}
