@@ -349,6 +349,12 @@ impl<'a> Newton<'a> {
             let pattern = problem.bulk_pattern(&all);
             (all, GlobalSystem::new(pattern, n))
         });
+        tracing::debug!(
+            free_entries = self.system.pattern.nnz(),
+            stiffness_entries = stiffness.as_ref().map_or(0, |(_, s)| s.pattern.nnz()),
+            solver_megabytes = solver.memory_bytes() >> 20,
+            "condensed path storage"
+        );
         self.condensed = Some(Condensed {
             solver,
             block: Mat::zeros(n_i, n_i),
@@ -400,20 +406,26 @@ impl<'a> Newton<'a> {
                 self.bulk_symmetric = problem.bulk_is_symmetric();
             }
         } else if !c.bulk_ready || fresh {
-            // The continuum's elements: its force (and states) at u, K_c the first time.
+            // The continuum's elements: its force (and states) at u, K_c the first time,
+            // over all dofs; the free dofs' system is its restriction (one element loop).
             let first = !c.bulk_ready;
-            system.clear(first);
-            problem.assemble_bulk(
-                system,
-                &AssemblyInput {
-                    tangent: first,
-                    ..input
-                },
-            );
-            if first && let Some((all, stiffness)) = c.stiffness.as_mut() {
+            if first {
+                let (all, stiffness) = c.stiffness.as_mut().expect("linear bulk");
                 stiffness.clear(true);
-                let input = AssemblyInput { dofs: all, ..input };
+                let input = AssemblyInput {
+                    dofs: all,
+                    tangent: true,
+                    ..input
+                };
                 problem.assemble_bulk(stiffness, &input);
+                system.restrict_from(stiffness, self.dofs);
+            } else {
+                system.clear(false);
+                let input = AssemblyInput {
+                    tangent: false,
+                    ..input
+                };
+                problem.assemble_bulk(system, &input);
             }
             c.bulk_dirty |= first;
             c.bulk_ready = true;
