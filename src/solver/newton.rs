@@ -64,11 +64,13 @@ use crate::solver::linear::CholeskySolver;
 pub mod arc;
 mod criteria;
 mod predictor;
+mod stiffness;
 
 pub use arc::{ArcConverged, ArcIncrement};
 pub use criteria::{Criteria, ForceAverage};
 use criteria::{Flux, FluxHistory, Measures};
 use predictor::Predictor;
+use stiffness::BulkStiffness;
 
 /// The linear solver of models with contact pairs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -178,10 +180,10 @@ struct Condensed {
     bulk_dirty: bool,
     /// Linear bulk: whether K_c is assembled and factored.
     bulk_ready: bool,
-    /// Linear bulk: the continuum stiffness over all dofs (prescribed ones numbered too),
-    /// whose product with a displacement change gives the change of the continuum's
-    /// internal force, reactions included.
-    stiffness: Option<(DofMap, GlobalSystem)>,
+    /// Linear bulk: the continuum stiffness over all dofs (its free block is the system's
+    /// matrix), whose product with a displacement change gives the change of the
+    /// continuum's internal force, reactions included. Made by the first evaluation.
+    stiffness: Option<BulkStiffness>,
     /// Linear bulk: the continuum internal force (all dofs) at the displacements `u_ref`
     /// (all dofs), evaluated at the start of the increment.
     bulk_force: Vec<f64>,
@@ -355,11 +357,11 @@ impl<'a> Newton<'a> {
         let n_i = solver.interface_equations().len();
         let n = self.dofs.dof_count();
         let linear_bulk = problem.bulk_is_linear();
-        let stiffness = linear_bulk.then(|| {
-            let all = DofMap::new(&vec![false; n]);
-            let pattern = problem.bulk_pattern(&all);
-            (all, GlobalSystem::new(pattern, n))
-        });
+        tracing::debug!(
+            matrix_entries = self.system.pattern.nnz(),
+            solver_megabytes = solver.memory_bytes() >> 20,
+            "condensed path storage"
+        );
         self.condensed = Some(Condensed {
             solver,
             block: Mat::zeros(n_i, n_i),
@@ -367,7 +369,7 @@ impl<'a> Newton<'a> {
             linear_bulk,
             bulk_dirty: false,
             bulk_ready: false,
-            stiffness,
+            stiffness: None,
             bulk_force: vec![0.0; n],
             u_ref: vec![0.0; n],
             du: vec![0.0; n],
@@ -426,41 +428,54 @@ impl<'a> Newton<'a> {
                 self.bulk_symmetric = problem.bulk_is_symmetric();
             }
         } else if !c.bulk_ready || fresh {
-            // The continuum's elements: its force (and states) at u, K_c the first time.
+            // The continuum's elements: its force (and states) at u, K_c the first time,
+            // over all dofs (one element loop); the system keeps its free block, and the
+            // entries of prescribed rows and columns are kept for K·u.
             let first = !c.bulk_ready;
-            system.clear(first);
-            problem.assemble_bulk(
-                system,
-                &AssemblyInput {
-                    tangent: first,
+            if first {
+                let n = self.dofs.dof_count();
+                let all = DofMap::new(&vec![false; n]);
+                let mut whole = GlobalSystem::new(problem.bulk_pattern(&all), n);
+                let input = AssemblyInput {
+                    dofs: &all,
+                    tangent: true,
                     ..input
-                },
-            );
+                };
+                problem.assemble_bulk(&mut whole, &input);
+                system.restrict_from(&whole, self.dofs);
+                let stiffness = BulkStiffness::new(&whole, self.dofs);
+                tracing::debug!(
+                    all_dof_entries = whole.pattern.nnz(),
+                    prescribed_entries = stiffness.len(),
+                    "linear bulk stiffness"
+                );
+                c.stiffness = Some(stiffness);
+            } else {
+                system.clear(false);
+                let input = AssemblyInput {
+                    tangent: false,
+                    ..input
+                };
+                problem.assemble_bulk(system, &input);
+            }
             let kind = if first {
                 &mut work.tangent_assemblies
             } else {
                 &mut work.force_assemblies
             };
             kind.since(t);
-            if first && let Some((all, stiffness)) = c.stiffness.as_mut() {
-                let t = Instant::now();
-                stiffness.clear(true);
-                let input = AssemblyInput { dofs: all, ..input };
-                problem.assemble_bulk(stiffness, &input);
-                work.tangent_assemblies.since(t);
-            }
             c.bulk_dirty |= first;
             c.bulk_ready = true;
             c.bulk_force.copy_from_slice(&system.internal_force);
             c.u_ref.copy_from_slice(u);
         } else {
             // f_c(u) = f_c(u_ref) + K_c (u − u_ref) over all dofs.
-            let (_, stiffness) = c.stiffness.as_ref().expect("linear bulk");
+            let stiffness = c.stiffness.as_ref().expect("linear bulk");
             for ((d, a), b) in c.du.iter_mut().zip(u).zip(&c.u_ref) {
                 *d = a - b;
             }
             let f = &mut system.internal_force;
-            multiply(&stiffness.pattern, &stiffness.values, &c.du, f);
+            stiffness.multiply(&system.pattern, &system.values, self.dofs, &c.du, f);
             for (f, f0) in f.iter_mut().zip(&c.bulk_force) {
                 *f += f0;
             }
@@ -755,7 +770,6 @@ fn max_change(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).fold(0.0, |m, (x, y)| m.max((x - y).abs()))
 }
 
-/// y = A x for the matrix with values `values` over `pattern` (both triangles stored).
 /// Iterations after which an increment of an unsymmetric (LU-factored) bulk may be given up
 /// as stalled ([`stalled`]), and how many iterations back its residual is compared.
 const STALL_AFTER: usize = 8;
@@ -772,21 +786,6 @@ const STALL_WINDOW: usize = 4;
 fn stalled(residuals: &[f64]) -> bool {
     let n = residuals.len();
     n > STALL_AFTER && residuals[n - 1] >= residuals[n - 1 - STALL_WINDOW]
-}
-
-fn multiply(pattern: &SparsityPattern, values: &[f64], x: &[f64], y: &mut [f64]) {
-    y.fill(0.0);
-    let symbolic = pattern.symbolic();
-    let (cp, ri) = (symbolic.col_ptr(), symbolic.row_idx());
-    for (j, &xj) in x.iter().enumerate() {
-        if xj == 0.0 {
-            continue;
-        }
-        let range = cp[j] as usize..cp[j + 1] as usize;
-        for (&i, &v) in ri[range.clone()].iter().zip(&values[range]) {
-            y[i as usize] += v * xj;
-        }
-    }
 }
 
 #[cfg(test)]
