@@ -15,12 +15,12 @@
 //! [ A_LE  A_LL ],
 //! ```
 //!
-//! A is factored as LU(A_EE) (partial pivoting), Y = A_EE⁻¹ A_EL over the c columns K_if
-//! couples, S' = A_LL − A_LE Y (a sparse-times-dense product) and LU(S'). With e = |E| and
-//! l = |L| this costs ⅔e³ + 2e²c + ⅔l³ flops against ⅔n³ for the whole, at most about 0.37 n³
-//! (e ≈ n/3, c = l): half for two bodies (e = l = n/2: 0.42 n³), and with twist E is the
-//! circumferential unknowns (0.37 n³). Sticking friction couples nothing across the
-//! circumferential–meridional split (c = 0), so there it costs the two blocks alone.
+//! A is factored as LU(A_EE) (partial pivoting) and its inverse, Y = A_EE⁻¹ A_EL over the c
+//! columns K_if couples (from A_EL's nonzeros: e flops each), S' = A_LL − A_LE Y (a
+//! sparse-times-dense product) and LU(S'). With e = |E| ≤ l = |L| this costs 2e³ + ⅔l³ flops
+//! (plus O(e·nnz(K_if))) against ⅔n³ for the whole: 0.33 n³ for two bodies (e = l = n/2), and
+//! 0.28 n³ with twist, where E is the circumferential unknowns (e = n/3). Sticking friction
+//! couples nothing across the circumferential–meridional split (c = 0).
 //!
 //! The elimination pivots only within A_EE, which is exact to rounding when A_EE is well
 //! conditioned: it is S_EE, the bodies' stiffness with the other groups held, plus the
@@ -31,11 +31,10 @@
 //! unknowns are exact zeros (sums of products with a zero factor).
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
-use faer::linalg::matmul::matmul;
-use faer::linalg::triangular_solve::{
-    solve_unit_lower_triangular_in_place, solve_upper_triangular_in_place,
+use faer::linalg::lu::partial_pivoting::{
+    factor as lu_factor, inverse as lu_inverse, solve as lu_solve,
 };
+use faer::linalg::matmul::matmul;
 use faer::perm::PermRef;
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Accum, Mat, MatMut, MatRef, Par};
@@ -94,6 +93,7 @@ impl InterfaceLu {
         let req = StackReq::any_of(&[
             lu_factor::lu_in_place_scratch::<usize, f64>(n, n, par, Default::default()),
             lu_solve::solve_in_place_scratch::<usize, f64>(n, 1, par),
+            lu_inverse::inverse_scratch::<usize, f64>(n / 2, par),
         ]);
         let workspace = MemBuffer::try_new(req)
             .map_err(|_| Error::Linear("out of memory for the interface LU workspace".into()))?;
@@ -158,20 +158,22 @@ impl InterfaceLu {
         }
         self.split
             .sort_unstable_by_key(|&k| (sizes[root[k]], root[k], k));
-        let mut best = (cost(n, 0, n), 0);
+        let mut best = (cost(n, 0), 0);
         let mut e = 0;
         while e < n {
-            e += self.group_sizes[self.marks[self.split[e]]];
-            if e == n {
+            let next = e + self.group_sizes[self.marks[self.split[e]]];
+            // E no larger than L: A_EE⁻¹ is formed in L's rows.
+            if 2 * next > n {
                 break;
             }
-            let c = cost(n, e, n - e);
+            e = next;
+            let c = cost(n, e);
             if c >= best.0 {
                 break;
             }
             best = (c, e);
         }
-        self.eliminated = if best.0 < SPLIT_GAIN * cost(n, 0, n) {
+        self.eliminated = if best.0 < SPLIT_GAIN * cost(n, 0) {
             best.1
         } else {
             0
@@ -239,20 +241,34 @@ impl InterfaceLu {
             return false;
         }
 
-        // Y = A_EE⁻¹ A_EL over the coupled columns: the rows of A_EL in pivot order, then
-        // the two triangular solves.
+        // A_EE⁻¹ (⁴⁄₃e³ flops), in the rows of L below it (l ≥ e by the choice of E), then
+        // Y = A_EE⁻¹ A_EL over the coupled columns from A_EL's nonzeros (e flops each, where
+        // substitutions would cost 2e² per column).
+        let (mut inverse, mut s) = bottom.rb_mut().split_at_col_mut(e);
+        let mut inverse = inverse.rb_mut().subrows_mut(0, e);
+        lu_inverse::inverse(
+            inverse.rb_mut(),
+            a_ee.rb(),
+            a_ee.rb(),
+            PermRef::new_checked(perm_e, inv_e, e),
+            self.par,
+            MemStack::new(&mut self.workspace),
+        );
         let mut y = y.rb_mut().subcols_mut(0, c);
         for (jj, &j) in order[e..e + c].iter().enumerate() {
-            let from = column(block, j);
-            for (to, &p) in column_mut(y.rb_mut(), jj).iter_mut().zip(perm_e.iter()) {
-                *to = from[order[p]];
+            let (from, to) = (column(block, j), column_mut(y.rb_mut(), jj));
+            to.fill(0.0);
+            for (ii, &i) in order[..e].iter().enumerate() {
+                let v = from[i];
+                if v != 0.0 {
+                    for (t, &w) in to.iter_mut().zip(column(inverse.rb(), ii)) {
+                        *t += v * w;
+                    }
+                }
             }
         }
-        solve_unit_lower_triangular_in_place(a_ee.rb(), y.rb_mut(), self.par);
-        solve_upper_triangular_in_place(a_ee.rb(), y.rb_mut(), self.par);
 
         // S' = A_LL − A_LE Y, A_LE sparse (by column of E).
-        let mut s = bottom.rb_mut().subcols_mut(e, l);
         gather_sum(schur, block, &order[e..], s.rb_mut());
         for k in 0..c {
             let y_k = column(y.rb(), k);
@@ -376,12 +392,11 @@ impl InterfaceLu {
     }
 }
 
-/// Flops of the split with e eliminated unknowns and c coupled columns (n in all); e = 0:
-/// the whole LU.
-fn cost(n: usize, e: usize, c: usize) -> f64 {
-    let (n, e, c) = (n as f64, e as f64, c as f64);
-    let l = n - e;
-    2.0 / 3.0 * e.powi(3) + 2.0 * e * e * c + 2.0 / 3.0 * l.powi(3)
+/// Flops of the split with e eliminated unknowns (n in all): LU(A_EE) and its inverse, and
+/// LU(S'); e = 0: the whole LU. (Y and the sparse products cost O(e · nnz(K_if)).)
+fn cost(n: usize, e: usize) -> f64 {
+    let (n, e) = (n as f64, e as f64);
+    2.0 * e.powi(3) + 2.0 / 3.0 * (n - e).powi(3)
 }
 
 /// Column `j` of a column-major matrix.
