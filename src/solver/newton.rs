@@ -671,6 +671,10 @@ impl<'a> Newton<'a> {
                 } else {
                     c.solver.factor_bulk_unsymmetric(matrix)?
                 };
+                if c.linear_bulk {
+                    // Factored for good: K_c is constant.
+                    c.solver.release_refactorisation_storage();
+                }
                 let kind = if factored {
                     &mut work.factorisations
                 } else {
