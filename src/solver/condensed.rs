@@ -1119,15 +1119,15 @@ fn backward_bulk(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::assembly::DofMap;
     use faer::linalg::solvers::Solve;
 
-    /// Small deterministic pseudo-random numbers in [−1, 1).
-    struct Rng(u64);
+    /// Small deterministic pseudo-random numbers in [−1, 1) (also for `interface_lu`'s tests).
+    pub(crate) struct Rng(pub(crate) u64);
     impl Rng {
-        fn next(&mut self) -> f64 {
+        pub(crate) fn next(&mut self) -> f64 {
             self.0 = self
                 .0
                 .wrapping_mul(6364136223846793005)

@@ -202,15 +202,13 @@ impl InterfaceLu {
         let mut a = self.lu.as_mut();
         a.copy_from(schur);
         a += block;
-        lu_factor::lu_in_place(
+        let (smallest, largest) = lu_pivots(
             self.lu.as_mut(),
             &mut self.perm,
             &mut self.perm_inv,
             self.par,
-            MemStack::new(&mut self.workspace),
-            Default::default(),
+            &mut self.workspace,
         );
-        let (smallest, largest) = pivot_range(self.lu.as_ref());
         largest.is_finite() && smallest > self.n as f64 * f64::EPSILON * largest
     }
 
@@ -228,15 +226,8 @@ impl InterfaceLu {
         gather_sum(schur, block, &order[..e], a_ee.rb_mut());
         let (perm_e, perm_l) = self.perm.split_at_mut(e);
         let (inv_e, inv_l) = self.perm_inv.split_at_mut(e);
-        lu_factor::lu_in_place(
-            a_ee.rb_mut(),
-            perm_e,
-            inv_e,
-            self.par,
-            MemStack::new(&mut self.workspace),
-            Default::default(),
-        );
-        let (smallest, largest) = pivot_range(a_ee.rb());
+        let (smallest, largest) =
+            lu_pivots(a_ee.rb_mut(), perm_e, inv_e, self.par, &mut self.workspace);
         if !largest.is_finite() || smallest <= SPLIT_PIVOT * largest {
             return false;
         }
@@ -282,15 +273,8 @@ impl InterfaceLu {
                 }
             }
         }
-        lu_factor::lu_in_place(
-            s.rb_mut(),
-            perm_l,
-            inv_l,
-            self.par,
-            MemStack::new(&mut self.workspace),
-            Default::default(),
-        );
-        let (smallest, largest) = pivot_range(s.rb());
+        let (smallest, largest) =
+            lu_pivots(s.rb_mut(), perm_l, inv_l, self.par, &mut self.workspace);
         largest.is_finite() && smallest > l as f64 * f64::EPSILON * largest
     }
 
@@ -445,6 +429,26 @@ fn lu_solve_vector(
     );
 }
 
+/// LU with partial pivoting of `a` in place (row pivots into `perm`, `perm_inv`); returns
+/// its smallest and largest |pivot|.
+fn lu_pivots(
+    mut a: MatMut<'_, f64>,
+    perm: &mut [usize],
+    perm_inv: &mut [usize],
+    par: Par,
+    workspace: &mut MemBuffer,
+) -> (f64, f64) {
+    lu_factor::lu_in_place(
+        a.rb_mut(),
+        perm,
+        perm_inv,
+        par,
+        MemStack::new(workspace),
+        Default::default(),
+    );
+    pivot_range(a.rb())
+}
+
 /// Smallest and largest |pivot| of an LU factor.
 fn pivot_range(lu: MatRef<'_, f64>) -> (f64, f64) {
     (0..lu.nrows()).fold((f64::INFINITY, 0.0f64), |(lo, hi), k| {
@@ -473,19 +477,8 @@ fn union(root: &mut [usize], a: usize, b: usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::solver::condensed::tests::Rng;
     use faer::linalg::solvers::Solve;
-
-    /// Small deterministic pseudo-random numbers in [−1, 1).
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        }
-    }
 
     /// A block-diagonal "Schur complement" with symmetric positive definite groups of the
     /// given sizes (a group's unknowns are interleaved with the others' as the unknowns of
