@@ -41,8 +41,8 @@ use faer::{Accum, Mat, MatMut, MatRef, Par};
 
 use crate::{Error, Result};
 
-/// A split is used only when its worst-case cost (c = l) is below this fraction of the
-/// whole LU's: below it, the gain outweighs the gathering and the sparse product.
+/// A split is used only when its flops ([`cost`]) are below this fraction of the whole
+/// LU's: below it, the gain outweighs the gathering and the sparse products.
 const SPLIT_GAIN: f64 = 0.9;
 
 /// Smallest pivot of LU(A_EE), relative to its largest, for which the split is trusted;
@@ -131,8 +131,8 @@ impl InterfaceLu {
     }
 
     /// Finds the groups of `schur` (connected components of its nonzero pattern) and
-    /// chooses E: the smallest groups, added while the worst-case cost falls; no split
-    /// unless that cost is below [`SPLIT_GAIN`] of the whole LU's.
+    /// chooses E: the smallest groups, added while the [`cost`] falls and E stays no larger
+    /// than L; no split unless that cost is below [`SPLIT_GAIN`] of the whole LU's.
     pub fn analyse(&mut self, schur: MatRef<'_, f64>) {
         let n = self.n;
         self.factored = false;
