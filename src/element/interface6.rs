@@ -145,7 +145,7 @@ fn operator<const D: usize, const R: usize, const W: usize>(
 }
 
 /// Relative displacement operator of point `p` without twist: (u_T, u_N) from the 12 dofs
-/// (in a 2×16, the leading columns of [`ElementVector`](super::ElementVector)).
+/// (in a 2×16, the leading columns of [`ElementVector`]).
 pub fn relative_operator(p: &InterfacePoint) -> SMatrix<f64, 2, 16> {
     operator::<2, 2, 16>(p)
 }

@@ -40,8 +40,8 @@
 //! # An unsymmetric bulk
 //! Kinematic hardening with dynamic recovery makes the continuum's tangent unsymmetric where
 //! it yields non-proportionally (`material::cyclic`). [`CondensedSolver::factor_bulk_unsymmetric`]
-//! then factors K_BB alone by sparse LU ([`SparseLu`]) and forms
-//! S_c = K_II − K_IB (K_BB⁻¹ K_BI) with [`SCHUR_BLOCK`] right-hand sides per LU solve (the
+//! then factors K_BB alone by sparse LU (`SparseLu`) and forms
+//! S_c = K_II − K_IB (K_BB⁻¹ K_BI) with `SCHUR_BLOCK` right-hand sides per LU solve (the
 //! pivoting LU cannot keep the interface rows last, so S_c does not fall out of the factor);
 //! solves substitute twice through the LU around the same dense interface LU. It costs n_I
 //! sparse substitutions per factorisation more than the Cholesky path, which stays as it is

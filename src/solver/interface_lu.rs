@@ -131,8 +131,8 @@ impl InterfaceLu {
     }
 
     /// Finds the groups of `schur` (connected components of its nonzero pattern) and
-    /// chooses E: the smallest groups, added while the [`cost`] falls and E stays no larger
-    /// than L; no split unless that cost is below [`SPLIT_GAIN`] of the whole LU's.
+    /// chooses E: the smallest groups, added while the `cost` falls and E stays no larger
+    /// than L; no split unless that cost is below `SPLIT_GAIN` of the whole LU's.
     pub fn analyse(&mut self, schur: MatRef<'_, f64>) {
         let n = self.n;
         self.factored = false;

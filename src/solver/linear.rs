@@ -22,7 +22,7 @@
 //! # An unsymmetric bulk
 //! Kinematic hardening with dynamic recovery (Armstrong–Frederick, γ > 0) has an unsymmetric
 //! consistent tangent under non-proportional flow (`material::cyclic`); its symmetric part
-//! makes Newton linear there. Such tangents are factored by [`SparseLu`] (faer's LU with
+//! makes Newton linear there. Such tangents are factored by `SparseLu` (faer's LU with
 //! partial pivoting, [`CholeskySolver::factorize_unsymmetric`]): exact, so Newton stays
 //! quadratic. Its ordering and symbolic analysis are made once, by the first unsymmetric
 //! factorisation; symmetric models never make them. It costs more than Cholesky on the same
@@ -32,7 +32,7 @@
 //!
 //! Every workspace is kept between calls: the Cholesky factorisation, the solves and BiCGSTAB
 //! allocate nothing once the first unsymmetric solve has sized the Krylov workspace (faer's
-//! numeric LU keeps its factor storage in [`SparseLu`] and grows it as pivoting needs).
+//! numeric LU keeps its factor storage in `SparseLu` and grows it as pivoting needs).
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;

@@ -140,7 +140,7 @@ impl Problem for Mechanics<'_> {
     }
 
     /// Unsymmetric while a point of a body whose material has an unsymmetric tangent
-    /// ([`Material::has_unsymmetric_tangent`]) yields; a model without such a material never
+    /// ([`Material::has_unsymmetric_tangent`](crate::material::Material::has_unsymmetric_tangent)) yields; a model without such a material never
     /// looks at its states.
     fn bulk_is_symmetric(&self) -> bool {
         let continuum = &self.model.continuum;
