@@ -304,8 +304,10 @@ impl InterfaceLu {
                 order[next] = j;
                 next += 1;
             }
+            if wanted == 1 {
+                self.coupled = next - e;
+            }
         }
-        self.coupled = split[e..].iter().filter(|&&j| place[j] == 1).count();
         debug_assert_eq!(next, n);
         // Position of each unknown of L in its block, then A_LE by column of E.
         for (ii, &i) in order[e..].iter().enumerate() {
