@@ -300,6 +300,21 @@ impl DenseScatter {
         Self { map }
     }
 
+    /// The entries of an n × n block the elements can write (column-major positions
+    /// i + n·j, sorted): every other entry of the assembled block is zero.
+    pub fn entries(&self, n: usize) -> Vec<usize> {
+        let mut entries = Vec::new();
+        for element in self.map.chunks_exact(Self::STRIDE) {
+            let inside = element.iter().filter(|&&k| k != OUTSIDE);
+            for &j in inside.clone() {
+                entries.extend(inside.clone().map(|&i| i as usize + n * j as usize));
+            }
+        }
+        entries.sort_unstable();
+        entries.dedup();
+        entries
+    }
+
     /// Block indices of the dofs of element `e`.
     #[inline]
     fn element(&self, e: usize) -> &[u32] {

@@ -53,9 +53,9 @@ impl Tally {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SolverWork {
     /// Element loops that evaluate the tangent: over the continuum on the condensed path
-    /// (there, for a linear bulk, once into the free equations and once over all dofs for
-    /// K·u), over the whole model otherwise (its interface elements included). Matrix
-    /// zeroing included.
+    /// (there, for a linear bulk, once over all dofs, for K·u and the factored free block),
+    /// over the whole model otherwise (its interface elements included). Matrix zeroing
+    /// included.
     pub tangent_assemblies: Tally,
     /// The same loops for the internal force alone (line-search trials; for a linear bulk,
     /// the continuum's check of a state reached with K·u).
@@ -74,8 +74,11 @@ pub struct SolverWork {
     /// Condensed path: calls that kept the last bulk factorisation (the scaled change of the
     /// bulk matrix below the reuse threshold), with the time the check took.
     pub kept_factorisations: Tally,
-    /// Condensed path: dense LU factorisations of the interface system.
+    /// Condensed path: dense LU factorisations of the interface system, and the calls that
+    /// kept the last one (the interface tangent and S_c unchanged, bit for bit), with the
+    /// time the check took.
     pub interface_factorisations: Tally,
+    pub kept_interface_factorisations: Tally,
     /// Linear solves with a factored tangent, and BiCGSTAB solves.
     pub solves: Tally,
 }
@@ -136,6 +139,7 @@ pub struct FloorCounts {
     pub factorisations: usize,
     pub kept_factorisations: usize,
     pub interface_factorisations: usize,
+    pub kept_interface_factorisations: usize,
     pub solves: usize,
 }
 
@@ -174,6 +178,7 @@ impl Floor {
                 factorisations: s.factorisations.calls,
                 kept_factorisations: s.kept_factorisations.calls,
                 interface_factorisations: s.interface_factorisations.calls,
+                kept_interface_factorisations: s.kept_interface_factorisations.calls,
                 solves: s.solves.calls,
             },
         }

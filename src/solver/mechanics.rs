@@ -156,6 +156,12 @@ impl Problem for Mechanics<'_> {
             .any(|(cell, states)| unsymmetric(cell.body) && states.iter().any(|s| s.yielding))
     }
 
+    /// Thermal strains: the temperature field can change from one increment (and thermal
+    /// exchange) to the next.
+    fn bulk_loads_vary(&self) -> bool {
+        !self.temperature.bodies.is_empty()
+    }
+
     fn bulk_pattern(&self, dofs: &DofMap) -> SparsityPattern {
         let continuum = &self.model.continuum;
         let connectivity = (0..continuum.len()).map(|e| ElementNodes {

@@ -151,6 +151,14 @@ pub trait Problem {
         true
     }
 
+    /// Whether the bulk's internal force at fixed displacements can change from one
+    /// increment to the next (thermal strains of a temperature field). A linear bulk then
+    /// evaluates its elements at the start of every increment instead of continuing from
+    /// the committed state by K·Δu. By default it can.
+    fn bulk_loads_vary(&self) -> bool {
+        true
+    }
+
     /// Adds the bulk's internal force (and, if `input.tangent`, its tangent) into `system`.
     fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput);
 
@@ -174,6 +182,14 @@ struct Condensed {
     /// The interface elements' tangent over the interface unknowns.
     block: Mat<f64>,
     map: DenseScatter,
+    /// The entries of `block` the interface elements write, and their values in the block
+    /// of the interface LU in force, if `interface_lu_current` (false: none, or made with an
+    /// older S_c). A tangent whose block has these bits again has the same factors: the LU
+    /// is kept (with a linear bulk and a piecewise-linear law, every iteration after the
+    /// statuses settle).
+    block_entries: Vec<usize>,
+    factored_block: Vec<f64>,
+    interface_lu_current: bool,
     /// Whether the bulk is linear (constant K_c, stored in the system's values).
     linear_bulk: bool,
     /// Whether the system's values hold a continuum tangent not yet factored.
@@ -193,6 +209,38 @@ struct Condensed {
     /// Whether the internal force of the last evaluation came from K_c Δu rather than from
     /// the continuum elements.
     extrapolated: bool,
+    /// Whether `u_ref` is the driver's committed state ([`Newton::commit`] after the element
+    /// loop that confirmed it, or [`Newton::start_from`]): an increment then starts from
+    /// f_c(u_ref) + K_c Δu without an element loop. Any element loop clears it.
+    reference_committed: bool,
+}
+
+impl Condensed {
+    /// Records the values of the block's element entries as those of the interface LU in
+    /// force (into the same storage each time).
+    fn record_factored_block(&mut self) {
+        let block = self.block.as_ref();
+        let n = block.nrows();
+        let value = |k: usize| block[(k % n, k / n)];
+        self.factored_block.clear();
+        self.factored_block
+            .extend(self.block_entries.iter().map(|&k| value(k)));
+        self.interface_lu_current = true;
+    }
+
+    /// Whether the interface LU in force is that of the current block: made since the last
+    /// bulk factorisation from a block with the same bits.
+    fn interface_lu_holds(&self) -> bool {
+        let block = self.block.as_ref();
+        let n = block.nrows();
+        let same = |(&k, &v): (&usize, &f64)| block[(k % n, k / n)].to_bits() == v.to_bits();
+        self.interface_lu_current
+            && self
+                .block_entries
+                .iter()
+                .zip(&self.factored_block)
+                .all(same)
+    }
 }
 
 /// What happened in one increment.
@@ -365,6 +413,9 @@ impl<'a> Newton<'a> {
         self.condensed = Some(Condensed {
             solver,
             block: Mat::zeros(n_i, n_i),
+            block_entries: map.entries(n_i),
+            factored_block: Vec::new(),
+            interface_lu_current: false,
             map,
             linear_bulk,
             bulk_dirty: false,
@@ -374,6 +425,7 @@ impl<'a> Newton<'a> {
             u_ref: vec![0.0; n],
             du: vec![0.0; n],
             extrapolated: false,
+            reference_committed: false,
         });
         Ok(t.elapsed().as_secs_f64())
     }
@@ -466,6 +518,7 @@ impl<'a> Newton<'a> {
             kind.since(t);
             c.bulk_dirty |= first;
             c.bulk_ready = true;
+            c.reference_committed = false;
             c.bulk_force.copy_from_slice(&system.internal_force);
             c.u_ref.copy_from_slice(u);
         } else {
@@ -528,12 +581,23 @@ impl<'a> Newton<'a> {
         let mut last_correction = f64::INFINITY;
         let mut correction_max = f64::INFINITY;
         let mut initial_residual = None;
-        // The next evaluation runs the bulk's elements (start of the increment, or the check
-        // of a converged state reached with extrapolated bulk forces).
-        let mut fresh = true;
+        // Whether the next evaluation runs the bulk's elements: at the start of the increment
+        // unless a linear bulk continues from the committed state by K·Δu (the element loop
+        // that confirmed that state gave its force), and for the check of a converged state
+        // reached with extrapolated bulk forces.
+        let mut fresh = problem.bulk_loads_vary()
+            || !self
+                .condensed
+                .as_ref()
+                .is_some_and(|c| c.reference_committed);
+        // The symmetry of a tangent the line search already evaluated at u (its full step).
+        let mut evaluated: Option<bool> = None;
         loop {
             let t = std::time::Instant::now();
-            let symmetric = self.evaluate(problem, u, true, fresh);
+            let symmetric = match evaluated.take() {
+                Some(symmetric) => symmetric,
+                None => self.evaluate(problem, u, true, fresh),
+            };
             fresh = false;
             log.assembly_seconds += t.elapsed().as_secs_f64();
             let r = &mut self.residual;
@@ -630,7 +694,8 @@ impl<'a> Newton<'a> {
             let before = norm(u);
             let step = if residual > LINE_SEARCH_ABOVE {
                 let t = std::time::Instant::now();
-                let alpha = self.line_search(problem, u, residual * reference);
+                let alpha;
+                (alpha, evaluated) = self.line_search(problem, u, residual * reference);
                 log.assembly_seconds += t.elapsed().as_secs_f64();
                 alpha
             } else {
@@ -642,6 +707,37 @@ impl<'a> Newton<'a> {
             correction_max = step * max_abs(&self.residual);
             log.corrections.push(last_correction);
             log.iterations += 1;
+        }
+    }
+
+    /// Sets the state the run starts from, `u` (all dofs; the committed displacements of a
+    /// new or resumed run): a linear bulk on the condensed path evaluates its elements there
+    /// (its stiffness the first time) and takes them as the committed reference its first
+    /// increment continues from by K·Δu. A resumed run thereby starts from the same bits as
+    /// the uninterrupted one, whose reference is the element loop that confirmed the same
+    /// state. Other problems are left to their first increment. The log holds the seconds
+    /// spent (making the condensed solver counts as factorisation, as in an increment).
+    pub fn start_from(&mut self, problem: &mut impl Problem, u: &[f64]) -> Result<NewtonLog> {
+        let mut log = NewtonLog::default();
+        if problem.bulk_loads_vary() {
+            return Ok(log);
+        }
+        log.factorization_seconds = self.prepare_condensed(problem)?;
+        if self.condensed.as_ref().is_some_and(|c| c.linear_bulk) {
+            let t = Instant::now();
+            self.evaluate(problem, u, true, true);
+            self.commit();
+            log.assembly_seconds = t.elapsed().as_secs_f64();
+        }
+        Ok(log)
+    }
+
+    /// Tells the solver that the driver committed the state of its last converged increment
+    /// (the state a restart record holds): its bulk force, from the element loop that
+    /// confirmed it, becomes the reference the next increment continues from.
+    pub fn commit(&mut self) {
+        if let Some(c) = &mut self.condensed {
+            c.reference_committed = c.linear_bulk && c.bulk_ready && !c.extrapolated;
         }
     }
 
@@ -682,10 +778,17 @@ impl<'a> Newton<'a> {
                 };
                 kind.since(t);
                 c.bulk_dirty = false;
+                c.interface_lu_current = false;
             }
             let t = Instant::now();
-            c.solver.factor_interface(c.block.as_ref())?;
-            work.interface_factorisations.since(t);
+            if c.interface_lu_holds() {
+                work.kept_interface_factorisations.since(t);
+            } else {
+                c.interface_lu_current = false;
+                c.solver.factor_interface(c.block.as_ref())?;
+                c.record_factored_block();
+                work.interface_factorisations.since(t);
+            }
         } else {
             // The first factorisation runs the symbolic analysis, timed on its own.
             let symbolic = self.linear.symbolic_seconds();
@@ -707,15 +810,28 @@ impl<'a> Newton<'a> {
     /// ‖r‖ below `current`, or the α with the smallest ‖r‖. Contact and friction make the
     /// residual piecewise smooth, and a point flipping between stick and slip (or open and
     /// closed) can make full Newton steps cycle; shortening the step breaks the cycle.
-    /// Returns α; `u` holds u + α δu.
-    fn line_search(&mut self, problem: &mut impl Problem, u: &mut [f64], current: f64) -> f64 {
+    ///
+    /// For a linear bulk on the condensed path the full step, taken in most iterations, is
+    /// evaluated with its tangent (K·Δu and the interface's tangent, little more than its
+    /// force): accepted, it is the next iteration's evaluation (the same bits as a second
+    /// pass at the same u and committed states), which is then not repeated. A plastic bulk
+    /// is not: its tangent costs more than its force, and the kept sum of its elastic cells
+    /// (`GlobalSystem::assemble_reusing`) would follow the rejected trials too. Returns α,
+    /// with the symmetry of that tangent when the full step was taken; `u` holds u + α δu.
+    fn line_search(
+        &mut self,
+        problem: &mut impl Problem,
+        u: &mut [f64],
+        current: f64,
+    ) -> (f64, Option<bool>) {
         self.start.copy_from_slice(u);
         let mut best = (f64::INFINITY, 1.0);
         let mut alpha = 1.0;
         for _ in 0..5 {
             u.copy_from_slice(&self.start);
             self.dofs.add_free(alpha, &self.residual, u);
-            self.evaluate(problem, u, false, false);
+            let full = alpha == 1.0 && self.condensed.as_ref().is_some_and(|c| c.linear_bulk);
+            let symmetric = self.evaluate(problem, u, full, false);
             self.work.line_search_evaluations += 1;
             let trial = &mut self.trial_residual;
             out_of_balance(
@@ -729,13 +845,13 @@ impl<'a> Newton<'a> {
                 best = (value, alpha);
             }
             if value < current {
-                return alpha;
+                return (alpha, full.then_some(symmetric));
             }
             alpha *= 0.5;
         }
         u.copy_from_slice(&self.start);
         self.dofs.add_free(best.1, &self.residual, u);
-        best.1
+        (best.1, None)
     }
 }
 

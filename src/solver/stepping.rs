@@ -77,6 +77,8 @@ pub fn run_steps_from(
     newton.restore_force_average(state.force_average);
     solution.reset_trial();
     coupling::start_temperatures(model, &mut solution, state.time)?;
+    let (u, mut problem) = solution.split(model);
+    stats.add_work(&newton.start_from(&mut problem, u)?);
     let mut converged_u = solution.u.clone();
     let mut f_ext = vec![0.0; model.dofs.dof_count()];
     let constant_tangent = !model.control.plastic && model.interface.elements.is_empty();
@@ -145,6 +147,7 @@ pub fn run_steps_from(
                     let internal_force = newton.system().internal_force.as_slice();
                     solution.record_energy(model, &converged_u, &f_ext, internal_force);
                     solution.commit();
+                    newton.commit();
                     state.force_average = newton.force_average();
                     converged_u.copy_from_slice(&solution.u);
                     state.time = trial_time;
@@ -380,6 +383,7 @@ fn settle_once(
     let internal_force = newton.system().internal_force.as_slice();
     solution.record_energy(model, converged_u, external_force, internal_force);
     solution.commit();
+    newton.commit();
     converged_u.copy_from_slice(&solution.u);
     tracing::info!(
         iterations = log.iterations,
