@@ -153,6 +153,15 @@ impl Model {
 }
 
 impl Model {
+    /// Whether the continuum's integration-point states are a function of the displacements
+    /// alone: every body linear elastic (no plastic strain, no internal variables) and no
+    /// temperature field (a coupled run evaluates its states with the temperatures of the
+    /// exchange before the last). A restart record then leaves them out, and a resumed run
+    /// evaluates them again at the record's displacements, to the same bits.
+    pub fn states_follow_displacements(&self) -> bool {
+        self.continuum.is_linear() && !self.has_temperature()
+    }
+
     /// Refuses a load-controlled run whose output increments and amplitude breakpoints alone
     /// need more increment solves than `[solver] max_solves`, naming the step that passes it.
     fn check_planned_solves(&self) -> Result<()> {

@@ -4,7 +4,8 @@
 //! It holds the stepping loop's state ([`LoopState`]: step, pseudo-time, next increment
 //! size, counters, force floor, stiffness history), the run's counters, the displacements,
 //! every integration point's committed state ([`PointState`], [`InterfaceState`] with its
-//! fretting history), the energy ledger, and the output's own state: the length and checksum
+//! fretting history; the continuum's left out when they follow from the displacements,
+//! [`ContinuumStates`]), the energy ledger, and the output's own state: the length and checksum
 //! of each file the run grows by appending ([`OutputState`]; `history.csv`, from which the
 //! step records of `summary.json` are read back, the fretting tables and the energy marks), so
 //! that a resumed run continues those files exactly, and the record stays the size of the
@@ -28,6 +29,7 @@ use serde::{Deserialize, Serialize};
 use super::append::FileMark;
 use crate::contact::InterfaceState;
 use crate::material::PointState;
+use crate::model::Model;
 use crate::solver::energy::EnergyLedger;
 use crate::solver::shakedown::BodyCycles;
 use crate::solver::state::{
@@ -38,8 +40,9 @@ use crate::{Error, Result};
 /// First bytes of a record; the trailing digit is the format version (3: `postcard`; 4: the
 /// growing files' lengths and checksums instead of their rows; 5: the continuum's internal
 /// variables, the backstresses of kinematic hardening, and the energy ledger's thermal work;
-/// 6: six-component stresses and strains and three-component interface states, for twist).
-const MAGIC: &[u8; 16] = b"asperity-rst-v6\n";
+/// 6: six-component stresses and strains and three-component interface states, for twist;
+/// 7: the continuum's states left out when they follow from the displacements).
+const MAGIC: &[u8; 16] = b"asperity-rst-v7\n";
 /// Bytes of [`MAGIC`] before the format version.
 const MAGIC_NAME: usize = 14;
 
@@ -93,6 +96,29 @@ pub struct Record {
     pub output: OutputState,
 }
 
+/// Whether a record holds the continuum's integration-point states. At a million unknowns
+/// they are 97 % of a record (232 of 238 MB), whose encoding on the solver's thread and
+/// writing cost more than a tenth of an elastic run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ContinuumStates {
+    /// Stored: states with a history (plasticity) or a temperature field.
+    Stored,
+    /// Left out: they follow from the displacements
+    /// ([`Model::states_follow_displacements`]); a resumed run evaluates them again.
+    FromDisplacements,
+}
+
+impl ContinuumStates {
+    /// What the records of `model` hold.
+    pub fn of(model: &Model) -> Self {
+        if model.states_follow_displacements() {
+            Self::FromDisplacements
+        } else {
+            Self::Stored
+        }
+    }
+}
+
 /// What is checked before the rest of a record is read, whose layout another version may
 /// have changed.
 #[derive(Serialize, Deserialize)]
@@ -111,6 +137,7 @@ struct Body<'a> {
     state: Cow<'a, LoopState>,
     stats: Cow<'a, RunStatistics>,
     u: Cow<'a, [f64]>,
+    /// Empty when they follow from the displacements ([`ContinuumStates::FromDisplacements`]).
     committed: Cow<'a, [PointState]>,
     interface_committed: Cow<'a, [InterfaceState]>,
     /// The continuum's committed internal variables (empty without kinematic hardening).
@@ -122,12 +149,14 @@ struct Body<'a> {
 }
 
 /// Encodes the record of the converged increment `progress` into `buffer` (cleared first);
-/// `case` is the case file's text, which [`read_record`] compares with the case being resumed.
+/// `case` is the case file's text, which [`read_record`] compares with the case being resumed;
+/// `states` says whether the continuum's states are stored.
 pub(super) fn encode_record(
     buffer: &mut Vec<u8>,
     case: &str,
     progress: &Progress,
     output: &OutputState,
+    states: ContinuumStates,
 ) -> io::Result<()> {
     let Progress {
         state,
@@ -142,7 +171,10 @@ pub(super) fn encode_record(
         state: Cow::Borrowed(state),
         stats: Cow::Borrowed(stats),
         u: Cow::Borrowed(&solution.u),
-        committed: Cow::Borrowed(&solution.committed),
+        committed: Cow::Borrowed(match states {
+            ContinuumStates::Stored => &solution.committed,
+            ContinuumStates::FromDisplacements => &[],
+        }),
         interface_committed: Cow::Borrowed(&solution.interface_committed),
         internal_committed: Cow::Borrowed(&solution.internal.committed),
         body_cycles: Cow::Borrowed(&solution.internal.cycles),
@@ -160,9 +192,15 @@ pub(super) fn encode_record(
 }
 
 /// Reads the record at `path` for the case whose text is `case` and a model whose solution
-/// has the sizes of `template` (from [`Solution::new`]). A record of another case, program
-/// version or model size, or a damaged one, is an [`Error::Restart`].
-pub fn read_record(path: &Path, case: &str, template: &Solution) -> Result<Record> {
+/// has the sizes of `template` (from [`Solution::new`]) and whose records hold `states`. A
+/// record of another case, program version or model size, or a damaged one, is an
+/// [`Error::Restart`]. Continuum states left out are `template`'s, for the run to evaluate.
+pub fn read_record(
+    path: &Path,
+    case: &str,
+    template: &Solution,
+    states: ContinuumStates,
+) -> Result<Record> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     let refuse = |reason: String| Error::Restart {
         path: path.to_path_buf(),
@@ -207,7 +245,10 @@ pub fn read_record(path: &Path, case: &str, template: &Solution) -> Result<Recor
         (
             "integration points",
             body.committed.len(),
-            template.committed.len(),
+            match states {
+                ContinuumStates::Stored => template.committed.len(),
+                ContinuumStates::FromDisplacements => 0,
+            },
         ),
         (
             "interface points",
@@ -232,10 +273,12 @@ impl Body<'_> {
     /// The record of a body read back for a model whose solution has the sizes of
     /// `template`; trial states start from the committed ones.
     fn into_record(self, template: &Solution) -> Record {
-        let (committed, interface_committed) = (
-            self.committed.into_owned(),
-            self.interface_committed.into_owned(),
-        );
+        let committed = if self.committed.is_empty() {
+            template.committed.clone()
+        } else {
+            self.committed.into_owned()
+        };
+        let interface_committed = self.interface_committed.into_owned();
         // Every field named, so that a new one cannot be forgotten here.
         let solution = Solution {
             u: self.u.into_owned(),
@@ -293,7 +336,15 @@ mod tests {
             solution: &solution,
         };
         let mut buffer = Vec::new();
-        encode_record(&mut buffer, case, &progress, &OutputState::default()).unwrap();
+        let output = OutputState::default();
+        encode_record(
+            &mut buffer,
+            case,
+            &progress,
+            &output,
+            ContinuumStates::Stored,
+        )
+        .unwrap();
         buffer
     }
 
@@ -302,7 +353,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("restart.bin");
         std::fs::write(&path, bytes).unwrap();
-        match read_record(&path, "case", &solution()) {
+        match read_record(&path, "case", &solution(), ContinuumStates::Stored) {
             Err(Error::Restart { path: p, reason }) if p == path => reason,
             other => panic!("not refused: {other:?}"),
         }
@@ -314,7 +365,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("restart.bin");
         std::fs::write(&path, &good).unwrap();
-        let back = read_record(&path, "case", &solution())
+        let back = read_record(&path, "case", &solution(), ContinuumStates::Stored)
             .unwrap()
             .resume
             .solution;

@@ -10,10 +10,10 @@ use super::append::Append;
 use super::atomic::write_bytes;
 use super::csv::{Cell, CsvTable, write_csv};
 use super::pvd::{PvdEntry, write_pvd};
-use super::restart::{OutputState, encode_record};
+use super::restart::{ContinuumStates, OutputState, encode_record};
 use super::vtm::{VtmBlock, write_vtm};
 use super::vtu::write_vtu_with;
-use crate::solver::state::{LoopState, Progress, RunStatistics, Solution};
+use crate::solver::state::Progress;
 use crate::{Error, Result};
 
 /// A file handed to the [`RecordWriter`], encoded and written on its thread.
@@ -151,17 +151,19 @@ impl RecordWriter {
         self.queued.clear();
     }
 
-    /// Encodes the record of the converged increment `progress` and adds it to the next
-    /// commit.
+    /// Encodes the record of the converged increment `progress` (with the continuum's
+    /// `states` or without) and adds it to the next commit.
     pub fn queue_record(
         &mut self,
         path: &Path,
         case: &str,
         progress: &Progress,
         output: &OutputState,
+        states: ContinuumStates,
     ) -> Result<()> {
         let mut buffer = std::mem::take(&mut self.spare);
-        encode_record(&mut buffer, case, progress, output).map_err(|e| Error::io(path, e))?;
+        encode_record(&mut buffer, case, progress, output, states)
+            .map_err(|e| Error::io(path, e))?;
         self.queue(path.to_path_buf(), Content::Record(buffer));
         Ok(())
     }
@@ -257,17 +259,11 @@ impl RecordWriter {
         &mut self,
         path: &Path,
         case: &str,
-        state: &LoopState,
-        stats: &RunStatistics,
-        solution: &Solution,
+        progress: &Progress,
         output: &OutputState,
+        states: ContinuumStates,
     ) -> Result<()> {
-        let progress = Progress {
-            state: state.clone(),
-            stats,
-            solution,
-        };
-        self.queue_record(path, case, &progress, output)?;
+        self.queue_record(path, case, progress, output, states)?;
         self.commit()
     }
 

@@ -57,7 +57,7 @@ use std::time::Instant;
 use crate::config::{Case, LinearSolverKind, SolverSpec};
 use crate::mesh::{Mesh, gmsh, msh};
 use crate::model::{Model, ModelSpec};
-use crate::output::restart::{Record, read_record};
+use crate::output::restart::{ContinuumStates, Record, read_record};
 use crate::output::summary::Summary;
 use crate::solver::newton::{LinearSolver, NewtonSettings};
 use crate::solver::state::{RunStatistics, Solution, StepResult};
@@ -442,7 +442,8 @@ fn solve(
 /// [`OutputFolder::resumable`]).
 fn resume_record(model: &Model, folder: &OutputFolder, case_text: &str) -> Result<Record> {
     let path = folder.dir().join(RunFile::Restart.name());
-    read_record(&path, case_text, &Solution::new(model))
+    let states = ContinuumStates::of(model);
+    read_record(&path, case_text, &Solution::new(model), states)
 }
 
 /// What `asperity check` checks of a built model beyond the model itself: the case's

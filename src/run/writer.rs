@@ -14,6 +14,7 @@ use crate::output::Grid;
 use crate::output::append::{self, AppendedFile};
 use crate::output::csv::GrowingCsv;
 use crate::output::pvd::PvdEntry;
+use crate::output::restart::ContinuumStates;
 use crate::output::restart::{
     ENERGY_MARKS, OutputState, Record, encode_energy_mark, read_energy_marks,
 };
@@ -487,6 +488,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             case_text,
             progress,
             &output,
+            ContinuumStates::of(self.model),
         )
     }
 

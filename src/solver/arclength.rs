@@ -49,6 +49,8 @@ pub fn run_arc_length(
     if newton.set_arc_reference(&reference) == 0.0 {
         return Err(Error::ArcLengthNoLoad);
     }
+    // A resumed run's continuum states may have been left out of its record.
+    let rebuild_states = resume.is_some() && model.states_follow_displacements();
     let Resume {
         mut state,
         mut stats,
@@ -57,6 +59,11 @@ pub fn run_arc_length(
     // A record of this case always holds the arc state (a record of another case is refused).
     let mut path = state.arc.take().unwrap_or_else(ArcState::start);
     solution.reset_trial();
+    if rebuild_states {
+        let (u, mut problem) = solution.split(model);
+        stats.add_work(&newton.start_from(&mut problem, u, true)?);
+        solution.committed.copy_from_slice(&solution.trial);
+    }
     let mut converged_u = solution.u.clone();
     let mut f_ext = vec![0.0; dofs.dof_count()];
     let stop = loop {

@@ -715,20 +715,36 @@ impl<'a> Newton<'a> {
     /// (its stiffness the first time) and takes them as the committed reference its first
     /// increment continues from by K·Δu. A resumed run thereby starts from the same bits as
     /// the uninterrupted one, whose reference is the element loop that confirmed the same
-    /// state. Other problems are left to their first increment. The log holds the seconds
-    /// spent (making the condensed solver counts as factorisation, as in an increment).
-    pub fn start_from(&mut self, problem: &mut impl Problem, u: &[f64]) -> Result<NewtonLog> {
+    /// state. Other problems are left to their first increment, unless `states`: then the
+    /// bulk's elements are evaluated at `u` for their trial states (those a restart record
+    /// leaves out when they follow from the displacements). The log holds the seconds spent
+    /// (making the condensed solver counts as factorisation, as in an increment).
+    pub fn start_from(
+        &mut self,
+        problem: &mut impl Problem,
+        u: &[f64],
+        states: bool,
+    ) -> Result<NewtonLog> {
         let mut log = NewtonLog::default();
-        if problem.bulk_loads_vary() {
-            return Ok(log);
+        if !problem.bulk_loads_vary() {
+            log.factorization_seconds = self.prepare_condensed(problem)?;
         }
-        log.factorization_seconds = self.prepare_condensed(problem)?;
-        if self.condensed.as_ref().is_some_and(|c| c.linear_bulk) {
-            let t = Instant::now();
+        let t = Instant::now();
+        if !problem.bulk_loads_vary() && self.condensed.as_ref().is_some_and(|c| c.linear_bulk) {
             self.evaluate(problem, u, true, true);
             self.commit();
-            log.assembly_seconds = t.elapsed().as_secs_f64();
+        } else if states {
+            let input = AssemblyInput {
+                dofs: self.dofs,
+                u,
+                tangent: false,
+                algorithm: self.settings.contact_algorithm,
+            };
+            self.system.clear(false);
+            problem.assemble_bulk(&mut self.system, &input);
+            self.work.force_assemblies.since(t);
         }
+        log.assembly_seconds = t.elapsed().as_secs_f64();
         Ok(log)
     }
 

@@ -69,6 +69,8 @@ pub fn run_steps_from(
         return crate::solver::arclength::run_arc_length(model, settings, arc, resume, observer);
     }
     let mut newton = Newton::new(*settings, &model.dofs, &model.pattern)?;
+    // A resumed run's continuum states may have been left out of its record.
+    let rebuild_states = resume.is_some() && model.states_follow_displacements();
     let Resume {
         mut state,
         mut stats,
@@ -78,7 +80,10 @@ pub fn run_steps_from(
     solution.reset_trial();
     coupling::start_temperatures(model, &mut solution, state.time)?;
     let (u, mut problem) = solution.split(model);
-    stats.add_work(&newton.start_from(&mut problem, u)?);
+    stats.add_work(&newton.start_from(&mut problem, u, rebuild_states)?);
+    if rebuild_states {
+        solution.committed.copy_from_slice(&solution.trial);
+    }
     let mut converged_u = solution.u.clone();
     let mut f_ext = vec![0.0; model.dofs.dof_count()];
     let constant_tangent = !model.control.plastic && model.interface.elements.is_empty();

@@ -26,13 +26,18 @@ pub fn through_record(
     model: &Model,
 ) -> asperity::output::restart::Record {
     let mut writer = asperity::output::writer::RecordWriter::default();
-    let (state, stats, solution) = (&resume.state, &resume.stats, &resume.solution);
-    let output = asperity::output::restart::OutputState::default();
+    use asperity::output::restart::{ContinuumStates, OutputState, read_record};
+    let progress = asperity::solver::state::Progress {
+        state: resume.state.clone(),
+        stats: &resume.stats,
+        solution: &resume.solution,
+    };
+    let states = ContinuumStates::of(model);
     writer
-        .write(path, case_text, state, stats, solution, &output)
+        .write(path, case_text, &progress, &OutputState::default(), states)
         .unwrap();
     writer.finish().unwrap();
-    asperity::output::restart::read_record(path, case_text, &Solution::new(model)).unwrap()
+    read_record(path, case_text, &Solution::new(model), states).unwrap()
 }
 
 /// The `asperity` binary of this build.
