@@ -55,6 +55,10 @@ pub struct BodyPoints {
     pub points: Vec<(u32, u32)>,
     /// For body b and node n: output point index at `index[b][n]` (u32::MAX if unused).
     index: Vec<Vec<u32>>,
+    /// The cells at each point, in cell order, with the point's node index in the cell:
+    /// point p's are `cells[start[p]..start[p + 1]]`.
+    start: Vec<u32>,
+    cells: Vec<(u32, u8)>,
 }
 
 impl BodyPoints {
@@ -72,7 +76,38 @@ impl BodyPoints {
                 }
             }
         }
-        Self { points, index }
+        // Counting sort by point: each point's cells stay in cell order.
+        let mut start = vec![0u32; points.len() + 1];
+        let point_of =
+            |c: &crate::element::set::ContinuumCell, n: u32| index[c.body as usize][n as usize];
+        for c in &model.continuum.cells {
+            for &n in &c.nodes[..c.kind.node_count()] {
+                start[point_of(c, n) as usize + 1] += 1;
+            }
+        }
+        for p in 0..points.len() {
+            start[p + 1] += start[p];
+        }
+        let mut fill = start.clone();
+        let mut cells = vec![(0u32, 0u8); start[points.len()] as usize];
+        for (e, c) in model.continuum.cells.iter().enumerate() {
+            for (i, &n) in c.nodes[..c.kind.node_count()].iter().enumerate() {
+                let slot = &mut fill[point_of(c, n) as usize];
+                cells[*slot as usize] = (e as u32, i as u8);
+                *slot += 1;
+            }
+        }
+        Self {
+            points,
+            index,
+            start,
+            cells,
+        }
+    }
+
+    /// The cells at point `p`, in cell order, with the point's node index in each.
+    fn cells_at(&self, p: usize) -> &[(u32, u8)] {
+        &self.cells[self.start[p] as usize..self.start[p + 1] as usize]
     }
 
     /// Output point of node `n` in body `b`.
@@ -98,38 +133,42 @@ pub struct NodalValues {
     pub equivalent_plastic_strain: f64,
 }
 
-/// Nodal stresses, strains and equivalent plastic strains per output point.
+/// Nodal stresses, strains and equivalent plastic strains per output point: the mean over
+/// the point's cells of their Gauss-point values extrapolated to it. Points in parallel,
+/// each summing its cells in cell order (the same bits on any number of threads).
 pub fn nodal_values(model: &Model, points: &BodyPoints, states: &[PointState]) -> Vec<NodalValues> {
-    let zero = NodalValues {
-        stress: Voigt::zeros(),
-        strain: Voigt::zeros(),
-        equivalent_plastic_strain: 0.0,
-    };
-    let mut out = vec![zero; points.points.len()];
-    let mut count = vec![0u32; points.points.len()];
+    use rayon::prelude::*;
     let ppe = crate::element::quadrature::MAX_CELL_POINTS;
-    for (e, c) in model.continuum.cells.iter().enumerate() {
-        let ex = extrapolation(c.kind);
-        let gp = &states[e * ppe..e * ppe + ex.ncols()];
-        for (i, &n) in c.nodes[..c.kind.node_count()].iter().enumerate() {
-            let p = points.point(c.body, n);
-            let v = &mut out[p];
+    let cells = &model.continuum.cells;
+    let value = |p: usize| {
+        let mut v = NodalValues {
+            stress: Voigt::zeros(),
+            strain: Voigt::zeros(),
+            equivalent_plastic_strain: 0.0,
+        };
+        let at = points.cells_at(p);
+        for &(e, i) in at {
+            let (e, i) = (e as usize, i as usize);
+            let ex = extrapolation(cells[e].kind);
+            let gp = &states[e * ppe..e * ppe + ex.ncols()];
             for (g, s) in gp.iter().enumerate() {
                 v.stress += ex[(i, g)] * s.stress;
                 v.strain += ex[(i, g)] * s.strain;
                 v.equivalent_plastic_strain += ex[(i, g)] * s.equivalent_plastic_strain;
             }
-            count[p] += 1;
         }
-    }
-    for (v, &k) in out.iter_mut().zip(&count) {
-        let k = k as f64;
+        let k = at.len() as f64;
         v.stress /= k;
         v.strain /= k;
         // ε̄ᵖ cannot be negative; extrapolation from the Gauss points can undershoot.
         v.equivalent_plastic_strain = (v.equivalent_plastic_strain / k).max(0.0);
-    }
-    out
+        v
+    };
+    (0..points.points.len())
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(value)
+        .collect()
 }
 
 /// The bodies' output grid of a step: quadratic cells; point data `displacement` (with twist
