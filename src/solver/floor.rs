@@ -57,8 +57,9 @@ pub struct SolverWork {
     /// over the whole model otherwise (its interface elements included). Matrix zeroing
     /// included.
     pub tangent_assemblies: Tally,
-    /// The same loops for the internal force alone (line-search trials; for a linear bulk,
-    /// the continuum's check of a state reached with K·u).
+    /// The same loops for the internal force alone (a line search's steps shorter than the
+    /// full one, whose trial is a tangent loop; for a linear bulk, the continuum's check of a
+    /// state reached with K·u; a resumed run's states left out of its record).
     pub force_assemblies: Tally,
     /// Condensed path: the interface elements' loops with their tangent, and for the
     /// internal force alone.
