@@ -92,6 +92,15 @@ const BULK: u32 = u32::MAX;
 /// allocate rayon bookkeeping (~1500 allocations per LU at n_I = 835).
 const DENSE_PARALLEL_FROM: usize = 1024;
 
+/// Factor entries (of the bulk's Cholesky factor) from which the numeric factorisation runs
+/// on all threads. Below it faer's parallel supernodal factorisation is slower than the
+/// sequential one on this project's 2-core machine (the threads wait on small fronts):
+/// measured per factorisation, sequential against parallel, 43k-unknown elasto-plastic
+/// punch (30 factorisations, ~5 M entries) 1.19–1.28 s against 1.98–2.07 s in all; 244k
+/// unknowns (37.6 M entries) 0.54–0.56 s against 0.60–0.64 s; 973k (176 M entries) 3.35 s
+/// against 3.20 s.
+const PARALLEL_FACTOR_FROM: usize = 100_000_000;
+
 /// Default of [`CondensedSolver::set_reuse_threshold`]: the factorisation is kept while no
 /// entry of the continuum matrix changed by more than 1 % of the geometric mean of its two
 /// diagonal entries. Measured on the elasto-plastic flat punch (43k unknowns, 10
@@ -361,7 +370,12 @@ impl CondensedSolver {
         let lower =
             SymbolicSparseColMat::new_unsorted_checked(n, n, lower_col_ptr, None, lower_row_idx);
 
-        let par = Par::rayon(0);
+        // Both cores for the bulk factorisation only where its fronts are large enough.
+        let par = if supernodal.len_val() >= PARALLEL_FACTOR_FROM {
+            Par::rayon(0)
+        } else {
+            Par::Seq
+        };
         let gather_len = (0..supernodal.n_supernodes())
             .map(|s| supernodal.supernode(s).pattern().len())
             .max()
@@ -406,7 +420,7 @@ impl CondensedSolver {
             dense: InterfaceLu::new(
                 n_i,
                 if n_i >= DENSE_PARALLEL_FROM {
-                    par
+                    Par::rayon(0)
                 } else {
                     Par::Seq
                 },
