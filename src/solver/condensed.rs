@@ -92,14 +92,16 @@ const BULK: u32 = u32::MAX;
 /// allocate rayon bookkeeping (~1500 allocations per LU at n_I = 835).
 const DENSE_PARALLEL_FROM: usize = 1024;
 
-/// Factor entries (of the bulk's Cholesky factor) from which the numeric factorisation runs
-/// on all threads. Below it faer's parallel supernodal factorisation is slower than the
-/// sequential one on this project's 2-core machine (the threads wait on small fronts):
-/// measured per factorisation, sequential against parallel, 43k-unknown elasto-plastic
-/// punch (30 factorisations, ~5 M entries) 1.19–1.28 s against 1.98–2.07 s in all; 244k
-/// unknowns (37.6 M entries) 0.54–0.56 s against 0.60–0.64 s; 973k (176 M entries) 3.35 s
-/// against 3.20 s.
-const PARALLEL_FACTOR_FROM: usize = 100_000_000;
+/// The parallelism of sparse factorisations and substitutions (the condensed bulk here, the
+/// whole tangent in [`crate::solver::linear`]): one thread. faer's parallel supernodal
+/// Cholesky was never faster on this project's 2-core machine, and much slower on small
+/// fronts (the threads wait: ~30 % of the elasto-plastic punch's samples in the scheduler).
+/// Measured, sequential against parallel: condensed path, 43k-unknown elasto-plastic punch
+/// (30 factorisations) 1.19–1.43 s against 1.98–2.07 s in all, 244k unknowns 0.54–0.56 s
+/// against 0.60–0.64 s per factorisation, 973k 3.35 s against 3.20 s, 3.84M 34.6 s against
+/// 34.8 s; Cholesky path (`make bench`, elastic block) 10k 0.015 against 0.025 s, 100k 0.24
+/// against 0.35 s, 1M 3.35 against 4.28 s. The other core stays free for the output writer.
+pub(crate) const BULK_FACTOR_PARALLELISM: Par = Par::Seq;
 
 /// Default of [`CondensedSolver::set_reuse_threshold`]: the factorisation is kept while no
 /// entry of the continuum matrix changed by more than 1 % of the geometric mean of its two
@@ -370,12 +372,8 @@ impl CondensedSolver {
         let lower =
             SymbolicSparseColMat::new_unsorted_checked(n, n, lower_col_ptr, None, lower_row_idx);
 
-        // Both cores for the bulk factorisation only where its fronts are large enough.
-        let par = if supernodal.len_val() >= PARALLEL_FACTOR_FROM {
-            Par::rayon(0)
-        } else {
-            Par::Seq
-        };
+        // One thread for the bulk factorisation: see `BULK_FACTOR_PARALLELISM`.
+        let par = BULK_FACTOR_PARALLELISM;
         let gather_len = (0..supernodal.n_supernodes())
             .map(|s| supernodal.supernode(s).pattern().len())
             .max()

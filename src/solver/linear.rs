@@ -125,7 +125,7 @@ impl CholeskySolver {
             analysis: None,
             krylov: None,
             lu: None,
-            par: Par::rayon(0),
+            par: crate::solver::condensed::BULK_FACTOR_PARALLELISM,
             factorized: false,
             unsymmetric: false,
             symbolic_seconds: 0.0,
