@@ -49,8 +49,7 @@ pub fn run_arc_length(
     if newton.set_arc_reference(&reference) == 0.0 {
         return Err(Error::ArcLengthNoLoad);
     }
-    // A resumed run's continuum states may have been left out of its record.
-    let rebuild_states = resume.is_some() && model.states_follow_displacements();
+    let resumed = resume.is_some();
     let Resume {
         mut state,
         mut stats,
@@ -59,10 +58,15 @@ pub fn run_arc_length(
     // A record of this case always holds the arc state (a record of another case is refused).
     let mut path = state.arc.take().unwrap_or_else(ArcState::start);
     solution.reset_trial();
-    if rebuild_states {
-        let (u, mut problem) = solution.split(model);
-        stats.add_work(&newton.start_from(&mut problem, u, true)?);
-        solution.committed.copy_from_slice(&solution.trial);
+    // Every arc-length increment evaluates the bulk's elements: only a resumed run needs
+    // a start (for the continuum states its record may have left out).
+    if resumed {
+        stats.add_work(&crate::solver::stepping::start_newton(
+            model,
+            &mut newton,
+            &mut solution,
+            true,
+        )?);
     }
     let mut converged_u = solution.u.clone();
     let mut f_ext = vec![0.0; dofs.dof_count()];

@@ -726,23 +726,17 @@ impl<'a> Newton<'a> {
         states: bool,
     ) -> Result<NewtonLog> {
         let mut log = NewtonLog::default();
-        if !problem.bulk_loads_vary() {
+        let fixed_loads = !problem.bulk_loads_vary();
+        if fixed_loads {
             log.factorization_seconds = self.prepare_condensed(problem)?;
         }
+        let reference = fixed_loads && self.condensed.as_ref().is_some_and(|c| c.linear_bulk);
         let t = Instant::now();
-        if !problem.bulk_loads_vary() && self.condensed.as_ref().is_some_and(|c| c.linear_bulk) {
-            self.evaluate(problem, u, true, true);
+        if reference || states {
+            self.evaluate(problem, u, reference, true);
+        }
+        if reference {
             self.commit();
-        } else if states {
-            let input = AssemblyInput {
-                dofs: self.dofs,
-                u,
-                tangent: false,
-                algorithm: self.settings.contact_algorithm,
-            };
-            self.system.clear(false);
-            problem.assemble_bulk(&mut self.system, &input);
-            self.work.force_assemblies.since(t);
         }
         log.assembly_seconds = t.elapsed().as_secs_f64();
         Ok(log)

@@ -69,8 +69,7 @@ pub fn run_steps_from(
         return crate::solver::arclength::run_arc_length(model, settings, arc, resume, observer);
     }
     let mut newton = Newton::new(*settings, &model.dofs, &model.pattern)?;
-    // A resumed run's continuum states may have been left out of its record.
-    let rebuild_states = resume.is_some() && model.states_follow_displacements();
+    let resumed = resume.is_some();
     let Resume {
         mut state,
         mut stats,
@@ -79,11 +78,7 @@ pub fn run_steps_from(
     newton.restore_force_average(state.force_average);
     solution.reset_trial();
     coupling::start_temperatures(model, &mut solution, state.time)?;
-    let (u, mut problem) = solution.split(model);
-    stats.add_work(&newton.start_from(&mut problem, u, rebuild_states)?);
-    if rebuild_states {
-        solution.committed.copy_from_slice(&solution.trial);
-    }
+    stats.add_work(&start_newton(model, &mut newton, &mut solution, resumed)?);
     let mut converged_u = solution.u.clone();
     let mut f_ext = vec![0.0; model.dofs.dof_count()];
     let constant_tangent = !model.control.plastic && model.interface.elements.is_empty();
@@ -323,6 +318,24 @@ pub fn run_steps_from(
     stats.factor_nnz = newton.linear().factor_nnz();
     stats.work.solver = *newton.work();
     Ok((solution, stats))
+}
+
+/// Starts `newton` at the committed state of `solution`, that of a new run or of one
+/// `resumed` from a restart record ([`Newton::start_from`]), and evaluates again the
+/// continuum states a record leaves out when they follow from the displacements.
+pub(crate) fn start_newton(
+    model: &Model,
+    newton: &mut Newton,
+    solution: &mut Solution,
+    resumed: bool,
+) -> Result<NewtonLog> {
+    let rebuild_states = resumed && model.states_follow_displacements();
+    let (u, mut problem) = solution.split(model);
+    let log = newton.start_from(&mut problem, u, rebuild_states)?;
+    if rebuild_states {
+        solution.committed.copy_from_slice(&solution.trial);
+    }
+    Ok(log)
 }
 
 /// Re-equilibrates the bodies after a wear jump, under the loads of the converged state (one
