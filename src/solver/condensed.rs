@@ -19,14 +19,16 @@
 //! the solution is exact to rounding.
 //!
 //! # How S_c is obtained
-//! One supernodal Cholesky factorisation (faer) of the whole continuum matrix with the bulk
-//! ordered first (AMD on K_BB) and the interface last: its trailing block satisfies
-//! L_II L_IIᵀ = S_c, so S_c falls out of the sparse factorisation, whose supernodal updates
-//! exploit the sparsity of K_BI (forming W = L_BB⁻¹ K_BI column block by column block would
-//! not). S_c is only positive *semi*-definite when a body is held only through the interface
-//! (e.g. a shaft pushed into a sleeve), so the factorisation is of K_c + D with a positive
-//! diagonal D on the interface unknowns (the continuum's own diagonal there); the bulk part
-//! of the factor does not change, the trailing block becomes S_c + D, and S_c = L_II L_IIᵀ − D.
+//! One supernodal Cholesky factorisation of the whole continuum matrix with the bulk
+//! ordered first (AMD on K_BB) and the interface last, stopped after the bulk columns
+//! ([`crate::solver::tree_cholesky`]): the bulk part of the factor is L_BB and L_IB, and the
+//! trailing block, updated by the bulk columns only, is K_II − L_IB L_IBᵀ = S_c, so S_c falls
+//! out of the sparse factorisation, whose supernodal updates exploit the sparsity of K_BI
+//! (forming W = L_BB⁻¹ K_BI column block by column block would not). The factorisation runs
+//! the independent subtrees of the elimination tree on all threads. S_c is only positive
+//! *semi*-definite when a body is held only through the interface (e.g. a shaft pushed into
+//! a sleeve); the interface diagonal is shifted by a positive D (the continuum's own
+//! diagonal there), which the bulk part of the factor does not see, and taken off S_c again.
 //!
 //! A solve then costs one sparse forward and backward substitution over the bulk part of the
 //! factor, a copy of S_c, the dense LU of S_c + K_if (at most ⅔ n_I³ flops) and its
@@ -57,19 +59,15 @@
 //! }
 //! ```
 
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::matmul::matmul;
-use faer::linalg::matmul::triangular::{BlockStructure, matmul as triangular_matmul};
 use faer::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_upper_triangular_in_place,
 };
 use faer::perm::PermRef;
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::amd;
-use faer::sparse::linalg::cholesky::supernodal::{
-    SupernodalLltRef, SymbolicSupernodalCholesky, factorize_supernodal_numeric_llt,
-    factorize_supernodal_numeric_llt_scratch,
-};
+use faer::sparse::linalg::cholesky::supernodal::{SupernodalLltRef, SymbolicSupernodalCholesky};
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
     factorize_symbolic_cholesky,
@@ -81,6 +79,7 @@ use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 use crate::assembly::SparsityPattern;
 use crate::solver::interface_lu::InterfaceLu;
 use crate::solver::linear::SparseLu;
+use crate::solver::tree_cholesky::TreeCholesky;
 use crate::{Error, Result};
 
 /// Marker for a bulk equation in the equation → interface-index map.
@@ -92,8 +91,10 @@ const BULK: u32 = u32::MAX;
 /// allocate rayon bookkeeping (~1500 allocations per LU at n_I = 835).
 const DENSE_PARALLEL_FROM: usize = 1024;
 
-/// The parallelism of sparse factorisations and substitutions (the condensed bulk here, the
-/// whole tangent in [`crate::solver::linear`]): one thread. faer's parallel supernodal
+/// The parallelism of faer's sparse factorisations and substitutions (the sparse LU of an
+/// unsymmetric bulk here, the whole tangent in [`crate::solver::linear`]): one thread. (The
+/// condensed symmetric bulk is factored by [`crate::solver::tree_cholesky`], which runs
+/// subtrees, not dense kernels, in parallel.) faer's parallel supernodal
 /// Cholesky was never faster on this project's 2-core machine, and much slower on small
 /// fronts (the threads wait: ~30 % of the elasto-plastic punch's samples in the scheduler).
 /// Measured, sequential against parallel: condensed path, 43k-unknown elasto-plastic punch
@@ -175,14 +176,15 @@ pub struct CondensedSolver {
     shift: Vec<f64>,
     /// Continuum Schur complement S_c on the interface unknowns.
     schur: Mat<f64>,
-    /// Dense LU of S_c + K_if (its buffer also holds L_II while S_c is formed).
+    /// Dense LU of S_c + K_if.
     dense: InterfaceLu,
     /// Right-hand side / solution in elimination order, and a gather buffer.
     x: Vec<f64>,
     gather: Vec<f64>,
-    workspace: MemBuffer,
-    /// Parallelism of the sparse factorisation and S_c.
+    /// Parallelism of the sparse LU of an unsymmetric bulk.
     par: Par,
+    /// The bulk factorisation's updaters and schedule over the elimination tree.
+    tree: TreeCholesky,
     /// Whether the bulk, and the interface system, are factored.
     factored: bool,
     /// Whether [`Self::release_refactorisation_storage`] was called.
@@ -378,14 +380,8 @@ impl CondensedSolver {
             .map(|s| supernodal.supernode(s).pattern().len())
             .max()
             .unwrap_or(0);
-        let req = StackReq::any_of(&[factorize_supernodal_numeric_llt_scratch::<u32, f64>(
-            supernodal,
-            par,
-            Default::default(),
-        )]);
-        let workspace = MemBuffer::try_new(req)
-            .map_err(|_| Error::Linear("out of memory for the factorisation workspace".into()))?;
         let factor = vec![0.0; supernodal.len_val()];
+        let tree = TreeCholesky::new(supernodal, rayon::current_num_threads());
         tracing::debug!(
             unknowns = n,
             interface = n_i,
@@ -425,8 +421,8 @@ impl CondensedSolver {
             )?,
             x: vec![0.0; n],
             gather: vec![0.0; gather_len],
-            workspace,
             par,
+            tree,
             symbolic,
             factored: false,
             released: false,
@@ -436,10 +432,12 @@ impl CondensedSolver {
         })
     }
 
-    /// Sets the parallelism of [`Self::factor_bulk`] (`factor`) and of the dense LU and
-    /// substitutions of every solve (`dense`). Defaults: all threads for the former; for the
-    /// latter all threads from n_I = 1024 interface unknowns, sequential below. (The sparse
-    /// substitutions over the bulk are sequential: one right-hand side.)
+    /// Sets the parallelism of the sparse LU of an unsymmetric bulk
+    /// ([`Self::factor_bulk_unsymmetric`], `factor`) and of the dense LU and substitutions of
+    /// every solve (`dense`). Defaults: one thread for the former
+    /// (`BULK_FACTOR_PARALLELISM`); for the latter all threads from n_I = 1024 interface
+    /// unknowns, sequential below. (The symmetric bulk is factored on all threads by subtrees,
+    /// [`crate::solver::tree_cholesky`]; the sparse substitutions are sequential.)
     pub fn set_parallelism(&mut self, factor: Par, dense: Par) {
         self.par = factor;
         self.dense.set_parallelism(dense);
@@ -528,7 +526,7 @@ impl CondensedSolver {
     }
 
     /// Frees what only a refactorisation needs — the reordered lower triangle and its maps,
-    /// the change test's scales, the factorisation workspace — once the bulk is factored for
+    /// the change test's scales, the factorisation's scratch — once the bulk is factored for
     /// good, as an elastic bulk is (about 250 MB beside the 1.4 GB factor of a 1M-unknown
     /// taper). Later calls of [`Self::factor_bulk`] and [`Self::factor_bulk_unsymmetric`]
     /// fail; solves are unaffected.
@@ -539,7 +537,7 @@ impl CondensedSolver {
         self.diagonal = Vec::new();
         self.inverse_scale = Vec::new();
         self.lower = SymbolicSparseColMat::new_checked(0, 0, vec![0], None, Vec::new());
-        self.workspace = MemBuffer::new(StackReq::EMPTY);
+        self.tree.release_scratch();
         self.released = true;
     }
 
@@ -548,7 +546,7 @@ impl CondensedSolver {
         let n_i = self.interface.len();
         8 * (self.factor.len() + self.lower_values.len() + 2 * n_i * n_i + 2 * self.n)
             + 4 * (self.lower.row_idx().len() + 4 * self.n)
-            + self.workspace.len()
+            + self.tree.memory_bytes()
     }
 
     /// The continuum Schur complement S_c on the interface (valid after
@@ -604,27 +602,24 @@ impl CondensedSolver {
         let SymbolicCholeskyRaw::Supernodal(symbolic) = self.symbolic.raw() else {
             unreachable!("forced supernodal in `new`");
         };
-        factorize_supernodal_numeric_llt(
-            &mut self.factor,
-            SparseColMatRef::new(self.lower.as_ref(), &self.lower_values),
-            Default::default(),
-            symbolic,
-            self.par,
-            MemStack::new(&mut self.workspace),
-            Default::default(),
-        )
-        .map_err(|_| {
-            Error::Linear(
-                "the bodies' stiffness with the interface unknowns held is not positive definite: a body is \
-                 neither supported nor in contact, or the bulk tangent lost definiteness"
-                    .into(),
-            )
-        })?;
-        // S_c = L_II L_IIᵀ − D, with L_II gathered into the LU buffer.
-        let llt = SupernodalLltRef::new(symbolic, &self.factor);
         let n_bulk = self.n_bulk;
-        let mut l_ii = self.dense.scratch();
-        l_ii.fill(0.0);
+        // The bulk columns factored, the interface columns left as S_c + D.
+        self.tree
+            .factorize(
+                &mut self.factor,
+                SparseColMatRef::new(self.lower.as_ref(), &self.lower_values),
+                symbolic,
+                n_bulk,
+            )
+            .map_err(|_| {
+                Error::Linear(
+                    "the bodies' stiffness with the interface unknowns held is not positive definite: a body is \
+                     neither supported nor in contact, or the bulk tangent lost definiteness"
+                        .into(),
+                )
+            })?;
+        // S_c from the interface columns of the factor's storage (lower triangle), mirrored.
+        let llt = SupernodalLltRef::new(symbolic, &self.factor);
         for s in first_interface_supernode(symbolic, n_bulk)..symbolic.n_supernodes() {
             let node = llt.supernode(s);
             let (start, ls, pattern) = (node.start(), node.val(), node.pattern());
@@ -632,26 +627,18 @@ impl CondensedSolver {
             for jj in n_bulk.saturating_sub(start)..width {
                 let col = start + jj - n_bulk;
                 for ii in jj..width {
-                    l_ii[(start + ii - n_bulk, col)] = ls[(ii, jj)];
+                    self.schur[(start + ii - n_bulk, col)] = ls[(ii, jj)];
                 }
                 for (idx, &row) in pattern.iter().enumerate() {
-                    l_ii[(row as usize - n_bulk, col)] = ls[(width + idx, jj)];
+                    self.schur[(row as usize - n_bulk, col)] = ls[(width + idx, jj)];
                 }
             }
         }
-        triangular_matmul(
-            self.schur.as_mut(),
-            BlockStructure::Rectangular,
-            Accum::Replace,
-            l_ii.rb(),
-            BlockStructure::TriangularLower,
-            l_ii.rb().transpose(),
-            BlockStructure::TriangularUpper,
-            1.0,
-            self.par,
-        );
-        for k in 0..n_i {
-            self.schur[(k, k)] -= self.shift[k];
+        for j in 0..n_i {
+            self.schur[(j, j)] -= self.shift[j];
+            for i in j + 1..n_i {
+                self.schur[(j, i)] = self.schur[(i, j)];
+            }
         }
         self.dense.analyse(self.schur.as_ref());
         self.factored = true;

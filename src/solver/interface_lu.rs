@@ -123,13 +123,6 @@ impl InterfaceLu {
         self.par = par;
     }
 
-    /// The n × n buffer, for a caller's use between factorisations (it invalidates the
-    /// factors).
-    pub fn scratch(&mut self) -> MatMut<'_, f64> {
-        self.factored = false;
-        self.lu.as_mut()
-    }
-
     /// Finds the groups of `schur` (connected components of its nonzero pattern) and
     /// chooses E: the smallest groups, added while the `cost` falls and E stays no larger
     /// than L; no split unless that cost is below `SPLIT_GAIN` of the whole LU's.

@@ -18,3 +18,4 @@ pub mod newton;
 pub mod shakedown;
 pub mod state;
 pub mod stepping;
+pub mod tree_cholesky;
