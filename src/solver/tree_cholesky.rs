@@ -12,9 +12,16 @@
 //! as separate tasks (rayon), each subtree's supernodes in sequence, and a node after its
 //! children — the classic subtree ("tree") parallelism of sparse direct solvers.
 //!
+//! The supernodes at the top of the tree — the separators under the interface and the
+//! interface itself — wait for their whole subtree and then run alone; one that receives much
+//! update work gathers it in four column blocks of its own, as parallel tasks (each block's
+//! entries get the same updates in the same order as in one pass, by kernels on other
+//! shapes).
+//!
 //! Every supernode is computed by the same operations in the same order (its updaters d in
-//! increasing order), whichever thread runs it and however many there are: the factor is
-//! bitwise the same on one thread as on two. The dense kernels are faer's, all sequential.
+//! increasing order; its column blocks fixed by its size), whichever thread runs it and
+//! however many there are: the factor is bitwise the same on one thread as on two. The dense
+//! kernels are faer's, all sequential.
 //!
 //! The schedule needs each subtree's supernodes to be consecutive (a postorder, as faer's
 //! symbolic factorisation numbers them); `TreeCholesky::new` checks it, and without it the
@@ -45,6 +52,18 @@ use std::sync::Mutex;
 /// No parent: a root of the elimination forest.
 const NONE: u32 = u32::MAX;
 
+/// Multiply-adds of the updates a supernode receives from which it gathers them in
+/// `UPDATE_BLOCKS` column blocks as parallel tasks (~20 ms of work): the supernodes at the
+/// top of the tree — the separators under the interface and the interface itself — wait for
+/// their whole subtree and then run alone (at 3.8 M unknowns the interface supernode took
+/// 3.8 s of the 21 s factorisation on one thread).
+const SPLIT_UPDATES_FROM: f64 = (1u64 << 26) as f64;
+
+/// Column blocks of a split supernode's updates, of about equal work. Fixed, not the number
+/// of threads: each column block is computed by the same operations on any number of
+/// threads.
+const UPDATE_BLOCKS: usize = 4;
+
 /// Number of tasks per thread the tree is cut into: enough that rayon's work stealing
 /// balances unequal subtrees, few enough that a task's bookkeeping is negligible.
 const TASKS_PER_THREAD: f64 = 16.0;
@@ -68,8 +87,12 @@ pub(crate) struct TreeCholesky {
     /// Scratch sizes: the largest supernode (rows, columns).
     max_rows: usize,
     max_cols: usize,
-    /// Scratch of finished tasks, taken again by the next ones.
+    /// Whether a supernode gathers its updates in `UPDATE_BLOCKS` column blocks, as parallel
+    /// tasks: those that receive at least `SPLIT_UPDATES_FROM` multiply-adds.
+    split: Vec<bool>,
+    /// Scratch of finished tasks and column blocks, taken again by the next ones.
     pool: Mutex<Vec<Scratch>>,
+    block_pool: Mutex<Vec<BlockScratch>>,
 }
 
 /// The elimination forest in postorder and its cut into tasks.
@@ -90,15 +113,32 @@ struct Schedule {
 /// positions, the dense update block, and the dense Cholesky's workspace.
 struct Scratch {
     global_to_local: Vec<u32>,
+    block: BlockScratch,
+    stack: MemBuffer,
+}
+
+/// The scratch of one column block's updates: their row and column positions and the dense
+/// update block.
+#[derive(Default)]
+struct BlockScratch {
     rows: Vec<u32>,
     cols: Vec<u32>,
     update: Vec<f64>,
-    stack: MemBuffer,
 }
 
 impl TreeCholesky {
     /// The updaters and the schedule of `symbolic` for `threads` threads.
     pub(crate) fn new(symbolic: &SymbolicSupernodalCholesky<u32>, threads: usize) -> Self {
+        Self::with_split(symbolic, threads, SPLIT_UPDATES_FROM)
+    }
+
+    /// [`Self::new`] with the supernodes that receive at least `split_from` multiply-adds
+    /// of updates gathering them in column blocks (tests split every supernode).
+    fn with_split(
+        symbolic: &SymbolicSupernodalCholesky<u32>,
+        threads: usize,
+        split_from: f64,
+    ) -> Self {
         let n_s = symbolic.n_supernodes();
         let begin = symbolic.supernode_begin();
         let end = symbolic.supernode_end();
@@ -140,15 +180,20 @@ impl TreeCholesky {
         let updater_ptr = updater_count;
         let mut fill: Vec<u32> = updater_ptr[..n_s].to_vec();
         let mut updaters = vec![0u32; updater_ptr[n_s] as usize];
+        let mut received = vec![0.0; n_s];
         for d in 0..n_s {
             let pattern = symbolic.supernode(d).pattern();
+            let d_cols = (end[d] - begin[d]) as f64;
             let mut last = NONE;
-            for &row in pattern {
+            for (k, &row) in pattern.iter().enumerate() {
                 let t = owner[row as usize];
                 if t != last {
                     updaters[fill[t as usize] as usize] = d as u32;
                     fill[t as usize] += 1;
                     last = t;
+                    // The update of t by d: d's rows from here on times its rows in t.
+                    let mid = pattern[k..].partition_point(|&r| r < end[t as usize]);
+                    received[t as usize] += ((pattern.len() - k) * mid) as f64 * d_cols;
                 }
             }
         }
@@ -159,7 +204,9 @@ impl TreeCholesky {
             updaters,
             max_rows,
             max_cols,
+            split: received.iter().map(|&w| w >= split_from).collect(),
             pool: Mutex::new(Vec::new()),
+            block_pool: Mutex::new(Vec::new()),
         }
     }
 
@@ -197,9 +244,7 @@ impl TreeCholesky {
         }
         Scratch {
             global_to_local: vec![NONE; n],
-            rows: vec![0; self.max_rows],
-            cols: vec![0; self.max_cols],
-            update: Vec::new(),
+            block: self.block_scratch(),
             stack: MemBuffer::new(StackReq::any_of(&[cholesky_in_place_scratch::<f64>(
                 self.max_cols,
                 Par::Seq,
@@ -212,21 +257,40 @@ impl TreeCholesky {
         self.pool.lock().expect("scratch pool").push(scratch);
     }
 
+    /// Scratch for a column block's updates: from the pool, or new.
+    fn take_block_scratch(&self) -> BlockScratch {
+        let spare = self.block_pool.lock().expect("scratch pool").pop();
+        spare.unwrap_or_else(|| self.block_scratch())
+    }
+
+    fn give_block_scratch(&self, scratch: BlockScratch) {
+        self.block_pool.lock().expect("scratch pool").push(scratch);
+    }
+
+    fn block_scratch(&self) -> BlockScratch {
+        BlockScratch {
+            rows: vec![0; self.max_rows],
+            cols: vec![0; self.max_cols],
+            update: Vec::new(),
+        }
+    }
+
     /// Frees the tasks' scratch (made again by the next factorisation).
     pub(crate) fn release_scratch(&mut self) {
         self.pool.get_mut().expect("scratch pool").clear();
+        self.block_pool.get_mut().expect("scratch pool").clear();
     }
 
     /// Bytes held: the updaters and the tasks' scratch.
     pub(crate) fn memory_bytes(&self) -> usize {
+        let block = |b: &BlockScratch| 4 * (b.rows.len() + b.cols.len()) + 8 * b.update.len();
         let scratch: usize = (self.pool.lock().expect("scratch pool").iter())
-            .map(|s| {
-                4 * (s.global_to_local.len() + s.rows.len() + s.cols.len())
-                    + 8 * s.update.len()
-                    + s.stack.len()
-            })
+            .map(|s| 4 * s.global_to_local.len() + block(&s.block) + s.stack.len())
             .sum();
-        4 * (self.updater_ptr.len() + self.updaters.len()) + scratch
+        let blocks: usize = (self.block_pool.lock().expect("scratch pool").iter())
+            .map(block)
+            .sum();
+        4 * (self.updater_ptr.len() + self.updaters.len()) + self.split.len() + scratch + blocks
     }
 }
 
@@ -304,6 +368,24 @@ impl Schedule {
             grain,
         })
     }
+}
+
+/// Ends of the column blocks of a split supernode of `cols` columns and `rows` rows, of
+/// about equal update work (a column's updates reach the rows from its own down).
+fn update_block_ends(cols: usize, rows: usize) -> Vec<usize> {
+    let work = |j: usize| (rows - j) as f64;
+    let total: f64 = (0..cols).map(work).sum();
+    let mut ends = Vec::with_capacity(UPDATE_BLOCKS);
+    let mut sum = 0.0;
+    for j in 0..cols {
+        sum += work(j);
+        let target = total * (ends.len() + 1) as f64 / UPDATE_BLOCKS as f64;
+        if sum >= target && ends.len() + 1 < UPDATE_BLOCKS {
+            ends.push(j + 1);
+        }
+    }
+    ends.push(cols);
+    ends
 }
 
 /// `product` ← `bot` · `top`ᵀ, where `top` is the first rows of `bot`: only the lower
@@ -422,6 +504,75 @@ impl Job<'_> {
         self.supernode(t, head, offset, own, scratch)
     }
 
+    /// Subtracts from `block` — the columns of supernode `s` from its column `first` on, all
+    /// its rows — the updates of its updaters' eliminated columns, reading their values from
+    /// `head` (from value offset `offset`); `g2l` maps s's pattern rows to its rows.
+    #[allow(clippy::too_many_arguments)]
+    fn updates(
+        &self,
+        s: usize,
+        head: &[f64],
+        offset: usize,
+        first: usize,
+        mut block: MatMut<'_, f64>,
+        g2l: &[u32],
+        scratch: &mut BlockScratch,
+    ) {
+        let symbolic = self.symbolic;
+        let s_start = symbolic.supernode_begin()[s] as usize;
+        let s_end = symbolic.supernode_end()[s] as usize;
+        let (col_lo, col_hi) = (s_start + first, s_start + first + block.ncols());
+        let tree = self.tree;
+        let ups = &tree.updaters[tree.updater_ptr[s] as usize..tree.updater_ptr[s + 1] as usize];
+        for &d in ups {
+            let d = d as usize;
+            let d_pattern = symbolic.supernode(d).pattern();
+            let d_start = symbolic.supernode_begin()[d] as usize;
+            let d_ncols = symbolic.supernode_end()[d] as usize - d_start;
+            let d_nrows = d_pattern.len() + d_ncols;
+            // Only the eliminated columns of d update s.
+            let d_used = d_ncols.min(self.eliminated.saturating_sub(d_start));
+            if d_used == 0 {
+                continue;
+            }
+            let lo = d_pattern.partition_point(|&r| (r as usize) < col_lo);
+            let mid = d_pattern[lo..].partition_point(|&r| (r as usize) < col_hi);
+            if mid == 0 {
+                continue;
+            }
+            let start = self.value_start(d) - offset;
+            let ld = MatRef::from_column_major_slice(
+                &head[start..start + d_nrows * d_ncols],
+                d_nrows,
+                d_ncols,
+            )
+            .subcols(0, d_used);
+            let bot = ld.subrows(d_ncols + lo, d_pattern.len() - lo);
+            let top = bot.subrows(0, mid);
+            let m = bot.nrows();
+            for (k, &r) in d_pattern[lo..].iter().enumerate() {
+                let r = r as usize;
+                scratch.rows[k] = if r < s_end {
+                    (r - s_start) as u32
+                } else {
+                    g2l[r]
+                };
+            }
+            for k in 0..mid {
+                scratch.cols[k] = (d_pattern[lo + k] as usize - col_lo) as u32;
+            }
+            // The update block bot·topᵀ (lower triangle of its square top), scattered.
+            let mut upd = self::block(&mut scratch.update, m, mid);
+            lower_product(upd.rb_mut(), bot, top);
+            for j in 0..mid {
+                let col = scratch.cols[j] as usize;
+                for i in j..m {
+                    block[(scratch.rows[i] as usize, col)] -= upd[(i, j)];
+                }
+            }
+        }
+    }
+
     /// Factors supernode `s` into `own`, reading its updaters' values from `head` (which
     /// starts at value offset `offset`): faer's left-looking step.
     fn supernode(
@@ -460,50 +611,26 @@ impl Job<'_> {
             }
         }
         let tree = self.tree;
-        let ups = &tree.updaters[tree.updater_ptr[s] as usize..tree.updater_ptr[s + 1] as usize];
-        for &d in ups {
-            let d = d as usize;
-            let d_pattern = symbolic.supernode(d).pattern();
-            let d_start = symbolic.supernode_begin()[d] as usize;
-            let d_ncols = symbolic.supernode_end()[d] as usize - d_start;
-            let d_nrows = d_pattern.len() + d_ncols;
-            // Only the eliminated columns of d update s.
-            let d_used = d_ncols.min(self.eliminated.saturating_sub(d_start));
-            if d_used == 0 {
-                continue;
+        let g2l = &scratch.global_to_local;
+        if tree.split[s] {
+            let mut blocks = Vec::with_capacity(UPDATE_BLOCKS);
+            let mut rest = ls.rb_mut();
+            let mut first = 0;
+            for end in update_block_ends(s_ncols, s_nrows) {
+                let (block, right) = rest.split_at_col_mut(end - first);
+                blocks.push((first, block));
+                rest = right;
+                first = end;
             }
-            let start = self.value_start(d) - offset;
-            let ld = MatRef::from_column_major_slice(
-                &head[start..start + d_nrows * d_ncols],
-                d_nrows,
-                d_ncols,
-            )
-            .subcols(0, d_used);
-            let lo = d_pattern.partition_point(|&r| (r as usize) < s_start);
-            let mid = d_pattern[lo..].partition_point(|&r| (r as usize) < s_end);
-            let bot = ld.subrows(d_ncols + lo, d_pattern.len() - lo);
-            let top = bot.subrows(0, mid);
-            let m = bot.nrows();
-            for (k, &r) in d_pattern[lo..].iter().enumerate() {
-                scratch.rows[k] = if k < mid {
-                    r - s_start as u32
-                } else {
-                    g2l[r as usize]
-                };
-            }
-            for k in 0..mid {
-                scratch.cols[k] = d_pattern[lo + k] - s_start as u32;
-            }
-            // The update block bot·topᵀ (lower triangle of its square top), scattered.
-            let mut upd = block(&mut scratch.update, m, mid);
-            lower_product(upd.rb_mut(), bot, top);
-            for j in 0..mid {
-                let col = scratch.cols[j] as usize;
-                for i in j..m {
-                    ls[(scratch.rows[i] as usize, col)] -= upd[(i, j)];
-                }
-            }
+            blocks.into_par_iter().for_each(|(first, block)| {
+                let mut local = tree.take_block_scratch();
+                self.updates(s, head, offset, first, block, g2l, &mut local);
+                tree.give_block_scratch(local);
+            });
+        } else {
+            self.updates(s, head, offset, 0, ls.rb_mut(), g2l, &mut scratch.block);
         }
+        let g2l = &mut scratch.global_to_local;
         for &row in s_pattern {
             g2l[row as usize] = NONE;
         }
@@ -527,7 +654,7 @@ impl Job<'_> {
         let rest = s_ncols - k;
         if rest > 0 {
             let m = below.nrows();
-            let mut upd = block(&mut scratch.update, m, rest);
+            let mut upd = block(&mut scratch.block.update, m, rest);
             lower_product(upd.rb_mut(), below.rb(), below.rb().subrows(0, rest));
             for j in 0..rest {
                 for i in j..m {
@@ -661,13 +788,14 @@ mod tests {
         symbolic: &SymbolicSupernodalCholesky<u32>,
         threads: usize,
         eliminated: usize,
+        split_from: f64,
     ) -> Vec<f64> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap();
         pool.install(|| {
-            let tree = TreeCholesky::new(symbolic, threads);
+            let tree = TreeCholesky::with_split(symbolic, threads, split_from);
             let schedule = tree
                 .schedule
                 .as_ref()
@@ -696,9 +824,18 @@ mod tests {
         let n = a.nrows();
         let symbolic = symbolic_of(&a);
         let s = supernodal(&symbolic);
-        let one = tree_factor(&a, s, 1, n);
-        let two = tree_factor(&a, s, 2, n);
-        let three = tree_factor(&a, s, 3, n);
+        let one = tree_factor(&a, s, 1, n, SPLIT_UPDATES_FROM);
+        let two = tree_factor(&a, s, 2, n, SPLIT_UPDATES_FROM);
+        let three = tree_factor(&a, s, 3, n, SPLIT_UPDATES_FROM);
+        // Every supernode's updates gathered in column blocks: the same on any threads.
+        let split_one = tree_factor(&a, s, 1, n, 0.0);
+        let split_two = tree_factor(&a, s, 2, n, 0.0);
+        assert!(
+            split_one
+                .iter()
+                .zip(&split_two)
+                .all(|(x, y)| x.to_bits() == y.to_bits())
+        );
         assert!(
             one.iter()
                 .zip(&two)
@@ -737,14 +874,16 @@ mod tests {
         )
         .unwrap();
         let scale = reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let worst = one
-            .iter()
-            .zip(&reference)
-            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
-        assert!(
-            worst <= 1e-13 * scale,
-            "differs from faer by {worst:e} (scale {scale:e})"
-        );
+        for values in [&one, &split_one] {
+            let worst = values
+                .iter()
+                .zip(&reference)
+                .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+            assert!(
+                worst <= 1e-13 * scale,
+                "differs from faer by {worst:e} (scale {scale:e})"
+            );
+        }
         // And it solves: L Lᵀ x = b.
         let llt = SupernodalLltRef::new(s, &one);
         let b = Mat::from_fn(n, 1, |i, _| (i % 7) as f64 - 3.0);
@@ -780,7 +919,7 @@ mod tests {
         );
         // Cuts inside supernodes and at their borders.
         for eliminated in [n / 2, n / 2 + 1, n - 30, n - 1] {
-            let values = tree_factor(&a, s, 2, eliminated);
+            let values = tree_factor(&a, s, 2, eliminated, 0.0);
             let k = eliminated;
             let bb = sym.submatrix(0, 0, k, k).to_owned();
             let bi = sym.submatrix(0, k, k, n - k).to_owned();
