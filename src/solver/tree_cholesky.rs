@@ -775,6 +775,13 @@ mod tests {
         .unwrap()
     }
 
+    /// The AMD-ordered grid matrix of `grid_matrix(nx, ny)` and its symbolic factorisation.
+    fn grid_case(nx: usize, ny: usize) -> (SparseColMat<u32, f64>, SymbolicCholesky<u32>) {
+        let a = amd_ordered(&grid_matrix(nx, ny));
+        let symbolic = symbolic_of(&a);
+        (a, symbolic)
+    }
+
     fn supernodal(symbolic: &SymbolicCholesky<u32>) -> &SymbolicSupernodalCholesky<u32> {
         let SymbolicCholeskyRaw::Supernodal(s) = symbolic.raw() else {
             panic!("supernodal forced")
@@ -820,10 +827,8 @@ mod tests {
 
     #[test]
     fn tree_factor_matches_faer_and_is_bitwise_the_same_on_one_and_two_threads() {
-        let a = amd_ordered(&grid_matrix(40, 30));
-        let n = a.nrows();
-        let symbolic = symbolic_of(&a);
-        let s = supernodal(&symbolic);
+        let (a, symbolic) = grid_case(40, 30);
+        let (n, s) = (a.nrows(), supernodal(&symbolic));
         let one = tree_factor(&a, s, 1, n, SPLIT_UPDATES_FROM);
         let two = tree_factor(&a, s, 2, n, SPLIT_UPDATES_FROM);
         let three = tree_factor(&a, s, 3, n, SPLIT_UPDATES_FROM);
@@ -907,10 +912,8 @@ mod tests {
 
     #[test]
     fn partial_factor_leaves_the_schur_complement_of_the_eliminated_block() {
-        let a = amd_ordered(&grid_matrix(12, 10));
-        let n = a.nrows();
-        let symbolic = symbolic_of(&a);
-        let s = supernodal(&symbolic);
+        let (a, symbolic) = grid_case(12, 10);
+        let (n, s) = (a.nrows(), supernodal(&symbolic));
         let full = a.to_dense();
         let sym = Mat::from_fn(
             n,
