@@ -647,7 +647,9 @@ impl CondensedSolver {
                 MatMut::from_column_major_slice_mut(&mut self.factor[at..at + n_i * n_i], n_i, n_i)
             }
             None => {
-                // S_c from the interface columns of the factor's storage (lower triangle).
+                // S_c from the interface columns of the factor's storage (lower triangle);
+                // the buffer may hold the LU path's S_c, whose structural zeros are rewritten.
+                self.schur.fill(0.0);
                 let llt = SupernodalLltRef::new(symbolic, &self.factor);
                 for s in first_interface_supernode(symbolic, n_bulk)..symbolic.n_supernodes() {
                     let node = llt.supernode(s);

@@ -68,12 +68,9 @@ const UPDATE_BLOCKS: usize = 4;
 /// balances unequal subtrees, few enough that a task's bookkeeping is negligible.
 const TASKS_PER_THREAD: f64 = 16.0;
 
-/// The failure of a numeric factorisation: the matrix is not positive definite (first
-/// column of the supernode whose diagonal block failed).
+/// The failure of a numeric factorisation: the matrix is not positive definite.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct NotPositiveDefinite {
-    pub(crate) column: usize,
-}
+pub(crate) struct NotPositiveDefinite;
 
 /// The updaters of each supernode of a supernodal symbolic factorisation and the task
 /// schedule over its elimination tree.
@@ -109,8 +106,8 @@ struct Schedule {
     grain: f64,
 }
 
-/// A task's scratch: global row → row of the current supernode, the update's row and column
-/// positions, the dense update block, and the dense Cholesky's workspace.
+/// A task's scratch: global row → row of the current supernode, its column blocks' scratch
+/// when it gathers its updates in one pass, and the dense Cholesky's workspace.
 struct Scratch {
     global_to_local: Vec<u32>,
     block: BlockScratch,
@@ -119,7 +116,6 @@ struct Scratch {
 
 /// The scratch of one column block's updates: their row and column positions and the dense
 /// update block.
-#[derive(Default)]
 struct BlockScratch {
     rows: Vec<u32>,
     cols: Vec<u32>,
@@ -649,7 +645,7 @@ impl Job<'_> {
             MemStack::new(&mut scratch.stack),
             Default::default(),
         )
-        .map_err(|_| NotPositiveDefinite { column: s_start })?;
+        .map_err(|_| NotPositiveDefinite)?;
         solve_lower_triangular_in_place(top.rb(), below.rb_mut().transpose_mut(), Par::Seq);
         let rest = s_ncols - k;
         if rest > 0 {
