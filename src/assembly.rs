@@ -388,13 +388,62 @@ pub struct DenseBlock<'a> {
     pub map: &'a DenseScatter,
 }
 
+/// Free columns per task of [`GlobalSystem::restrict_from`].
+const RESTRICT_BLOCK: usize = 1 << 14;
+
+/// A zeroed vector of `n` values whose pages the pool's threads write first: the kernel maps
+/// them at that write, in parallel, rather than at a later read-then-write (the shared zero
+/// page, then a copy-on-write fault with a TLB flush on every core), as an assembly's
+/// `+=` into freshly allocated values would.
+fn zeroed_in_parallel(n: usize) -> Vec<f64> {
+    let mut v = Vec::with_capacity(n);
+    v.par_extend(rayon::iter::repeat_n(0.0, n));
+    v
+}
+
+/// The values of the free columns `first..first + dofs_of.len()` (whose dofs are `dofs_of`)
+/// of `target`'s pattern, taken from `all` (over all dofs) into `values`.
+fn restrict_columns(
+    all: &GlobalSystem,
+    target: &SparsityPattern,
+    dofs: &DofMap,
+    first: usize,
+    dofs_of: &[usize],
+    values: &mut [f64],
+) {
+    let (cp, ri) = (target.symbolic.col_ptr(), target.symbolic.row_idx());
+    let (all_cp, all_ri) = (
+        all.pattern.symbolic.col_ptr(),
+        all.pattern.symbolic.row_idx(),
+    );
+    let offset = cp[first] as usize;
+    for (k, &dof) in dofs_of.iter().enumerate() {
+        let column = first + k;
+        let source = all_cp[dof] as usize..all_cp[dof + 1] as usize;
+        let mut from = all_ri[source.clone()]
+            .iter()
+            .zip(&all.values[source])
+            .filter_map(|(&row, &v)| dofs.equation(row as usize).map(|eq| (eq, v)))
+            .peekable();
+        let target = cp[column] as usize..cp[column + 1] as usize;
+        let out = &mut values[target.start - offset..target.end - offset];
+        for (&row, value) in ri[target].iter().zip(out) {
+            *value = match from.next_if(|&(eq, _)| eq == row as usize) {
+                Some((_, v)) => v,
+                None => 0.0,
+            };
+        }
+        debug_assert!(from.next().is_none(), "an entry outside the free pattern");
+    }
+}
+
 impl GlobalSystem {
     /// Zeroed system over `pattern` with `dof_count` total dofs.
     pub fn new(pattern: SparsityPattern, dof_count: usize) -> Self {
         let nnz = pattern.nnz();
         Self {
             pattern,
-            values: vec![0.0; nnz],
+            values: zeroed_in_parallel(nnz),
             internal_force: vec![0.0; dof_count],
             preconditioner: Vec::new(),
             reference: None,
@@ -454,33 +503,25 @@ impl GlobalSystem {
     /// loop. Both patterns' rows must be sorted within each column.
     pub fn restrict_from(&mut self, all: &GlobalSystem, dofs: &DofMap) {
         self.internal_force.copy_from_slice(&all.internal_force);
-        let (cp, ri) = (
-            self.pattern.symbolic.col_ptr(),
-            self.pattern.symbolic.row_idx(),
-        );
-        let (all_cp, all_ri) = (
-            all.pattern.symbolic.col_ptr(),
-            all.pattern.symbolic.row_idx(),
-        );
-        for dof in 0..dofs.dof_count() {
-            let Some(column) = dofs.equation(dof) else {
-                continue;
-            };
-            let source = all_cp[dof] as usize..all_cp[dof + 1] as usize;
-            let mut from = all_ri[source.clone()]
-                .iter()
-                .zip(&all.values[source])
-                .filter_map(|(&row, &v)| dofs.equation(row as usize).map(|eq| (eq, v)))
-                .peekable();
-            let target = cp[column] as usize..cp[column + 1] as usize;
-            for (&row, value) in ri[target.clone()].iter().zip(&mut self.values[target]) {
-                *value = match from.next_if(|&(eq, _)| eq == row as usize) {
-                    Some((_, v)) => v,
-                    None => 0.0,
-                };
-            }
-            debug_assert!(from.next().is_none(), "an entry outside the free pattern");
+        let cp = self.pattern.symbolic.col_ptr();
+        // Blocks of free columns in parallel: the equations number the free dofs in order, so
+        // a block of columns is a run of dofs and its values one slice of `self.values`.
+        let free: Vec<usize> = (0..dofs.dof_count())
+            .filter(|&dof| dofs.equation(dof).is_some())
+            .collect();
+        let mut blocks = Vec::new();
+        let mut rest = self.values.as_mut_slice();
+        for (k, block) in free.chunks(RESTRICT_BLOCK).enumerate() {
+            let first = k * RESTRICT_BLOCK;
+            let len = (cp[first + block.len()] - cp[first]) as usize;
+            let (values, tail) = rest.split_at_mut(len);
+            rest = tail;
+            blocks.push((first, block, values));
         }
+        let target = &self.pattern;
+        blocks.into_par_iter().for_each(|(first, block, values)| {
+            restrict_columns(all, target, dofs, first, block, values)
+        });
     }
 
     /// [`Self::assemble`] for a set whose elements' tangent is, most of the time, a constant

@@ -164,7 +164,8 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
     /// Writes `history.csv` with the row of the unloaded state (step 0).
     pub(super) fn write_start(&mut self) -> Result<()> {
         let model = self.model;
-        let solution = Solution::new(model);
+        // The history row reads no integration-point state.
+        let solution = Solution::without_point_states(model);
         let zero = vec![0.0; model.dofs.dof_count()];
         let start = StepResult {
             frame: crate::model::timeline::Frame::default(),

@@ -54,7 +54,17 @@ pub struct Solution {
 impl Solution {
     /// The unloaded state of `model`: zero displacements, virgin integration points.
     pub fn new(model: &Model) -> Self {
-        let states = model.continuum.cells.len() * MAX_CELL_POINTS;
+        Self::unloaded(model, model.continuum.cells.len() * MAX_CELL_POINTS)
+    }
+
+    /// The unloaded state of `model` without the continuum's integration-point states, for
+    /// what reads only the displacements, the interface and the totals (the history row of
+    /// the start): a model's point states are the largest part of its memory.
+    pub fn without_point_states(model: &Model) -> Self {
+        Self::unloaded(model, 0)
+    }
+
+    fn unloaded(model: &Model, states: usize) -> Self {
         let interface = model.interface.elements.len() * INTERFACE_POINTS;
         Self {
             u: vec![0.0; model.dofs.dof_count()],
