@@ -391,13 +391,14 @@ pub struct DenseBlock<'a> {
 /// Free columns per task of [`GlobalSystem::restrict_from`].
 const RESTRICT_BLOCK: usize = 1 << 14;
 
-/// A zeroed vector of `n` values whose pages the pool's threads write first: the kernel maps
-/// them at that write, in parallel, rather than at a later read-then-write (the shared zero
-/// page, then a copy-on-write fault with a TLB flush on every core), as an assembly's
-/// `+=` into freshly allocated values would.
-fn zeroed_in_parallel(n: usize) -> Vec<f64> {
+/// `n` copies of `value`, written by the pool's threads: the kernel maps a large vector's
+/// pages at that first write, in parallel (first touches cost about ten times a later write
+/// on the virtual machines measured), and a vector of zeros written so is not left to a
+/// later read-then-write (the shared zero page, then a copy-on-write fault with a TLB flush
+/// on every core), as an assembly's `+=` into freshly allocated values would be.
+pub fn filled_in_parallel<T: Clone + Send + Sync>(value: T, n: usize) -> Vec<T> {
     let mut v = Vec::with_capacity(n);
-    v.par_extend(rayon::iter::repeat_n(0.0, n));
+    v.par_extend(rayon::iter::repeat_n(value, n));
     v
 }
 
@@ -443,7 +444,7 @@ impl GlobalSystem {
         let nnz = pattern.nnz();
         Self {
             pattern,
-            values: zeroed_in_parallel(nnz),
+            values: filled_in_parallel(0.0, nnz),
             internal_force: vec![0.0; dof_count],
             preconditioner: Vec::new(),
             reference: None,

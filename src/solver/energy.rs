@@ -30,6 +30,7 @@ use crate::element::ElementVector;
 use crate::element::continuum::point_kinematics;
 use crate::element::interface6::{InterfacePoint, interface_point, relative_displacement};
 use crate::element::quadrature::{MAX_CELL_POINTS, cell_rule};
+use crate::element::set::ContinuumCell;
 use crate::element::set::{INTERFACE_POINTS, InternalLayout};
 use crate::material::{PointState, dot};
 use crate::model::Model;
@@ -287,44 +288,31 @@ impl EnergyLedger {
     /// The bodies' stored energy (from the trial states), plastic work and the numerical
     /// part of the trapezoidal rule on it; returns the plastic dissipation per body.
     fn record_bodies(&mut self, model: &Model, increment: &Increment) -> Vec<f64> {
-        let (mut elastic, mut plastic, mut numerical, mut thermal) = (0.0, 0.0, 0.0, 0.0);
-        let mut bodies = vec![0.0; model.bodies.len()];
-        let cells = &model.continuum.cells;
-        let slots = increment
-            .trial
-            .chunks_exact(MAX_CELL_POINTS)
-            .zip(increment.committed.chunks_exact(MAX_CELL_POINTS))
-            .zip(self.weights.volumes.chunks_exact(MAX_CELL_POINTS));
-        for (cell, ((trial, committed), volumes)) in cells.iter().zip(slots) {
-            let material = model.continuum.materials[cell.body as usize].as_ref();
-            let expands = model.continuum.expansions[cell.body as usize] != 0.0;
-            let points = cell_rule(cell.kind).len();
-            for ((t, c), &dv) in trial.iter().zip(committed).zip(volumes).take(points) {
-                let plastic_increment = t.plastic_strain - c.plastic_strain;
-                let stored = material.elastic_energy(t);
-                let point_plastic = dot(&t.stress, &plastic_increment);
-                let point_numerical = 0.5 * dot(&(c.stress - t.stress), &plastic_increment);
-                elastic += stored * dv;
-                plastic += point_plastic * dv;
-                bodies[cell.body as usize] += point_plastic * dv;
-                numerical += point_numerical * dv;
-                if expands {
-                    // The stress work on the total strain less its mechanical part (the
-                    // stored, plastic and numerical terms above): the work on α ΔT m.
-                    let work = 0.5 * dot(&(c.stress + t.stress), &(t.strain - c.strain));
-                    let mechanical =
-                        stored - material.elastic_energy(c) + point_plastic + point_numerical;
-                    thermal += (work - mechanical) * dv;
-                }
-            }
-        }
+        use rayon::prelude::*;
+        // Blocks of cells in parallel, their sums added in block order: the same bits on any
+        // number of threads.
+        let block = ENERGY_BLOCK * MAX_CELL_POINTS;
+        let sums = model
+            .continuum
+            .cells
+            .par_chunks(ENERGY_BLOCK)
+            .zip(increment.trial.par_chunks(block))
+            .zip(increment.committed.par_chunks(block))
+            .zip(self.weights.volumes.par_chunks(block))
+            .map(|(((cells, trial), committed), volumes)| {
+                body_sums(model, cells, trial, committed, volumes)
+            })
+            .collect::<Vec<_>>()
+            .into_iter()
+            .fold(BodySums::new(model), BodySums::add);
+        let mut bodies = sums.bodies;
         let (stored, released) =
             hardening_energy(model, increment, &self.weights.volumes, &mut bodies);
         let t = &mut self.total;
-        t.elastic_energy = elastic + stored;
-        t.plastic_dissipation += plastic - released;
-        t.numerical_dissipation += numerical;
-        t.thermal_work += thermal;
+        t.elastic_energy = sums.elastic + stored;
+        t.plastic_dissipation += sums.plastic - released;
+        t.numerical_dissipation += sums.numerical;
+        t.thermal_work += sums.thermal;
         bodies
     }
 
@@ -366,6 +354,84 @@ impl EnergyLedger {
         }
         sum
     }
+}
+
+/// Cells per task of the bodies' energy sums (fixed, for the same sums on any number of
+/// threads).
+const ENERGY_BLOCK: usize = 4096;
+
+/// The bodies' energy terms of some cells' integration points.
+struct BodySums {
+    elastic: f64,
+    plastic: f64,
+    numerical: f64,
+    thermal: f64,
+    /// Plastic work per body.
+    bodies: Vec<f64>,
+}
+
+impl BodySums {
+    fn new(model: &Model) -> Self {
+        Self {
+            elastic: 0.0,
+            plastic: 0.0,
+            numerical: 0.0,
+            thermal: 0.0,
+            bodies: vec![0.0; model.bodies.len()],
+        }
+    }
+
+    fn add(mut self, other: Self) -> Self {
+        self.elastic += other.elastic;
+        self.plastic += other.plastic;
+        self.numerical += other.numerical;
+        self.thermal += other.thermal;
+        for (a, b) in self.bodies.iter_mut().zip(other.bodies) {
+            *a += b;
+        }
+        self
+    }
+}
+
+/// The stored energy (from the trial states), plastic work, numerical dissipation and
+/// thermal work of the points of `cells`, whose trial and committed states and volumes are
+/// `trial`, `committed` and `volumes` ([`MAX_CELL_POINTS`] slots per cell).
+fn body_sums(
+    model: &Model,
+    cells: &[ContinuumCell],
+    trial: &[PointState],
+    committed: &[PointState],
+    volumes: &[f64],
+) -> BodySums {
+    let mut sums = BodySums::new(model);
+    let slots = trial
+        .chunks_exact(MAX_CELL_POINTS)
+        .zip(committed.chunks_exact(MAX_CELL_POINTS))
+        .zip(volumes.chunks_exact(MAX_CELL_POINTS));
+    for (cell, ((trial, committed), volumes)) in cells.iter().zip(slots) {
+        let material = model.continuum.materials[cell.body as usize].as_ref();
+        let expands = model.continuum.expansions[cell.body as usize] != 0.0;
+        let points = cell_rule(cell.kind).len();
+        for ((t, c), &dv) in trial.iter().zip(committed).zip(volumes).take(points) {
+            let plastic_increment = t.plastic_strain - c.plastic_strain;
+            let stored = material.elastic_energy(t);
+            let point_plastic = dot(&t.stress, &plastic_increment);
+            let point_numerical = 0.5 * dot(&(c.stress - t.stress), &plastic_increment);
+            sums.elastic += stored * dv;
+            sums.plastic += point_plastic * dv;
+            sums.bodies[cell.body as usize] += point_plastic * dv;
+            sums.numerical += point_numerical * dv;
+            if expands {
+                // The stress work on the total strain less its mechanical part (the stored,
+                // plastic and numerical terms above): the work on α ΔT m.
+                let work = 0.5 * dot(&(c.stress + t.stress), &(t.strain - c.strain));
+                let mechanical =
+                    stored - material.elastic_energy(c) + point_plastic + point_numerical;
+                sums.thermal += (work - mechanical) * dv;
+            }
+        }
+    }
+    sums
 }
 
 /// The energy stored in the backstresses of kinematic hardening at the end of `increment`,

@@ -10,6 +10,7 @@
 //! [`crate::solver::cycles`] the slices they work on: those modules do not know this one.
 
 use crate::Result;
+use crate::assembly::filled_in_parallel;
 use crate::contact::InterfaceState;
 use crate::element::quadrature::MAX_CELL_POINTS;
 use crate::element::set::{INTERFACE_POINTS, InternalLayout};
@@ -68,8 +69,8 @@ impl Solution {
         let interface = model.interface.elements.len() * INTERFACE_POINTS;
         Self {
             u: vec![0.0; model.dofs.dof_count()],
-            committed: vec![PointState::default(); states],
-            trial: vec![PointState::default(); states],
+            committed: filled_in_parallel(PointState::default(), states),
+            trial: filled_in_parallel(PointState::default(), states),
             interface_committed: vec![InterfaceState::default(); interface],
             interface_trial: vec![InterfaceState::default(); interface],
             internal: InternalVariables::new(model),
