@@ -23,7 +23,7 @@ use crate::mesh::topology::directed_chains;
 use crate::model::Model;
 use crate::output::csv::CsvTable;
 use crate::output::{Field, FieldValues, Grid};
-use crate::post::{BodyPoints, nodal_values, thermal};
+use crate::post::{BodyPoints, nodal_value, thermal};
 use crate::solver::state::Solution;
 
 /// Names of the scalar point fields, in the order of [`NodalContact::values`].
@@ -538,14 +538,14 @@ impl InterfaceOutput {
         }
         // F3 needs the stress recovery only once a cycle has slipped somewhere.
         if out.iter().flatten().any(|v| v[F2] > 0.0) {
-            let stresses = nodal_values(model, &self.body_points, &solution.committed);
+            let states = &solution.committed;
             for (pair, values) in self.pairs.iter().zip(&mut out) {
                 for ((v, t), points) in values.iter_mut().zip(&pair.tangent).zip(&pair.body_points)
                 {
                     let sigma_t = points
                         .iter()
                         .map(|&b| {
-                            let s = &stresses[b].stress;
+                            let s = nodal_value(model, &self.body_points, states, b).stress;
                             t[0] * t[0] * s[0] + t[1] * t[1] * s[1] + 2.0 * t[0] * t[1] * s[2]
                         })
                         .fold(0.0, f64::max);
