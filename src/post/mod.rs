@@ -197,6 +197,7 @@ fn nodal_fields(model: &Model, points: &BodyPoints, states: &[PointState]) -> [V
         .with_min_len(4096)
         .for_each(|(p, (((stress, strain), mises), plastic))| {
             let v = nodal_value(model, points, states, p);
+            // Solver order → VTK order, θ as VTK's z; the strain's shears halved (tensor shear).
             stress.copy_from_slice(&vtk_tensor(&v.stress, 1.0));
             strain.copy_from_slice(&vtk_tensor(&v.strain, 0.5));
             *mises = von_mises(&v.stress);
