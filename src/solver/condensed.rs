@@ -157,6 +157,12 @@ pub struct CondensedSolver {
     inverse_scale: Vec<f64>,
     /// The scaled change measured by the last [`Self::factor_bulk`] that had a factor.
     last_change: f64,
+    /// Columns (elimination order) in which that matrix differs from the factored one in
+    /// any bit, when the comparison ran to the end (`changes_known`); a refactorisation then
+    /// computes only the supernodes `refactor` marks (see `TreeCholesky::factorize`).
+    changed_columns: Vec<bool>,
+    changes_known: bool,
+    refactor: Vec<bool>,
     /// Largest scaled change of the continuum matrix for which the last factorisation is
     /// kept (see [`Self::set_reuse_threshold`]).
     reuse_threshold: f64,
@@ -442,6 +448,9 @@ impl CondensedSolver {
             diagonal,
             inverse_scale: vec![0.0; n],
             last_change: f64::INFINITY,
+            changed_columns: vec![false; n],
+            changes_known: false,
+            refactor: Vec::new(),
             reuse_threshold: DEFAULT_REUSE_THRESHOLD,
             increment_started: false,
             factorizations: 0,
@@ -519,13 +528,15 @@ impl CondensedSolver {
 
     /// max_ij |K_ij − K̃_ij| / √(|K̃_ii| |K̃_jj|) over the lower triangle, K̃ the last factored
     /// matrix (its interface shift removed) and K = `values` (original pattern); ∞ if a
-    /// change meets a zero scale or a value is not finite.
-    fn change_from_factored(&self, values: &[f64]) -> f64 {
+    /// change meets a zero scale or a value is not finite. Flags in `changed_columns` the
+    /// columns with a changed entry, and sets `changes_known` if it looked at every entry.
+    fn change_from_factored(&mut self, values: &[f64]) -> f64 {
         let (col_ptr, row_idx) = (self.lower.col_ptr(), self.lower.row_idx());
         let mut largest = 0.0f64;
         for col in 0..self.n {
             let range = col_ptr[col] as usize..col_ptr[col + 1] as usize;
             let scale_col = self.inverse_scale[col];
+            let mut changed = false;
             for k in range {
                 let row = row_idx[k] as usize;
                 let mut old = self.lower_values[k];
@@ -536,13 +547,16 @@ impl CondensedSolver {
                 if difference == 0.0 {
                     continue;
                 }
+                changed = true;
                 let relative = difference * self.inverse_scale[row] * scale_col;
                 if !relative.is_finite() {
                     return f64::INFINITY;
                 }
                 largest = largest.max(relative);
             }
+            self.changed_columns[col] = changed;
         }
+        self.changes_known = true;
         largest
     }
 
@@ -658,6 +672,24 @@ impl CondensedSolver {
             unreachable!("forced supernodal in `new`");
         };
         let n_bulk = self.n_bulk;
+        // Only the supernodes whose values change, when the last factor's matrix is known to
+        // differ from this one in some columns only (a plastic zone's).
+        let only = if self.changes_known {
+            let count = self.tree.supernodes_to_refactor(
+                symbolic,
+                &self.changed_columns,
+                n_bulk,
+                &mut self.refactor,
+            );
+            tracing::trace!(
+                supernodes = count,
+                of = symbolic.n_supernodes(),
+                "bulk supernodes refactored"
+            );
+            Some(self.refactor.as_slice())
+        } else {
+            None
+        };
         // The bulk columns factored, the interface columns left as S_c + D.
         self.tree
             .factorize(
@@ -665,6 +697,7 @@ impl CondensedSolver {
                 SparseColMatRef::new(self.lower.as_ref(), &self.lower_values),
                 symbolic,
                 n_bulk,
+                only,
             )
             .map_err(|_| {
                 Error::Linear(
@@ -733,6 +766,8 @@ impl CondensedSolver {
                     .into(),
             ));
         }
+        // Set again only by a comparison with a Cholesky factor's matrix that runs through.
+        self.changes_known = false;
         if !self.factored {
             return Ok(false);
         }

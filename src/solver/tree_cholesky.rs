@@ -28,6 +28,16 @@
 //! supernodes are factored one after the other in their own order (updaters come first in
 //! any supernodal numbering), by the same operations.
 //!
+//! # Only what changed
+//! A left-looking supernode reads its own columns of the matrix and its descendants' factor
+//! columns, nothing else. When a new matrix differs from the last factored one in a few
+//! columns only — the elements of a plastic zone — the supernodes holding them and their
+//! ancestors are computed again and the others' values kept
+//! ([`TreeCholesky::supernodes_to_refactor`]): the same bits as the whole factorisation,
+//! for the work of the paths from the zone to the root. Measured on the elasto-plastic flat
+//! punch (43k unknowns, 4589 supernodes, 30 refactorisations of 19–125 supernodes each):
+//! factorisation 1.20–1.30 → 0.70–0.77 s.
+//!
 //! # Only the bulk columns
 //! The condensed solver orders the interface unknowns last and needs the Schur complement
 //! of the bulk on them, not their factor. `TreeCholesky::factorize` therefore takes the
@@ -77,6 +87,8 @@ pub(crate) struct NotPositiveDefinite;
 pub(crate) struct TreeCholesky {
     /// The schedule, `None` when the supernodes are not in postorder.
     schedule: Option<Schedule>,
+    /// Parent of each supernode in the elimination tree (`NONE` for a root).
+    parent: Vec<u32>,
     /// Updaters of each supernode (CSR): the supernodes d < s with a row among s's columns,
     /// in increasing order (faer's order).
     updater_ptr: Vec<u32>,
@@ -196,6 +208,7 @@ impl TreeCholesky {
         drop((owner, fill));
         Self {
             schedule: Schedule::new(&parent, own_work, threads),
+            parent,
             updater_ptr,
             updaters,
             max_rows,
@@ -213,12 +226,19 @@ impl TreeCholesky {
     /// the columns after it (see the module documentation). `eliminated = nrows` is the
     /// whole Cholesky factorisation, as faer's `factorize_supernodal_numeric_llt` with its
     /// default parameters.
+    ///
+    /// `only`: the supernodes to compute (see [`Self::supernodes_to_refactor`]); the others'
+    /// values are left as they are, which must be those of an earlier factorisation of a
+    /// matrix that differs only in the columns of the computed ones. The result is then
+    /// bitwise that of the whole factorisation: a supernode's values depend on its own
+    /// columns of the matrix and on its descendants' values only, by the same operations.
     pub(crate) fn factorize(
         &self,
         values: &mut [f64],
         a_lower: SparseColMatRef<'_, u32, f64>,
         symbolic: &SymbolicSupernodalCholesky<u32>,
         eliminated: usize,
+        only: Option<&[bool]>,
     ) -> Result<(), NotPositiveDefinite> {
         assert_eq!(values.len(), symbolic.len_val());
         let job = Job {
@@ -226,11 +246,43 @@ impl TreeCholesky {
             symbolic,
             a_lower,
             eliminated,
+            only,
         };
         match &self.schedule {
             Some(schedule) => job.forest(schedule, &schedule.roots, values, 0),
             None => job.sequence(0..symbolic.n_supernodes(), values, 0),
         }
+    }
+
+    /// Sets `refactor[s]` for the supernodes s of `symbolic` that a factorisation of a
+    /// matrix differing from the last factored one only in the columns flagged in `changed`
+    /// must compute again ([`Self::factorize`]'s `only`): those holding a changed column or
+    /// a column after `eliminated` (the Schur complement block, which the condensed solver
+    /// completes in place), and all their ancestors. Returns how many there are.
+    pub(crate) fn supernodes_to_refactor(
+        &self,
+        symbolic: &SymbolicSupernodalCholesky<u32>,
+        changed: &[bool],
+        eliminated: usize,
+        refactor: &mut Vec<bool>,
+    ) -> usize {
+        let (begin, end) = (symbolic.supernode_begin(), symbolic.supernode_end());
+        refactor.clear();
+        refactor.extend((0..symbolic.n_supernodes()).map(|s| {
+            let columns = begin[s] as usize..end[s] as usize;
+            columns.end > eliminated || changed[columns].contains(&true)
+        }));
+        // Parents come after their children.
+        let mut count = 0;
+        for s in 0..refactor.len() {
+            if refactor[s] {
+                count += 1;
+                if let Some(&p) = self.parent.get(s).filter(|&&p| p != NONE) {
+                    refactor[p as usize] = true;
+                }
+            }
+        }
+        count
     }
 
     /// Scratch for one task: from the pool, or new.
@@ -416,12 +468,19 @@ struct Job<'a> {
     a_lower: SparseColMatRef<'a, u32, f64>,
     /// Columns eliminated: the rest is left as the Schur complement.
     eliminated: usize,
+    /// The supernodes to compute, `None` for all (see [`TreeCholesky::factorize`]).
+    only: Option<&'a [bool]>,
 }
 
 impl Job<'_> {
     /// Offset of supernode s's values.
     fn value_start(&self, s: usize) -> usize {
         self.symbolic.col_ptr_for_val()[s] as usize
+    }
+
+    /// Whether this factorisation computes supernode s.
+    fn computes(&self, s: usize) -> bool {
+        self.only.is_none_or(|only| only[s])
     }
 
     /// Factors the consecutive subtrees rooted at `roots` (in increasing order), whose
@@ -460,6 +519,10 @@ impl Job<'_> {
         values: &mut [f64],
         offset: usize,
     ) -> Result<(), NotPositiveDefinite> {
+        if !self.computes(s) {
+            // Nor any of its descendants: a computed one makes its ancestors computed.
+            return Ok(());
+        }
         if schedule.work[s] < schedule.grain {
             return self.sequence(schedule.first[s] as usize..s + 1, values, offset);
         }
@@ -481,7 +544,7 @@ impl Job<'_> {
         let tree = self.tree;
         let mut scratch = tree.take_scratch(self.symbolic.nrows());
         let result = range
-            .into_iter()
+            .filter(|&t| self.computes(t))
             .try_for_each(|t| self.supernode_in(t, values, offset, &mut scratch));
         tree.give_scratch(scratch);
         result
@@ -815,7 +878,7 @@ mod tests {
                 .count();
             assert!(tasks >= 4 * threads.min(2), "only {tasks} tasks");
             let mut values = vec![0.0; symbolic.len_val()];
-            tree.factorize(&mut values, a.as_ref(), symbolic, eliminated)
+            tree.factorize(&mut values, a.as_ref(), symbolic, eliminated, None)
                 .unwrap();
             values
         })
@@ -851,7 +914,7 @@ mod tests {
         let mut tree = TreeCholesky::new(s, 2);
         tree.schedule = None;
         let mut plain = vec![0.0; s.len_val()];
-        tree.factorize(&mut plain, a.as_ref(), s, n).unwrap();
+        tree.factorize(&mut plain, a.as_ref(), s, n, None).unwrap();
         assert!(
             one.iter()
                 .zip(&plain)
@@ -904,6 +967,65 @@ mod tests {
         );
         let residual = &sym * &x - &b;
         assert!(residual.norm_max() <= 1e-12 * b.norm_max());
+    }
+
+    #[test]
+    fn refactoring_the_supernodes_of_changed_columns_gives_the_whole_factorisations_bits() {
+        let (a, symbolic) = grid_case(40, 30);
+        let (n, s) = (a.nrows(), supernodal(&symbolic));
+        let eliminated = n - 20;
+        let tree = TreeCholesky::new(s, 2);
+        let mut values = vec![0.0; s.len_val()];
+        tree.factorize(&mut values, a.as_ref(), s, eliminated, None)
+            .unwrap();
+        // Change the entries of a few columns (a small "plastic zone"): scale column j's
+        // below-diagonal entries, which keeps the matrix diagonally dominant.
+        let mut changed_matrix = a.clone();
+        let mut changed = vec![false; n];
+        let col_ptr = a.symbolic().col_ptr().to_vec();
+        let row_idx = a.symbolic().row_idx().to_vec();
+        for j in [3, 4, 5, n / 3] {
+            changed[j] = true;
+            let range = col_ptr[j] as usize..col_ptr[j + 1] as usize;
+            for (v, &row) in changed_matrix.val_mut()[range.clone()]
+                .iter_mut()
+                .zip(&row_idx[range])
+            {
+                if row as usize != j {
+                    *v *= 0.5;
+                }
+            }
+        }
+        let mut refactor = Vec::new();
+        let count = tree.supernodes_to_refactor(s, &changed, eliminated, &mut refactor);
+        assert_eq!(count, refactor.iter().filter(|&&r| r).count());
+        assert!(
+            count > 0 && count < s.n_supernodes() / 4,
+            "{count} of {}",
+            s.n_supernodes()
+        );
+        tree.factorize(
+            &mut values,
+            changed_matrix.as_ref(),
+            s,
+            eliminated,
+            Some(&refactor),
+        )
+        .unwrap();
+        let mut whole = vec![0.0; s.len_val()];
+        tree.factorize(&mut whole, changed_matrix.as_ref(), s, eliminated, None)
+            .unwrap();
+        assert!(
+            values
+                .iter()
+                .zip(&whole)
+                .all(|(x, y)| x.to_bits() == y.to_bits())
+        );
+        // The factor did change: the partial factorisation was not a no-op.
+        let mut before = vec![0.0; s.len_val()];
+        tree.factorize(&mut before, a.as_ref(), s, eliminated, None)
+            .unwrap();
+        assert!(before.iter().zip(&whole).any(|(x, y)| x != y));
     }
 
     #[test]
@@ -962,7 +1084,7 @@ mod tests {
         a.val_mut()[col_start] = -1.0;
         let tree = TreeCholesky::new(s, 2);
         let mut values = vec![0.0; s.len_val()];
-        assert!(tree.factorize(&mut values, a.as_ref(), s, n).is_err());
+        assert!(tree.factorize(&mut values, a.as_ref(), s, n, None).is_err());
         // Parent 2 ← 0 and 1 ← 2 breaks the postorder (a parent before its child).
         assert!(Schedule::new(&[2, NONE, 1], vec![1.0; 3], 2).is_none());
         // Children 0 and 2 of 3 with 1 (a root) between them: subtrees not consecutive.
