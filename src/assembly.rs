@@ -353,9 +353,10 @@ pub struct GlobalSystem {
     reference: Option<Reference>,
 }
 
-/// The sum of the reference (elastic) matrices of the elements whose tangent is their
-/// reference one ("frozen"), kept between assemblies so that those elements need not be
-/// re-evaluated for the tangent nor scattered (see [`GlobalSystem::assemble_reusing`]).
+/// The sum of every element's reference (elastic) matrix, made once, so that elements whose
+/// tangent is their reference one ("frozen") need not be evaluated for the tangent nor
+/// scattered (see [`GlobalSystem::assemble_reusing`]); and whether each element was frozen
+/// at its last evaluation, which only decides whether its next one computes a tangent.
 #[derive(Clone, Debug)]
 struct Reference {
     values: Vec<f64>,
@@ -483,7 +484,7 @@ impl GlobalSystem {
             values: input.tangent.then_some(SharedMut(self.values.as_mut_ptr())),
             force: Some(SharedMut(self.internal_force.as_mut_ptr())),
             dense: None,
-            reference: None,
+            frozen: None,
         };
         scatter(
             &self.pattern,
@@ -527,13 +528,14 @@ impl GlobalSystem {
 
     /// [`Self::assemble`] for a set whose elements' tangent is, most of the time, a constant
     /// reference matrix (elastic elements of a plastic body: every point that did not yield
-    /// has the elastic tangent, see [`ElementSet::tangent_is_reference`]). The sum of the
-    /// reference matrices of such ("frozen") elements is kept in this system: a tangent
-    /// assembly adds it and then evaluates frozen elements for their forces and states only;
-    /// an element leaves the sum when a point yields and joins it when its tangent is the
-    /// reference one again. The result equals [`Self::assemble`]'s up to the rounding of
-    /// the kept sum. Meant for one set per system (the sum is reset if another set's size
-    /// is seen); the first call allocates the sum (one value array) and the flags.
+    /// has the elastic tangent, see [`ElementSet::tangent_is_reference`]). The sum K_ref of
+    /// all elements' reference matrices is made by the first call and kept; a tangent
+    /// assembly is K_ref plus k_e − k_ref,e of the elements whose trial tangent is not their
+    /// reference one, and evaluates the others ("frozen") for their forces and states only.
+    /// The result depends on the trial states alone, not on earlier assemblies (a resumed
+    /// run repeats the uninterrupted one bit for bit), and equals [`Self::assemble`]'s up to
+    /// rounding. Meant for one set per system (K_ref is made again if another set's size is
+    /// seen); the first call allocates K_ref (one value array) and the flags.
     pub fn assemble_reusing<S: ElementSet>(
         &mut self,
         input: &AssemblyInput,
@@ -548,10 +550,25 @@ impl GlobalSystem {
         let nnz = self.values.len();
         let reference = match &mut self.reference {
             Some(r) if r.frozen.len() == set.len() && r.values.len() == nnz => r,
-            slot => slot.insert(Reference {
-                values: vec![0.0; nnz],
-                frozen: vec![false; set.len()],
-            }),
+            slot => {
+                let mut values = filled_in_parallel(0.0, nnz);
+                let target = SharedMut(values.as_mut_ptr());
+                let pattern = &self.pattern;
+                for_each_element(coloring, |e, scratch| {
+                    let ke = &mut scratch.ke;
+                    ke.fill(0.0);
+                    set.reference_tangent(e, ke);
+                    let nodes = (set.nodes(e), set.dofs_per_node());
+                    // SAFETY: elements of one colour share no dof.
+                    unsafe {
+                        add_element_matrix(pattern, input.dofs, nodes, ke, 1.0, target.get())
+                    };
+                });
+                slot.insert(Reference {
+                    values,
+                    frozen: vec![false; set.len()],
+                })
+            }
         };
         for (v, r) in self.values.iter_mut().zip(&reference.values) {
             *v += r;
@@ -560,10 +577,7 @@ impl GlobalSystem {
             values: Some(SharedMut(self.values.as_mut_ptr())),
             force: Some(SharedMut(self.internal_force.as_mut_ptr())),
             dense: None,
-            reference: Some(Frozen {
-                values: SharedMut(reference.values.as_mut_ptr()),
-                frozen: SharedMut(reference.frozen.as_mut_ptr()),
-            }),
+            frozen: Some(SharedMut(reference.frozen.as_mut_ptr())),
         };
         scatter(
             &self.pattern,
@@ -576,20 +590,8 @@ impl GlobalSystem {
         );
     }
 
-    /// Empties the kept sum of [`Self::assemble_reusing`]: the next tangent assembly
-    /// evaluates every element and rebuilds the sum from the present states. Called at the
-    /// start of each load increment, so that the sum's rounding depends on that increment's
-    /// start state only (a run resumed from a restart record repeats the uninterrupted run
-    /// bit for bit). Allocates nothing.
-    pub fn forget_reference(&mut self) {
-        if let Some(r) = &mut self.reference {
-            r.values.fill(0.0);
-            r.frozen.fill(false);
-        }
-    }
-
-    /// Number of elements whose reference matrix [`Self::assemble_reusing`] keeps in its sum
-    /// (frozen: not re-evaluated for the tangent).
+    /// Number of elements whose tangent was their reference one at the last tangent
+    /// assembly of [`Self::assemble_reusing`] (frozen: not evaluated for the tangent).
     pub fn frozen_elements(&self) -> usize {
         self.reference
             .as_ref()
@@ -620,7 +622,7 @@ impl GlobalSystem {
                 col_stride: stride as usize,
                 map,
             }),
-            reference: None,
+            frozen: None,
         };
         scatter(
             &self.pattern,
@@ -650,7 +652,7 @@ impl GlobalSystem {
             values: Some(SharedMut(self.preconditioner.as_mut_ptr())),
             force: None,
             dense: None,
-            reference: None,
+            frozen: None,
         };
         scatter(
             &self.pattern,
@@ -671,15 +673,10 @@ struct Targets<'m> {
     values: Option<SharedMut<f64>>,
     force: Option<SharedMut<f64>>,
     dense: Option<Dense<'m>>,
-    reference: Option<Frozen>,
-}
-
-/// The kept sum of frozen elements' reference matrices and the per-element flags of
-/// [`GlobalSystem::assemble_reusing`].
-#[derive(Clone, Copy)]
-struct Frozen {
-    values: SharedMut<f64>,
-    frozen: SharedMut<bool>,
+    /// The per-element flags of [`GlobalSystem::assemble_reusing`]: with them, `values`
+    /// holds the sum of all reference matrices, and an element adds k_e − k_ref,e, nothing
+    /// if its tangent is its reference one.
+    frozen: Option<SharedMut<bool>>,
 }
 
 /// A dense column-major block and the map of the elements' dofs into it.
@@ -841,7 +838,7 @@ fn scatter<S: ElementSet>(
         values,
         force,
         dense,
-        reference,
+        frozen,
     } = targets;
     let AssemblyInput {
         dofs, u, algorithm, ..
@@ -854,7 +851,7 @@ fn scatter<S: ElementSet>(
     // The leading block an element of this set can write (8 nodes × D): zeroed per element,
     // the rest of the scratch matrix is never touched.
     let used = MAX_ELEMENT_NODES * d;
-    let element = |e: usize, scratch: &mut ElementScratch| {
+    for_each_element(coloring, |e: usize, scratch: &mut ElementScratch| {
         let nodes = set.nodes(e);
         let mut ue = ElementVector::zeros();
         for (a, &n) in nodes.iter().enumerate() {
@@ -865,7 +862,7 @@ fn scatter<S: ElementSet>(
         // SAFETY: every element is evaluated exactly once, and its state slots (and its
         // frozen flag) are its own.
         let trial_e = unsafe { std::slice::from_raw_parts_mut(states.get().add(e * ppe), ppe) };
-        let frozen = reference.map(|r| unsafe { &mut *r.frozen.get().add(e) });
+        let frozen = frozen.map(|f| unsafe { &mut *f.get().add(e) });
         let was_frozen = frozen.as_deref().copied().unwrap_or(false);
         let element_input = ElementInput {
             u: &ue,
@@ -918,43 +915,36 @@ fn scatter<S: ElementSet>(
             }
         }
         let Some(values) = values else { return };
-        if let (Some(r), Some(frozen)) = (reference, frozen) {
-            let is_reference = set.tangent_is_reference(trial_e);
-            match (was_frozen, is_reference) {
-                // The kept sum already holds this element's tangent.
-                (true, true) => return,
-                // A point yielded: the element leaves the sum, its tangent is added.
-                (true, false) => {
-                    let output = ElementOutput {
-                        trial: &mut *trial_e,
-                        k: Some(&mut *ke),
-                        f: &mut ElementVector::zeros(),
-                    };
-                    set.evaluate(e, &element_input, output);
-                    let mut kr = ElementMatrix::zeros();
-                    set.reference_tangent(e, &mut kr);
-                    // SAFETY: as above.
-                    unsafe {
-                        add_element_matrix(pattern, dofs, (nodes, d), &kr, -1.0, r.values.get())
-                    };
-                    *ke -= kr;
-                    *frozen = false;
-                }
-                // Its tangent is the reference one: it joins the sum.
-                (false, true) => {
-                    // SAFETY: as above.
-                    unsafe {
-                        add_element_matrix(pattern, dofs, (nodes, d), ke, 1.0, r.values.get())
-                    };
-                    *frozen = true;
-                }
-                (false, false) => {}
+        if let Some(frozen) = frozen {
+            // `values` holds every element's reference matrix: this one adds its tangent's
+            // difference from it, if any. The flag only chose the first evaluation.
+            *frozen = set.tangent_is_reference(trial_e);
+            if *frozen {
+                return;
             }
+            if was_frozen {
+                // A point yielded: the same evaluation again, with the tangent.
+                let output = ElementOutput {
+                    trial: &mut *trial_e,
+                    k: Some(&mut *ke),
+                    f: &mut ElementVector::zeros(),
+                };
+                set.evaluate(e, &element_input, output);
+            }
+            let mut kr = ElementMatrix::zeros();
+            set.reference_tangent(e, &mut kr);
+            *ke -= kr;
         }
         // SAFETY: as above; the entries of this element's dofs are written by no other
         // element of its colour.
         unsafe { add_element_matrix(pattern, dofs, (nodes, d), ke, 1.0, values.get()) };
-    };
+    });
+}
+
+/// Runs `element(e, scratch)` for every element of `coloring`: colour by colour, in
+/// parallel within a colour (each worker with its own scratch), so that no two elements run
+/// at once share a node.
+fn for_each_element(coloring: &Coloring, element: impl Fn(usize, &mut ElementScratch) + Sync) {
     let last = coloring.groups.len().saturating_sub(1);
     for (c, group) in coloring.groups.iter().enumerate() {
         if c == last && coloring.groups.len() == 64 {
@@ -1118,6 +1108,12 @@ mod tests {
             reusing.clear(true);
             reusing.assemble_reusing(&input, &set, &coloring, &committed, &mut trial_b);
             assert_eq!(trial_a, trial_b);
+            // Independent of the assemblies before: a new system's first gives the same bits.
+            let mut fresh = GlobalSystem::new(plain.pattern.clone(), dofs.dof_count());
+            let mut trial_c = committed.clone();
+            fresh.assemble_reusing(&input, &set, &coloring, &committed, &mut trial_c);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&fresh.values), bits(&reusing.values));
             assert_eq!(plain.internal_force, reusing.internal_force);
             let scale = plain.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             let difference = plain

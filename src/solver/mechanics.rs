@@ -179,8 +179,9 @@ impl Problem for Mechanics<'_> {
         DenseScatter::new(&self.model.interface, dofs, local)
     }
 
-    /// A nonlinear (plastic) continuum keeps the elastic matrices of its cells without a
-    /// yielding point between assemblies ([`GlobalSystem::assemble_reusing`]); a linear one
+    /// A nonlinear (plastic) continuum keeps the sum of its cells' elastic matrices and
+    /// evaluates tangents only for cells with a yielding point
+    /// ([`GlobalSystem::assemble_reusing`]); a linear one
     /// is assembled plainly (its stiffness is assembled once per model, and keeping a copy
     /// would only cost memory).
     fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) {

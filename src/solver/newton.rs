@@ -752,11 +752,11 @@ impl<'a> Newton<'a> {
     }
 
     /// Starts an increment of `problem`. Nothing cached from earlier increments may change
-    /// this one's iterates (a resumed run must repeat the uninterrupted one): the kept
-    /// elastic-cell sum is rebuilt and the bulk factor kept only for an unchanged tangent.
-    /// Makes the condensed solver at the first increment; returns the seconds that took.
+    /// this one's iterates (a resumed run must repeat the uninterrupted one): the bulk
+    /// factor is kept only for an unchanged tangent (the tangent itself depends on the trial
+    /// states alone, `GlobalSystem::assemble_reusing`). Makes the condensed solver at the
+    /// first increment; returns the seconds that took.
     fn begin_increment(&mut self, problem: &impl Problem) -> Result<f64> {
-        self.system.forget_reference();
         if let Some(c) = &mut self.condensed {
             c.solver.start_increment();
         }
@@ -823,9 +823,8 @@ impl<'a> Newton<'a> {
     ///
     /// The full step, taken in most iterations, is evaluated with its tangent: accepted, it
     /// is the next iteration's evaluation, which is then not repeated (the same trial states
-    /// as a second pass at the same u; for a linear bulk the same bits, for a plastic one the
-    /// kept sum of its elastic cells, `GlobalSystem::assemble_reusing`, follows the trial's
-    /// cells, the same matrix up to rounding). A rejected full step costs the tangent part
+    /// as a second pass at the same u, hence the same bits: a plastic bulk's tangent depends
+    /// on the trial states alone, `GlobalSystem::assemble_reusing`). A rejected full step costs the tangent part
     /// of one evaluation. Measured on the elasto-plastic flat punch (43k unknowns, 40
     /// iterations, 36 of 42 full steps accepted): assembly 0.96 → 0.73 s, the same
     /// iterations. Returns α, with the symmetry of that tangent when the full step was
