@@ -128,6 +128,7 @@ impl Grid {
     /// over the cells and each part's own points, so the cost is the grid's size however many
     /// parts there are.
     pub fn split(&self, part: &[u32], parts: usize) -> Vec<Grid> {
+        use rayon::prelude::*;
         debug_assert_eq!(part.len(), self.cell_count());
         let mut cells = vec![Vec::new(); parts];
         for (c, &p) in part.iter().enumerate() {
@@ -147,27 +148,37 @@ impl Grid {
                     self.offsets[c - 1] as usize
                 };
                 let cell = &self.connectivity[start..self.offsets[c] as usize];
-                let renumbered: Vec<u64> = cell
-                    .iter()
-                    .map(|&p| {
-                        let p = p as usize;
-                        if owner[p] != k {
-                            owner[p] = k;
-                            local[p] = points.len() as u64;
-                            points.push(p);
-                        }
-                        local[p]
-                    })
-                    .collect();
+                let renumbered = cell.iter().map(|&p| {
+                    let p = p as usize;
+                    if owner[p] != k {
+                        owner[p] = k;
+                        local[p] = points.len() as u64;
+                        points.push(p);
+                    }
+                    local[p]
+                });
                 grid.push_cell(self.cell_types[c], renumbered);
             }
-            grid.points = points.iter().map(|&p| self.points[p]).collect();
-            grid.point_data = self.point_data.iter().map(|f| f.select(&points)).collect();
-            grid.cell_data = self.cell_data.iter().map(|f| f.select(cells)).collect();
-            grid.field_data = self.field_data.clone();
-            grids.push(grid);
+            grids.push((grid, points));
         }
+        // The arrays restricted to each part's points and cells, on all threads.
         grids
+            .into_par_iter()
+            .zip(cells)
+            .map(|((mut grid, points), cells)| {
+                grid.points = points.par_iter().map(|&p| self.points[p]).collect();
+                grid.point_data = (self.point_data.par_iter())
+                    .map(|f| f.select(&points))
+                    .collect();
+                grid.cell_data = self
+                    .cell_data
+                    .par_iter()
+                    .map(|f| f.select(&cells))
+                    .collect();
+                grid.field_data = self.field_data.clone();
+                grid
+            })
+            .collect()
     }
 }
 
