@@ -14,6 +14,7 @@ pub struct ShapeValues {
 
 /// Shape functions of `kind` at natural coordinates (ξ, η). Quad8: ξ, η ∈ [−1, 1];
 /// tri6: area coordinates ξ, η ≥ 0, ξ + η ≤ 1.
+#[inline(always)]
 pub fn cell_shape(kind: CellKind, xi: f64, eta: f64) -> ShapeValues {
     match kind {
         CellKind::Quad8 => quad8(xi, eta),
@@ -22,6 +23,7 @@ pub fn cell_shape(kind: CellKind, xi: f64, eta: f64) -> ShapeValues {
 }
 
 /// 8-node serendipity quadrilateral.
+#[inline(always)]
 pub fn quad8(xi: f64, eta: f64) -> ShapeValues {
     const CORNERS: [(f64, f64); 4] = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
     let mut s = ShapeValues::default();
@@ -52,6 +54,7 @@ pub fn quad8(xi: f64, eta: f64) -> ShapeValues {
 }
 
 /// 6-node triangle in area coordinates L1 = 1 − ξ − η, L2 = ξ, L3 = η.
+#[inline(always)]
 pub fn tri6(xi: f64, eta: f64) -> ShapeValues {
     let l1 = 1.0 - xi - eta;
     let mut s = ShapeValues::default();
