@@ -33,7 +33,7 @@
 //! columns, nothing else. When a new matrix differs from the last factored one in a few
 //! columns only — the elements of a plastic zone — the supernodes holding them and their
 //! ancestors are computed again and the others' values kept
-//! ([`TreeCholesky::supernodes_to_refactor`]): the same bits as the whole factorisation,
+//! (`TreeCholesky::supernodes_to_refactor`): the same bits as the whole factorisation,
 //! for the work of the paths from the zone to the root. Measured on the elasto-plastic flat
 //! punch (43k unknowns, 4589 supernodes, 30 refactorisations of 19–125 supernodes each):
 //! factorisation 1.20–1.30 → 0.70–0.77 s.
