@@ -608,6 +608,8 @@ impl CondensedSolver {
             + n_i * n_i
             + 2 * self.n)
             + 4 * (self.lower.row_idx().len() + 4 * self.n)
+            + self.changed_columns.len()
+            + self.refactor.len()
             + self.tree.memory_bytes()
     }
 

@@ -824,11 +824,11 @@ impl<'a> Newton<'a> {
     /// The full step, taken in most iterations, is evaluated with its tangent: accepted, it
     /// is the next iteration's evaluation, which is then not repeated (the same trial states
     /// as a second pass at the same u, hence the same bits: a plastic bulk's tangent depends
-    /// on the trial states alone, `GlobalSystem::assemble_reusing`). A rejected full step costs the tangent part
-    /// of one evaluation. Measured on the elasto-plastic flat punch (43k unknowns, 40
-    /// iterations, 36 of 42 full steps accepted): assembly 0.96 → 0.73 s, the same
-    /// iterations. Returns α, with the symmetry of that tangent when the full step was
-    /// taken; `u` holds u + α δu.
+    /// on the trial states alone, `GlobalSystem::assemble_reusing`). A rejected full step
+    /// costs the tangent part of one evaluation. Measured on the elasto-plastic flat punch
+    /// (43k unknowns, 40 iterations, 36 of 42 full steps accepted): assembly 0.96 → 0.73 s,
+    /// the same iterations. Returns α, with the symmetry of that tangent when the full step
+    /// was taken; `u` holds u + α δu.
     fn line_search(
         &mut self,
         problem: &mut impl Problem,
