@@ -644,10 +644,18 @@ impl CondensedSolver {
         self.factored = false;
         self.interface_factored = false;
         self.lu_bulk = false;
-        // Reordered lower triangle.
+        // Reordered lower triangle: the columns the comparison found changed and the
+        // interface's (which hold the shift), or all of them.
         let values = &mut self.lower_values;
-        for (v, &p) in values.iter_mut().zip(&self.source) {
-            *v = continuum.val()[p as usize];
+        let col_ptr = self.lower.col_ptr();
+        for col in 0..self.n {
+            if self.changes_known && col < self.n_bulk && !self.changed_columns[col] {
+                continue;
+            }
+            let range = col_ptr[col] as usize..col_ptr[col + 1] as usize;
+            for (v, &p) in values[range.clone()].iter_mut().zip(&self.source[range]) {
+                *v = continuum.val()[p as usize];
+            }
         }
         for (d, &slot) in self.inverse_scale.iter_mut().zip(&self.diagonal) {
             *d = values[slot as usize].abs().sqrt().recip();
