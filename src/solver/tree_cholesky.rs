@@ -272,12 +272,14 @@ impl TreeCholesky {
             let columns = begin[s] as usize..end[s] as usize;
             columns.end > eliminated || changed[columns].contains(&true)
         }));
-        // Parents come after their children.
+        // A parent comes after its children (its columns are their first rows below), so
+        // one pass in increasing order reaches every ancestor.
         let mut count = 0;
         for s in 0..refactor.len() {
             if refactor[s] {
                 count += 1;
                 if let Some(&p) = self.parent.get(s).filter(|&&p| p != NONE) {
+                    debug_assert!(p as usize > s, "supernode {s} has parent {p}");
                     refactor[p as usize] = true;
                 }
             }
