@@ -162,6 +162,7 @@ pub struct CondensedSolver {
     /// computes only the supernodes `refactor` marks (see `TreeCholesky::factorize`).
     changed_columns: Vec<bool>,
     changes_known: bool,
+    /// Per supernode (allocated here, so that a Newton iteration allocates nothing).
     refactor: Vec<bool>,
     /// Largest scaled change of the continuum matrix for which the last factorisation is
     /// kept (see [`Self::set_reuse_threshold`]).
@@ -450,7 +451,7 @@ impl CondensedSolver {
             last_change: f64::INFINITY,
             changed_columns: vec![false; n],
             changes_known: false,
-            refactor: Vec::new(),
+            refactor: Vec::with_capacity(supernodal.n_supernodes()),
             reuse_threshold: DEFAULT_REUSE_THRESHOLD,
             increment_started: false,
             factorizations: 0,
