@@ -853,12 +853,7 @@ fn scatter<S: ElementSet>(
     let used = MAX_ELEMENT_NODES * d;
     for_each_element(coloring, |e: usize, scratch: &mut ElementScratch| {
         let nodes = set.nodes(e);
-        let mut ue = ElementVector::zeros();
-        for (a, &n) in nodes.iter().enumerate() {
-            for c in 0..d {
-                ue[d * a + c] = u[d * n as usize + c];
-            }
-        }
+        let ue = element_displacements(nodes, d, u);
         // SAFETY: every element is evaluated exactly once, and its state slots (and its
         // frozen flag) are its own.
         let trial_e = unsafe { std::slice::from_raw_parts_mut(states.get().add(e * ppe), ppe) };
@@ -870,17 +865,21 @@ fn scatter<S: ElementSet>(
             algorithm,
         };
         let (ke, fe): (&mut ElementMatrix, _) = (&mut scratch.ke, &mut scratch.fe);
-        for column in ke
-            .as_mut_slice()
-            .chunks_exact_mut(MAX_ELEMENT_DOFS)
-            .take(used)
-        {
-            column[..used].fill(0.0);
+        // A frozen element's matrix may still be wanted, if one of its points yields.
+        let matrix = values.is_some() || dense.is_some();
+        if matrix {
+            for column in ke
+                .as_mut_slice()
+                .chunks_exact_mut(MAX_ELEMENT_DOFS)
+                .take(used)
+            {
+                column[..used].fill(0.0);
+            }
         }
         fe.as_mut_slice()[..used].fill(0.0);
         let output = ElementOutput {
             trial: &mut *trial_e,
-            k: ((values.is_some() || dense.is_some()) && !was_frozen).then_some(&mut *ke),
+            k: (matrix && !was_frozen).then_some(&mut *ke),
             f: &mut *fe,
         };
         set.evaluate(e, &element_input, output);
@@ -939,6 +938,52 @@ fn scatter<S: ElementSet>(
         // element of its colour.
         unsafe { add_element_matrix(pattern, dofs, (nodes, d), ke, 1.0, values.get()) };
     });
+}
+
+/// The displacements of an element's `nodes` (`d` per node) taken from `u` (all dofs).
+fn element_displacements(nodes: &[u32], d: usize, u: &[f64]) -> ElementVector {
+    let mut ue = ElementVector::zeros();
+    for (a, &n) in nodes.iter().enumerate() {
+        for c in 0..d {
+            ue[d * a + c] = u[d * n as usize + c];
+        }
+    }
+    ue
+}
+
+/// Evaluates the elements of `set` at the displacements `input.u` for their trial states
+/// alone, elements in parallel: no matrix and no force is assembled (their force is thrown
+/// away), so no element waits for another's colour. For a linear bulk, whose internal force
+/// is K·u, the states of a converged state.
+pub fn evaluate_states<S: ElementSet>(
+    input: &AssemblyInput,
+    set: &S,
+    committed: &[S::State],
+    trial: &mut [S::State],
+) {
+    let ppe = set.points_per_element();
+    let d = set.dofs_per_node();
+    assert_eq!(trial.len(), set.len() * ppe);
+    assert_eq!(committed.len(), trial.len());
+    trial
+        .par_chunks_mut(ppe)
+        .zip(committed.par_chunks(ppe))
+        .enumerate()
+        .with_min_len(64)
+        .for_each(|(e, (trial, committed))| {
+            let ue = element_displacements(set.nodes(e), d, input.u);
+            let element_input = ElementInput {
+                u: &ue,
+                committed,
+                algorithm: input.algorithm,
+            };
+            let output = ElementOutput {
+                trial,
+                k: None,
+                f: &mut ElementVector::zeros(),
+            };
+            set.evaluate(e, &element_input, output);
+        });
 }
 
 /// Runs `element(e, scratch)` for every element of `coloring`: colour by colour, in

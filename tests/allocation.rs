@@ -161,6 +161,10 @@ impl Problem for Marked<'_> {
         self.inner.assemble_bulk(system, input);
     }
 
+    fn bulk_states(&mut self, input: &AssemblyInput) {
+        self.inner.bulk_states(input);
+    }
+
     /// On the condensed path every evaluation ends with the interface: its tangent
     /// assemblies start the iterations (and the confirmation of a converged increment).
     fn assemble_interface(

@@ -58,9 +58,13 @@ pub struct SolverWork {
     /// included.
     pub tangent_assemblies: Tally,
     /// The same loops for the internal force alone (a line search's steps shorter than the
-    /// full one, whose trial is a tangent loop; for a linear bulk, the continuum's check of a
-    /// state reached with K·u; a resumed run's states left out of its record).
+    /// full one, whose trial is a tangent loop; for a linear bulk under a temperature field,
+    /// the continuum's check of a state reached with K·Δu; a resumed run's states left out
+    /// of its record).
     pub force_assemblies: Tally,
+    /// Linear bulk without a temperature field, whose force is K·u: the loops that evaluate
+    /// the point states of a converged state alone (no force, no matrix).
+    pub state_evaluations: Tally,
     /// Condensed path: the interface elements' loops with their tangent, and for the
     /// internal force alone.
     pub interface_tangent_assemblies: Tally,
@@ -133,6 +137,7 @@ pub struct FloorCounts {
     pub frames: usize,
     pub assemblies: usize,
     pub force_assemblies: usize,
+    pub state_evaluations: usize,
     pub interface_assemblies: usize,
     pub interface_force_assemblies: usize,
     pub products: usize,
@@ -172,6 +177,7 @@ impl Floor {
                 frames: work.frames.calls,
                 assemblies: s.tangent_assemblies.calls,
                 force_assemblies: s.force_assemblies.calls,
+                state_evaluations: s.state_evaluations.calls,
                 interface_assemblies: s.interface_tangent_assemblies.calls,
                 interface_force_assemblies: s.interface_force_assemblies.calls,
                 products: s.products.calls,

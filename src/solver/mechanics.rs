@@ -6,6 +6,7 @@ use faer::MatMut;
 
 use crate::assembly::{
     AssemblyInput, DenseBlock, DenseScatter, DofMap, ElementNodes, GlobalSystem, SparsityPattern,
+    evaluate_states,
 };
 use crate::contact::{ContactAlgorithm, InterfaceState};
 use crate::element::interface6::evaluate_interface;
@@ -106,6 +107,21 @@ pub struct Mechanics<'a> {
     pub temperature: &'a TemperatureField,
 }
 
+impl<'a> Mechanics<'a> {
+    /// The bodies in their context (temperatures, internal variables) and their committed
+    /// and trial point states.
+    fn bodies(&mut self) -> (ContinuumInContext<'_>, &'a [PointState], &mut [PointState]) {
+        let bodies = ContinuumInContext::new(
+            &self.model.continuum,
+            self.temperature,
+            self.internal_layout,
+            self.internal_committed,
+            &mut *self.internal_trial,
+        );
+        (bodies, self.committed, &mut *self.trial)
+    }
+}
+
 impl Problem for Mechanics<'_> {
     fn assemble(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) -> bool {
         self.assemble_bulk(system, input);
@@ -186,19 +202,17 @@ impl Problem for Mechanics<'_> {
     /// would only cost memory).
     fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) {
         let m = self.model;
-        let (cc, ct) = (self.committed, &mut *self.trial);
-        let bodies = ContinuumInContext::new(
-            &m.continuum,
-            self.temperature,
-            self.internal_layout,
-            self.internal_committed,
-            &mut *self.internal_trial,
-        );
+        let (bodies, cc, ct) = self.bodies();
         if !bodies.has_history() && m.continuum.is_linear() {
             system.assemble(input, &bodies, &m.continuum_coloring, cc, ct);
         } else {
             system.assemble_reusing(input, &bodies, &m.continuum_coloring, cc, ct);
         }
+    }
+
+    fn bulk_states(&mut self, input: &AssemblyInput) {
+        let (bodies, committed, trial) = self.bodies();
+        evaluate_states(input, &bodies, committed, trial);
     }
 
     fn assemble_interface(

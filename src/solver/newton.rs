@@ -35,10 +35,12 @@
 //! tangent changed — once per model for linear-elastic bodies, every iteration otherwise —
 //! and the interface elements into a dense block over the interface unknowns, whose dense LU
 //! is formed at every iteration. The consistent (unsymmetric) tangent is used as is. With
-//! linear-elastic bodies the continuum is evaluated only at the start of an increment (its
-//! internal force and states); iterations take its force as f_c(u₀) + K_c (u − u₀) from the
-//! stored stiffness, re-evaluating the interface elements alone, and a converged increment
-//! is confirmed by one full evaluation (which also gives its states and reactions). Models
+//! linear-elastic bodies and no temperature field the continuum's force is K_c u from the
+//! stored stiffness throughout (reactions included), iterations re-evaluate the interface
+//! elements alone, and a converged increment's point states come from one loop that
+//! evaluates them alone. Under a temperature field the continuum is evaluated at the start
+//! of an increment, iterations take its force as f_c(u₀) + K_c (u − u₀), and a converged
+//! increment is confirmed by one full evaluation (its states and reactions). Models
 //! without contact pairs, and [`LinearSolver::Krylov`], use [`CholeskySolver`] (with BiCGSTAB
 //! for unsymmetric tangents).
 //!
@@ -162,6 +164,10 @@ pub trait Problem {
     /// Adds the bulk's internal force (and, if `input.tangent`, its tangent) into `system`.
     fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput);
 
+    /// Evaluates the bulk's trial states at `input.u` alone (no force, no tangent): those of
+    /// a converged state of a linear bulk whose force is K·u.
+    fn bulk_states(&mut self, input: &AssemblyInput);
+
     /// Adds the interface's internal force into `system` and, if `input.tangent`, its
     /// tangent into the dense interface `block` through `map`. Returns whether that tangent
     /// is symmetric.
@@ -200,8 +206,8 @@ struct Condensed {
     /// matrix), whose product with a displacement change gives the change of the
     /// continuum's internal force, reactions included. Made by the first evaluation.
     stiffness: Option<BulkStiffness>,
-    /// Linear bulk: the continuum internal force (all dofs) at the displacements `u_ref`
-    /// (all dofs), evaluated at the start of the increment.
+    /// Linear bulk under a temperature field: the continuum internal force (all dofs) at the
+    /// displacements `u_ref` (all dofs), evaluated at the start of the increment.
     bulk_force: Vec<f64>,
     u_ref: Vec<f64>,
     /// Workspace: Δu = u − u_ref over all dofs.
@@ -209,10 +215,14 @@ struct Condensed {
     /// Whether the internal force of the last evaluation came from K_c Δu rather than from
     /// the continuum elements.
     extrapolated: bool,
-    /// Whether `u_ref` is the driver's committed state ([`Newton::commit`] after the element
-    /// loop that confirmed it, or [`Newton::start_from`]): an increment then starts from
-    /// f_c(u_ref) + K_c Δu without an element loop. Any element loop clears it.
-    reference_committed: bool,
+    /// Linear bulk whose force at fixed displacements never changes (no temperature field):
+    /// f_c(u) = K_c u exactly (u_ref = 0, f_c(0) = 0), so every evaluation after the one
+    /// that made K_c is a product, and a converged state's point states come from a loop
+    /// that evaluates the states alone ([`Problem::bulk_states`]).
+    by_product: bool,
+    /// Whether the bulk's trial states are not those of the last evaluation's displacements
+    /// (it took its force from K_c Δu).
+    states_stale: bool,
 }
 
 impl Condensed {
@@ -425,7 +435,8 @@ impl<'a> Newton<'a> {
             u_ref: vec![0.0; n],
             du: vec![0.0; n],
             extrapolated: false,
-            reference_committed: false,
+            by_product: linear_bulk && !problem.bulk_loads_vary(),
+            states_stale: false,
         });
         Ok(t.elapsed().as_secs_f64())
     }
@@ -479,12 +490,16 @@ impl<'a> Newton<'a> {
                 c.bulk_dirty = true;
                 self.bulk_symmetric = problem.bulk_is_symmetric();
             }
-        } else if !c.bulk_ready || fresh {
-            // The continuum's elements: its force (and states) at u, K_c the first time,
-            // over all dofs (one element loop); the system keeps its free block, and the
-            // entries of prescribed rows and columns are kept for K·u.
+        } else {
+            let force_input = AssemblyInput {
+                tangent: false,
+                ..input
+            };
             let first = !c.bulk_ready;
             if first {
+                // The continuum's elements over all dofs, once: K_c (the system keeps its
+                // free block, and the entries of prescribed rows and columns are kept for
+                // K·u), with the force and states at u.
                 let n = self.dofs.dof_count();
                 let all = DofMap::new(&vec![false; n]);
                 let mut whole = GlobalSystem::new(problem.bulk_pattern(&all), n);
@@ -502,38 +517,42 @@ impl<'a> Newton<'a> {
                     "linear bulk stiffness"
                 );
                 c.stiffness = Some(stiffness);
-            } else {
+                c.bulk_dirty = true;
+                c.bulk_ready = true;
+                work.tangent_assemblies.since(t);
+            } else if fresh && c.by_product {
+                problem.bulk_states(&force_input);
+                work.state_evaluations.since(t);
+            } else if fresh {
                 system.clear(false);
-                let input = AssemblyInput {
-                    tangent: false,
-                    ..input
-                };
-                problem.assemble_bulk(system, &input);
+                problem.assemble_bulk(system, &force_input);
+                work.force_assemblies.since(t);
             }
-            let kind = if first {
-                &mut work.tangent_assemblies
+            c.states_stale = !(first || fresh);
+            if (first || fresh) && !c.by_product {
+                // The elements' force at u is the reference the next evaluations continue
+                // from.
+                c.bulk_force.copy_from_slice(&system.internal_force);
+                c.u_ref.copy_from_slice(u);
             } else {
-                &mut work.force_assemblies
-            };
-            kind.since(t);
-            c.bulk_dirty |= first;
-            c.bulk_ready = true;
-            c.reference_committed = false;
-            c.bulk_force.copy_from_slice(&system.internal_force);
-            c.u_ref.copy_from_slice(u);
-        } else {
-            // f_c(u) = f_c(u_ref) + K_c (u − u_ref) over all dofs.
-            let stiffness = c.stiffness.as_ref().expect("linear bulk");
-            for ((d, a), b) in c.du.iter_mut().zip(u).zip(&c.u_ref) {
-                *d = a - b;
+                // f_c(u) = K_c u, or f_c(u_ref) + K_c (u − u_ref), over all dofs.
+                let t = Instant::now();
+                let stiffness = c.stiffness.as_ref().expect("linear bulk");
+                let f = &mut system.internal_force;
+                if c.by_product {
+                    stiffness.multiply(&system.pattern, &system.values, self.dofs, u, f);
+                } else {
+                    for ((d, a), b) in c.du.iter_mut().zip(u).zip(&c.u_ref) {
+                        *d = a - b;
+                    }
+                    stiffness.multiply(&system.pattern, &system.values, self.dofs, &c.du, f);
+                    for (f, f0) in f.iter_mut().zip(&c.bulk_force) {
+                        *f += f0;
+                    }
+                }
+                c.extrapolated = true;
+                work.products.since(t);
             }
-            let f = &mut system.internal_force;
-            stiffness.multiply(&system.pattern, &system.values, self.dofs, &c.du, f);
-            for (f, f0) in f.iter_mut().zip(&c.bulk_force) {
-                *f += f0;
-            }
-            c.extrapolated = true;
-            work.products.since(t);
         }
         // The bodies' nodal forces, before the interface's are added (they balance them).
         self.flux = Flux::of(&system.internal_force);
@@ -582,14 +601,9 @@ impl<'a> Newton<'a> {
         let mut correction_max = f64::INFINITY;
         let mut initial_residual = None;
         // Whether the next evaluation runs the bulk's elements: at the start of the increment
-        // unless a linear bulk continues from the committed state by K·Δu (the element loop
-        // that confirmed that state gave its force), and for the check of a converged state
+        // unless a linear bulk's force is K_c u, and for the check of a converged state
         // reached with extrapolated bulk forces.
-        let mut fresh = problem.bulk_loads_vary()
-            || !self
-                .condensed
-                .as_ref()
-                .is_some_and(|c| c.reference_committed);
+        let mut fresh = !self.condensed.as_ref().is_some_and(|c| c.by_product);
         // The symmetry of a tangent the line search already evaluated at u (its full step).
         let mut evaluated: Option<bool> = None;
         loop {
@@ -643,11 +657,29 @@ impl<'a> Newton<'a> {
                     last_correction.min(next_correction),
                 );
             if engineering && norms {
-                if self.condensed.as_ref().is_some_and(|c| c.extrapolated) {
-                    // Confirm with the continuum's elements (its states and reactions too).
-                    fresh = true;
-                    log.residuals.pop();
-                    continue;
+                if let Some(c) = self.condensed.as_mut().filter(|c| c.extrapolated) {
+                    if !c.by_product {
+                        // Confirm with the continuum's elements (its states and reactions
+                        // too): their force is f_c(u_ref) + K_c Δu only while the bulk's
+                        // loads stand still.
+                        fresh = true;
+                        log.residuals.pop();
+                        continue;
+                    }
+                    if c.states_stale {
+                        // f_c = K_c u exactly: the states alone are missing.
+                        let t = Instant::now();
+                        let input = AssemblyInput {
+                            dofs,
+                            u,
+                            tangent: false,
+                            algorithm: settings.contact_algorithm,
+                        };
+                        problem.bulk_states(&input);
+                        c.states_stale = false;
+                        self.work.state_evaluations.since(t);
+                        log.assembly_seconds += t.elapsed().as_secs_f64();
+                    }
                 }
                 if criteria.average_force.is_none() {
                     self.flux_history.record(flux, zero_flux);
@@ -711,11 +743,10 @@ impl<'a> Newton<'a> {
     }
 
     /// Sets the state the run starts from, `u` (all dofs; the committed displacements of a
-    /// new or resumed run): a linear bulk on the condensed path evaluates its elements there
-    /// (its stiffness the first time) and takes them as the committed reference its first
-    /// increment continues from by K·Δu. A resumed run thereby starts from the same bits as
-    /// the uninterrupted one, whose reference is the element loop that confirmed the same
-    /// state. Other problems are left to their first increment, unless `states`: then the
+    /// new or resumed run): a linear bulk on the condensed path without a temperature field
+    /// makes its stiffness there (and the states at `u`), its force being K_c u from then on:
+    /// a resumed run multiplies the same K_c and u as the uninterrupted one, to the same
+    /// bits. Other problems are left to their first increment, unless `states`: then the
     /// bulk's elements are evaluated at `u` for their trial states (those a restart record
     /// leaves out when they follow from the displacements). The log holds the seconds spent
     /// (making the condensed solver counts as factorisation, as in an increment).
@@ -730,25 +761,13 @@ impl<'a> Newton<'a> {
         if fixed_loads {
             log.factorization_seconds = self.prepare_condensed(problem)?;
         }
-        let reference = fixed_loads && self.condensed.as_ref().is_some_and(|c| c.linear_bulk);
+        let by_product = self.condensed.as_ref().is_some_and(|c| c.by_product);
         let t = Instant::now();
-        if reference || states {
-            self.evaluate(problem, u, reference, true);
-        }
-        if reference {
-            self.commit();
+        if by_product || states {
+            self.evaluate(problem, u, by_product, true);
         }
         log.assembly_seconds = t.elapsed().as_secs_f64();
         Ok(log)
-    }
-
-    /// Tells the solver that the driver committed the state of its last converged increment
-    /// (the state a restart record holds): its bulk force, from the element loop that
-    /// confirmed it, becomes the reference the next increment continues from.
-    pub fn commit(&mut self) {
-        if let Some(c) = &mut self.condensed {
-            c.reference_committed = c.linear_bulk && c.bulk_ready && !c.extrapolated;
-        }
     }
 
     /// Starts an increment of `problem`. Nothing cached from earlier increments may change

@@ -147,7 +147,6 @@ pub fn run_steps_from(
                     let internal_force = newton.system().internal_force.as_slice();
                     solution.record_energy(model, &converged_u, &f_ext, internal_force);
                     solution.commit();
-                    newton.commit();
                     state.force_average = newton.force_average();
                     converged_u.copy_from_slice(&solution.u);
                     state.time = trial_time;
@@ -401,7 +400,6 @@ fn settle_once(
     let internal_force = newton.system().internal_force.as_slice();
     solution.record_energy(model, converged_u, external_force, internal_force);
     solution.commit();
-    newton.commit();
     converged_u.copy_from_slice(&solution.u);
     tracing::info!(
         iterations = log.iterations,
