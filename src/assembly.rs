@@ -361,6 +361,11 @@ pub struct GlobalSystem {
 struct Reference {
     values: Vec<f64>,
     frozen: Vec<bool>,
+    /// Per free equation: whether an element whose tangent was not its reference one at the
+    /// last tangent assembly has it (the matrix differs from K_ref in those columns only);
+    /// valid only if `off_reference_current` (not after a plain tangent assembly).
+    off_reference: Vec<bool>,
+    off_reference_current: bool,
 }
 
 /// A raw pointer that may be shared between threads; writes through it are made disjoint by
@@ -461,6 +466,9 @@ impl GlobalSystem {
     pub fn clear(&mut self, with_tangent: bool) {
         if with_tangent {
             self.values.fill(0.0);
+            if let Some(r) = &mut self.reference {
+                r.off_reference_current = false;
+            }
         }
         self.internal_force.fill(0.0);
     }
@@ -567,6 +575,8 @@ impl GlobalSystem {
                 slot.insert(Reference {
                     values,
                     frozen: vec![false; set.len()],
+                    off_reference: vec![false; input.dofs.free_count()],
+                    off_reference_current: false,
                 })
             }
         };
@@ -588,6 +598,29 @@ impl GlobalSystem {
             trial,
             targets,
         );
+        let off = &mut reference.off_reference;
+        off.clear();
+        off.resize(input.dofs.free_count(), false);
+        let d = set.dofs_per_node();
+        for e in (0..set.len()).filter(|&e| !reference.frozen[e]) {
+            for &node in set.nodes(e) {
+                for c in 0..d {
+                    if let Some(eq) = input.dofs.equation(d * node as usize + c) {
+                        off[eq] = true;
+                    }
+                }
+            }
+        }
+        reference.off_reference_current = true;
+    }
+
+    /// After a tangent assembly by [`Self::assemble_reusing`]: per free equation, whether its
+    /// column may differ from K_ref (an element on it had a tangent other than its
+    /// reference one); `None` otherwise.
+    pub fn off_reference_columns(&self) -> Option<&[bool]> {
+        let r = self.reference.as_ref()?;
+        r.off_reference_current
+            .then_some(r.off_reference.as_slice())
     }
 
     /// Number of elements whose tangent was their reference one at the last tangent
@@ -1175,6 +1208,24 @@ mod tests {
                 .count();
             assert_eq!(reusing.frozen_elements(), set.len() - yielded);
             frozen.push(reusing.frozen_elements());
+            // The matrix differs from K_ref only in the columns reported off it, which are
+            // those of the yielding cells.
+            let reference = &reusing.reference.as_ref().unwrap().values;
+            let off = reusing
+                .off_reference_columns()
+                .expect("after a reusing assembly");
+            let symbolic = reusing.pattern.symbolic();
+            for (col, &flagged) in off.iter().enumerate() {
+                let range = symbolic.col_range(col);
+                let differs = reusing.values[range.clone()] != reference[range];
+                assert!(flagged || !differs, "column {col} differs, not flagged");
+            }
+            assert_eq!(off.iter().any(|&f| f), yielded > 0);
+            plain.clear(true);
+            assert!(reusing.off_reference_columns().is_some());
+            reusing.clear(true);
+            assert!(reusing.off_reference_columns().is_none());
+            reusing.assemble_reusing(&input, &set, &coloring, &committed, &mut trial_b);
         }
         // Elastic, partly plastic (more cells at larger amplitudes), elastic again.
         assert_eq!(frozen[0], set.len());

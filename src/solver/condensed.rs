@@ -193,6 +193,15 @@ pub struct CondensedSolver {
     /// computes only the supernodes `refactor` marks (see `TreeCholesky::factorize`).
     changed_columns: Vec<bool>,
     changes_known: bool,
+    /// Columns (elimination order) in which the matrix to factor may differ from a constant
+    /// reference matrix (a plastic bulk's elastic sum K_ref), as its assembly reports them
+    /// ([`Self::factor_bulk_varying`]), and the same for the last factored matrix, if known:
+    /// two such matrices can differ in these columns only, and the change test looks at no
+    /// other.
+    varying: Vec<bool>,
+    varying_known: bool,
+    factored_varying: Vec<bool>,
+    factored_varying_known: bool,
     /// Per supernode (allocated here, so that a Newton iteration allocates nothing).
     refactor: Vec<bool>,
     /// Largest scaled change of the continuum matrix for which the last factorisation is
@@ -482,6 +491,10 @@ impl CondensedSolver {
             last_change: f64::INFINITY,
             changed_columns: vec![false; n],
             changes_known: false,
+            varying: vec![false; n],
+            varying_known: false,
+            factored_varying: vec![false; n],
+            factored_varying_known: false,
             refactor: Vec::with_capacity(supernodal.n_supernodes()),
             reuse_threshold: DEFAULT_REUSE_THRESHOLD,
             increment_started: false,
@@ -565,7 +578,14 @@ impl CondensedSolver {
     fn change_from_factored(&mut self, values: &[f64]) -> f64 {
         let (col_ptr, row_idx) = (self.lower.col_ptr(), self.lower.row_idx());
         let mut largest = 0.0f64;
+        let restricted = self.varying_known && self.factored_varying_known;
         for col in 0..self.n {
+            if restricted && col < self.n_bulk && !self.varying[col] && !self.factored_varying[col]
+            {
+                // Both matrices have the reference's values here.
+                self.changed_columns[col] = false;
+                continue;
+            }
             let range = col_ptr[col] as usize..col_ptr[col + 1] as usize;
             let scale_col = self.inverse_scale[col];
             let mut changed = false;
@@ -670,9 +690,30 @@ impl CondensedSolver {
     /// [`Self::set_reuse_threshold`] (always when it is unchanged, e.g. a plastic body whose
     /// points all stayed elastic). Returns whether it factored.
     pub fn factor_bulk(&mut self, continuum: SparseColMatRef<'_, u32, f64>) -> Result<bool> {
+        self.factor_bulk_varying(continuum, None)
+    }
+
+    /// [`Self::factor_bulk`] for a `continuum` that differs from a constant reference matrix
+    /// in the columns (equations) `varying` flags at most, if given (a plastic bulk's
+    /// elastic sum and its yielding cells: [`crate::assembly::GlobalSystem::
+    /// off_reference_columns`]). The change test then compares only the columns flagged
+    /// for this matrix or for the last factored one, and the interface's.
+    pub fn factor_bulk_varying(
+        &mut self,
+        continuum: SparseColMatRef<'_, u32, f64>,
+        varying: Option<&[bool]>,
+    ) -> Result<bool> {
+        self.varying_known = varying.is_some();
+        if let Some(flags) = varying {
+            for (eq, &flag) in flags.iter().enumerate() {
+                self.varying[self.position[eq] as usize] = flag;
+            }
+        }
         if self.keeps_factor(continuum, false)? {
             return Ok(false);
         }
+        std::mem::swap(&mut self.varying, &mut self.factored_varying);
+        self.factored_varying_known = self.varying_known;
         self.factored = false;
         self.interface_factored = false;
         self.lu_bulk = false;
@@ -869,9 +910,11 @@ impl CondensedSolver {
         if self.unsymmetric.is_none() {
             self.unsymmetric = Some(Box::new(self.unsymmetric_structures(continuum.symbolic())?));
         }
+        self.varying_known = false;
         if self.keeps_factor(continuum, true)? {
             return Ok(false);
         }
+        self.factored_varying_known = false;
         self.factored = false;
         self.interface_factored = false;
         self.lu_bulk = true;
@@ -1867,6 +1910,47 @@ pub(crate) mod tests {
         solver.set_reuse_threshold(f64::MAX);
         kc[p] = f64::NAN;
         assert!(solver.factor_bulk(SparseColMatRef::new(sym, &kc)).is_err());
+    }
+
+    #[test]
+    fn the_change_test_looks_only_at_columns_flagged_now_or_at_the_last_factorisation() {
+        let t = test_system(5, 4, 1.0, &[]);
+        let sym = t.pattern.symbolic().as_ref();
+        let mut solver = CondensedSolver::new(&t.pattern, &t.interface_eqs).unwrap();
+        solver.set_reuse_threshold(0.0);
+        let n = t.dofs.free_count();
+        let mut kc = t.continuum.clone();
+        let j = (0..n).find(|&j| solver.local_index(j).is_none()).unwrap();
+        let p = sym.col_range(j).start
+            + sym
+                .row_idx_of_col_raw(j)
+                .iter()
+                .position(|&i| i as usize == j)
+                .unwrap();
+        let mut flags = vec![false; n];
+        let factor = |solver: &mut CondensedSolver, kc: &[f64], flags: &[bool]| {
+            let matrix = SparseColMatRef::new(sym, kc);
+            solver.factor_bulk_varying(matrix, Some(flags)).unwrap()
+        };
+        assert!(factor(&mut solver, &kc, &flags));
+        // Bulk column j changes and is flagged: measured as by the whole comparison.
+        kc[p] *= 1.0 + 1e-3;
+        flags[j] = true;
+        assert!(factor(&mut solver, &kc, &flags));
+        assert!((solver.last_change() - 1e-3).abs() < 1e-12);
+        // Back to the reference: column j is no longer flagged now, but was for the factored
+        // matrix, so the change is still seen.
+        kc[p] = t.continuum[p];
+        flags[j] = false;
+        assert!(factor(&mut solver, &kc, &flags));
+        assert!((solver.last_change() - 1e-3 / (1.0 + 1e-3)).abs() < 1e-12);
+        // A change in a column flagged neither now nor then is not looked at (the assembly
+        // promises there is none): the factorisation is kept.
+        kc[p] *= 1.0 + 1e-3;
+        assert!(!factor(&mut solver, &kc, &flags));
+        assert_eq!(solver.last_change(), 0.0);
+        // Without flags every column is compared.
+        assert!(solver.factor_bulk(SparseColMatRef::new(sym, &kc)).unwrap());
     }
 
     #[test]

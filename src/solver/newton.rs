@@ -792,7 +792,8 @@ impl<'a> Newton<'a> {
         if let Some(c) = self.condensed.as_mut() {
             if c.bulk_dirty {
                 let factored = if self.bulk_symmetric {
-                    c.solver.factor_bulk(matrix)?
+                    let varying = self.system.off_reference_columns();
+                    c.solver.factor_bulk_varying(matrix, varying)?
                 } else {
                     c.solver.factor_bulk_unsymmetric(matrix)?
                 };

@@ -201,7 +201,8 @@ impl Newton<'_> {
     }
 
     /// Assembles the internal force and the tangent at `u` (always evaluating the bulk's
-    /// elements, whose states the increment commits); an unsymmetric tangent is refused.
+    /// elements, whose states the increment commits: for their states alone where the
+    /// bulk's force is K_c u); an unsymmetric tangent is refused.
     fn evaluate_symmetric(
         &mut self,
         problem: &mut impl Problem,
