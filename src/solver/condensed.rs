@@ -1852,12 +1852,29 @@ pub(crate) mod tests {
         }
     }
 
-    #[test]
-    fn condensed_keeps_the_bulk_factorisation_below_the_reuse_threshold() {
+    /// A small test system, its solver with reuse threshold 0, and a bulk equation j with
+    /// the position p of its diagonal entry among the matrix values.
+    fn reuse_case() -> (TestSystem, CondensedSolver, usize, usize) {
         let t = test_system(5, 4, 1.0, &[]);
-        let sym = t.pattern.symbolic().as_ref();
         let mut solver = CondensedSolver::new(&t.pattern, &t.interface_eqs).unwrap();
         solver.set_reuse_threshold(0.0);
+        let sym = t.pattern.symbolic();
+        let j = (0..sym.ncols())
+            .find(|&j| solver.local_index(j).is_none())
+            .unwrap();
+        let p = sym.col_range(j).start
+            + sym
+                .row_idx_of_col_raw(j)
+                .iter()
+                .position(|&i| i as usize == j)
+                .unwrap();
+        (t, solver, j, p)
+    }
+
+    #[test]
+    fn condensed_keeps_the_bulk_factorisation_below_the_reuse_threshold() {
+        let (t, mut solver, _, p) = reuse_case();
+        let sym = t.pattern.symbolic().as_ref();
         let mut kc = t.continuum.clone();
         let factor = |solver: &mut CondensedSolver, kc: &[f64]| {
             solver.factor_bulk(SparseColMatRef::new(sym, kc)).unwrap()
@@ -1867,15 +1884,6 @@ pub(crate) mod tests {
         assert_eq!(solver.last_change(), 0.0);
         // Change the diagonal entry of a bulk unknown by a fraction ε of itself: the scaled
         // change is ε.
-        let j = (0..kc.len().min(sym.ncols()))
-            .find(|&j| solver.local_index(j).is_none())
-            .unwrap();
-        let p = sym.col_range(j).start
-            + sym
-                .row_idx_of_col_raw(j)
-                .iter()
-                .position(|&i| i as usize == j)
-                .unwrap();
         let eps = 1e-3;
         kc[p] *= 1.0 + eps;
         assert!(factor(&mut solver, &kc), "threshold 0: refactored");
@@ -1914,19 +1922,10 @@ pub(crate) mod tests {
 
     #[test]
     fn the_change_test_looks_only_at_columns_flagged_now_or_at_the_last_factorisation() {
-        let t = test_system(5, 4, 1.0, &[]);
+        let (t, mut solver, j, p) = reuse_case();
         let sym = t.pattern.symbolic().as_ref();
-        let mut solver = CondensedSolver::new(&t.pattern, &t.interface_eqs).unwrap();
-        solver.set_reuse_threshold(0.0);
         let n = t.dofs.free_count();
         let mut kc = t.continuum.clone();
-        let j = (0..n).find(|&j| solver.local_index(j).is_none()).unwrap();
-        let p = sym.col_range(j).start
-            + sym
-                .row_idx_of_col_raw(j)
-                .iter()
-                .position(|&i| i as usize == j)
-                .unwrap();
         let mut flags = vec![false; n];
         let factor = |solver: &mut CondensedSolver, kc: &[f64], flags: &[bool]| {
             let matrix = SparseColMatRef::new(sym, kc);
