@@ -221,7 +221,7 @@ struct Condensed {
     /// that evaluates the states alone ([`Problem::bulk_states`]).
     by_product: bool,
     /// Whether the bulk's trial states are not those of the last evaluation's displacements
-    /// (it took its force from K_c Δu).
+    /// (it took its force from a product with K_c and evaluated no element).
     states_stale: bool,
 }
 
