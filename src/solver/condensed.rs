@@ -695,9 +695,10 @@ impl CondensedSolver {
 
     /// [`Self::factor_bulk`] for a `continuum` that differs from a constant reference matrix
     /// in the columns (equations) `varying` flags at most, if given (a plastic bulk's
-    /// elastic sum and its yielding cells: [`crate::assembly::GlobalSystem::
-    /// off_reference_columns`]). The change test then compares only the columns flagged
-    /// for this matrix or for the last factored one, and the interface's.
+    /// elastic sum and its yielding cells:
+    /// [`GlobalSystem::off_reference_columns`](crate::assembly::GlobalSystem::off_reference_columns)).
+    /// The change test then compares only the columns flagged for this matrix or for the
+    /// last factored one, and the interface's.
     pub fn factor_bulk_varying(
         &mut self,
         continuum: SparseColMatRef<'_, u32, f64>,
