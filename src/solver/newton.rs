@@ -207,7 +207,8 @@ struct Condensed {
     /// continuum's internal force, reactions included. Made by the first evaluation.
     stiffness: Option<BulkStiffness>,
     /// Linear bulk under a temperature field: the continuum internal force (all dofs) at the
-    /// displacements `u_ref` (all dofs), evaluated at the start of the increment.
+    /// displacements `u_ref` (all dofs), evaluated at the start of the increment (empty
+    /// otherwise, as is `du`).
     bulk_force: Vec<f64>,
     u_ref: Vec<f64>,
     /// Workspace: Δu = u − u_ref over all dofs.
@@ -415,6 +416,9 @@ impl<'a> Newton<'a> {
         let n_i = solver.interface_equations().len();
         let n = self.dofs.dof_count();
         let linear_bulk = problem.bulk_is_linear();
+        let by_product = linear_bulk && !problem.bulk_loads_vary();
+        // Only a linear bulk under a temperature field continues from a reference state.
+        let reference_len = if linear_bulk && !by_product { n } else { 0 };
         tracing::debug!(
             matrix_entries = self.system.pattern.nnz(),
             solver_megabytes = solver.memory_bytes() >> 20,
@@ -431,11 +435,11 @@ impl<'a> Newton<'a> {
             bulk_dirty: false,
             bulk_ready: false,
             stiffness: None,
-            bulk_force: vec![0.0; n],
-            u_ref: vec![0.0; n],
-            du: vec![0.0; n],
+            bulk_force: vec![0.0; reference_len],
+            u_ref: vec![0.0; reference_len],
+            du: vec![0.0; reference_len],
             extrapolated: false,
-            by_product: linear_bulk && !problem.bulk_loads_vary(),
+            by_product,
             states_stale: false,
         });
         Ok(t.elapsed().as_secs_f64())
