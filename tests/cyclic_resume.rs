@@ -91,11 +91,7 @@ struct Frames {
 
 impl Frames {
     fn keep(&mut self, progress: &Progress) {
-        self.resumes.push(Resume {
-            state: progress.state.clone(),
-            stats: progress.stats.clone(),
-            solution: progress.solution.clone(),
-        });
+        self.resumes.push(progress.to_resume());
     }
 }
 

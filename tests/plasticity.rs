@@ -46,6 +46,9 @@ fn thick_cylinder_yields_at_the_closed_form_pressure_and_collapses_at_p_l() {
         .support("ends", &[("uz", 0.0)])
         .support("bore", &[("ur", u_e)])
         .step_factors(&factors)
+        // From the converged state, not extrapolated: an extrapolated start converges the
+        // plastic steps before three iterations can measure the order.
+        .set("solver", "extrapolate", false)
         .case();
     let model = model(mesh, &case).unwrap();
     let mut curve = Vec::new();

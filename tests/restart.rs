@@ -151,6 +151,7 @@ fn a_record_gives_back_every_bit() {
         state: state(),
         stats: &stats,
         solution: &original,
+        last_increment: None,
     };
     writer
         .write(&path, "case text", &progress, &output, Stored)
@@ -388,11 +389,7 @@ impl asperity::solver::state::Observer for Frames {
         }
         self.frames
             .push((step.step, values, format!("{:?}", s.energy)));
-        self.resumes.push(asperity::solver::state::Resume {
-            state: progress.state.clone(),
-            stats: progress.stats.clone(),
-            solution: progress.solution.clone(),
-        });
+        self.resumes.push(progress.to_resume());
         Ok(0.0)
     }
 }

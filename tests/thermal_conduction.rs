@@ -363,11 +363,7 @@ impl asperity::solver::state::Observer for Frames {
         ];
         self.frames
             .push(values.chain(&energy).map(|v| v.to_bits()).collect());
-        self.resumes.push(asperity::solver::state::Resume {
-            state: progress.state.clone(),
-            stats: progress.stats.clone(),
-            solution: progress.solution.clone(),
-        });
+        self.resumes.push(progress.to_resume());
         Ok(0.0)
     }
 }

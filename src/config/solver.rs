@@ -50,7 +50,7 @@ pub struct SolverSpec {
     /// BiCGSTAB preconditioned with the elastic contact matrix for unsymmetric tangents).
     pub linear_solver: LinearSolverKind,
     /// Start an increment proportional to the last converged one from the displacements
-    /// extrapolated from it (default false).
+    /// extrapolated from it (default true).
     pub extrapolate: bool,
     // --- plausibility of a converged increment and collapse detection ----------
     /// Largest nodal displacement increment of a converged increment, as a fraction of the
@@ -115,8 +115,13 @@ struct RawSolverSpec {
     /// Linear solver of models with contact pairs (default `"condensed"`); models without
     /// contact always use Cholesky.
     linear_solver: LinearSolverKind,
-    /// Start an increment whose loads change in proportion to the last converged
-    /// increment's from the displacements extrapolated from it (default false).
+    /// Start an increment whose loads and prescribed displacements change in proportion to
+    /// the last converged increment's (s > 0 times its change) from the displacements
+    /// extrapolated from it, u + s Δu_last, as Abaqus does by default; otherwise (the first
+    /// increment, a reversal, a non-proportional change, after a cut-back's failed attempt)
+    /// from the converged state. An extrapolated start that already meets the criteria is
+    /// accepted without a solve (default true; false starts every increment from the
+    /// converged state).
     extrapolate: bool,
     /// Plausibility bound: a converged increment in which a node moves by more than this
     /// fraction of the model size (bounding-box diagonal) is a failed increment and is cut back
@@ -154,7 +159,7 @@ impl Default for RawSolverSpec {
             max_solves: DEFAULT_MAX_SOLVES,
             contact_algorithm: ContactAlgorithmKind::default(),
             linear_solver: LinearSolverKind::default(),
-            extrapolate: false,
+            extrapolate: true,
             max_displacement_increment: 0.1,
             max_strain_increment: 0.05,
             collapse_stiffness_ratio: 1e-2,

@@ -31,6 +31,7 @@ use crate::contact::InterfaceState;
 use crate::material::PointState;
 use crate::model::Model;
 use crate::solver::energy::EnergyLedger;
+use crate::solver::newton::LastIncrement;
 use crate::solver::shakedown::BodyCycles;
 use crate::solver::state::{
     InternalVariables, LoopState, Progress, Resume, RunStatistics, Solution,
@@ -41,8 +42,9 @@ use crate::{Error, Result};
 /// growing files' lengths and checksums instead of their rows; 5: the continuum's internal
 /// variables, the backstresses of kinematic hardening, and the energy ledger's thermal work;
 /// 6: six-component stresses and strains and three-component interface states, for twist;
-/// 7: the continuum's states left out when they follow from the displacements).
-const MAGIC: &[u8; 16] = b"asperity-rst-v7\n";
+/// 7: the continuum's states left out when they follow from the displacements; 8: the
+/// predictor's last converged increment).
+const MAGIC: &[u8; 16] = b"asperity-rst-v8\n";
 /// Bytes of [`MAGIC`] before the format version.
 const MAGIC_NAME: usize = 14;
 
@@ -146,6 +148,8 @@ struct Body<'a> {
     body_cycles: Cow<'a, BodyCycles>,
     energy: Cow<'a, EnergyLedger>,
     output: Cow<'a, OutputState>,
+    /// The predictor's last converged increment (`None` with the predictor off).
+    last_increment: Option<Cow<'a, LastIncrement>>,
 }
 
 /// Encodes the record of the converged increment `progress` into `buffer` (cleared first);
@@ -162,6 +166,7 @@ pub(super) fn encode_record(
         state,
         stats,
         solution,
+        last_increment,
     } = progress;
     let header = Header {
         version: env!("CARGO_PKG_VERSION"),
@@ -180,6 +185,7 @@ pub(super) fn encode_record(
         body_cycles: Cow::Borrowed(&solution.internal.cycles),
         energy: Cow::Borrowed(&solution.energy),
         output: Cow::Borrowed(output),
+        last_increment: last_increment.map(Cow::Borrowed),
     };
     // Encoded into memory first (a record is mostly integration-point states: ~10 MB for a
     // 60k-unknown model), then written with one call; the buffer is reused from record to
@@ -261,7 +267,16 @@ pub fn read_record(
             template.internal.committed.len(),
         ),
     ];
-    if let Some((what, found, expected)) = sizes.into_iter().find(|(_, f, e)| f != e) {
+    // The predictor's vectors are over all dofs, as the displacements are.
+    let last_increment = body.last_increment.iter().flat_map(|last| {
+        [&last.u, &last.f_ext, &last.du, &last.df]
+            .map(|v| ("last increment's dofs", v.len(), template.u.len()))
+    });
+    if let Some((what, found, expected)) = sizes
+        .into_iter()
+        .chain(last_increment)
+        .find(|(_, f, e)| f != e)
+    {
         return Err(refuse(format!(
             "the record is damaged ({found} {what}, the model has {expected})"
         )));
@@ -303,6 +318,7 @@ impl Body<'_> {
                 state: self.state.into_owned(),
                 stats: self.stats.into_owned(),
                 solution,
+                last_increment: self.last_increment.map(Cow::into_owned),
             },
             output: self.output.into_owned(),
         }
@@ -329,11 +345,16 @@ mod tests {
     }
 
     fn record(case: &str) -> Vec<u8> {
+        record_with(case, None)
+    }
+
+    fn record_with(case: &str, last_increment: Option<&LastIncrement>) -> Vec<u8> {
         let (stats, solution) = (RunStatistics::default(), solution());
         let progress = Progress {
             state: LoopState::start(),
             stats: &stats,
             solution: &solution,
+            last_increment,
         };
         let mut buffer = Vec::new();
         let output = OutputState::default();
@@ -357,6 +378,47 @@ mod tests {
             Err(Error::Restart { path: p, reason }) if p == path => reason,
             other => panic!("not refused: {other:?}"),
         }
+    }
+
+    /// The predictor's last increment comes back bit for bit (a resumed run extrapolates its
+    /// first increment as the uninterrupted run does); vectors of another size are refused.
+    #[test]
+    fn the_predictors_last_increment_comes_back_bit_for_bit() {
+        let last = LastIncrement {
+            ready: true,
+            u: vec![0.1 + 0.2, -0.0],
+            f_ext: vec![1e-300, 3.0],
+            du: vec![f64::MIN_POSITIVE, 1.0 / 7.0],
+            df: vec![0.0, -2.5],
+        };
+        let back = read_record_bytes(&record_with("case", Some(&last)));
+        let bits = |l: &LastIncrement| {
+            [&l.u, &l.f_ext, &l.du, &l.df]
+                .map(|v| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>())
+        };
+        assert_eq!(
+            back.resume.last_increment.as_ref().map(bits),
+            Some(bits(&last))
+        );
+        let without = read_record_bytes(&record("case"));
+        assert!(without.resume.last_increment.is_none());
+
+        let short = LastIncrement {
+            du: vec![1.0],
+            ..last
+        };
+        let reason = refusal(&record_with("case", Some(&short)));
+        assert!(
+            reason.contains("1 last increment's dofs, the model has 2"),
+            "{reason}"
+        );
+    }
+
+    fn read_record_bytes(bytes: &[u8]) -> Record {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("restart.bin");
+        std::fs::write(&path, bytes).unwrap();
+        read_record(&path, "case", &solution(), ContinuumStates::Stored).unwrap()
     }
 
     #[test]

@@ -50,10 +50,12 @@ pub fn run_arc_length(
         return Err(Error::ArcLengthNoLoad);
     }
     let resumed = resume.is_some();
+    // Arc-length control has its own predictor (along the path's tangent).
     let Resume {
         mut state,
         mut stats,
         mut solution,
+        last_increment: _,
     } = resume.unwrap_or_else(|| Resume::start(model));
     // A record of this case always holds the arc state (a record of another case is refused).
     let mut path = state.arc.take().unwrap_or_else(ArcState::start);
@@ -165,6 +167,7 @@ pub fn run_arc_length(
             },
             stats: &stats,
             solution: &solution,
+            last_increment: None,
         };
         stats.add_output(observer.step(&result, &progress)?, true);
     };

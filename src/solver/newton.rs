@@ -71,6 +71,7 @@ mod stiffness;
 pub use arc::{ArcConverged, ArcIncrement};
 pub use criteria::{Criteria, ForceAverage};
 use criteria::{Flux, FluxHistory, Measures};
+pub use predictor::LastIncrement;
 use predictor::Predictor;
 use stiffness::BulkStiffness;
 
@@ -581,6 +582,18 @@ impl<'a> Newton<'a> {
     /// Continues the time average of q̃ of an interrupted run.
     pub fn restore_force_average(&mut self, average: ForceAverage) {
         self.flux_history.past = average;
+    }
+
+    /// The last converged increment the predictor extrapolates from (`None` with the predictor
+    /// off): what a restart record keeps of it.
+    pub fn last_increment(&self) -> Option<&LastIncrement> {
+        self.settings.extrapolate.then(|| self.predictor.last())
+    }
+
+    /// Continues the predictor of an interrupted run from its `last` converged increment
+    /// (read back with this model's sizes, [`crate::output::restart::read_record`]).
+    pub fn restore_last_increment(&mut self, last: LastIncrement) {
+        self.predictor.restore(last);
     }
 
     pub fn solve_increment(

@@ -21,7 +21,7 @@ use crate::solver::cycles;
 use crate::solver::energy::{EnergyLedger, Increment};
 use crate::solver::floor::Work;
 use crate::solver::mechanics::Mechanics;
-use crate::solver::newton::{ForceAverage, NewtonLog};
+use crate::solver::newton::{ForceAverage, LastIncrement, NewtonLog};
 use crate::solver::shakedown::BodyCycles;
 use crate::thermal::ThermalState;
 
@@ -419,6 +419,9 @@ pub struct Resume {
     pub stats: RunStatistics,
     /// Displacements and committed states (trial states are made equal to them).
     pub solution: Solution,
+    /// The converged increment the predictor extrapolates the next one from (load control
+    /// with `extrapolate` on).
+    pub last_increment: Option<LastIncrement>,
 }
 
 impl Resume {
@@ -428,6 +431,7 @@ impl Resume {
             state: LoopState::start(),
             stats: RunStatistics::default(),
             solution: Solution::new(model),
+            last_increment: None,
         }
     }
 }
@@ -438,6 +442,20 @@ pub struct Progress<'a> {
     pub state: LoopState,
     pub stats: &'a RunStatistics,
     pub solution: &'a Solution,
+    /// The predictor's last converged increment ([`Resume::last_increment`]).
+    pub last_increment: Option<&'a LastIncrement>,
+}
+
+impl Progress<'_> {
+    /// The state a run continues from after this increment (what a restart record holds).
+    pub fn to_resume(&self) -> Resume {
+        Resume {
+            state: self.state.clone(),
+            stats: self.stats.clone(),
+            solution: self.solution.clone(),
+            last_increment: self.last_increment.cloned(),
+        }
+    }
 }
 
 /// What a driver reports to its caller (the output): converged steps, converged

@@ -74,8 +74,12 @@ pub fn run_steps_from(
         mut state,
         mut stats,
         mut solution,
+        last_increment,
     } = resume.unwrap_or_else(|| Resume::start(model));
     newton.restore_force_average(state.force_average);
+    if let Some(last) = last_increment {
+        newton.restore_last_increment(last);
+    }
     solution.reset_trial();
     coupling::start_temperatures(model, &mut solution, state.time)?;
     stats.add_work(&start_newton(model, &mut newton, &mut solution, resumed)?);
@@ -160,6 +164,7 @@ pub fn run_steps_from(
                         state: state.clone(),
                         stats: &stats,
                         solution: &solution,
+                        last_increment: newton.last_increment(),
                     };
                     observer.increment(&progress)?;
                 }
@@ -309,6 +314,7 @@ pub fn run_steps_from(
             state: state.clone(),
             stats: &stats,
             solution: &solution,
+            last_increment: newton.last_increment(),
         };
         stats.add_output(observer.step(&result, &progress)?, true);
     }

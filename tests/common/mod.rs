@@ -31,6 +31,7 @@ pub fn through_record(
         state: resume.state.clone(),
         stats: &resume.stats,
         solution: &resume.solution,
+        last_increment: resume.last_increment.as_ref(),
     };
     let states = ContinuumStates::of(model);
     writer

@@ -12,16 +12,25 @@ use crate::assembly::DofMap;
 /// the stick–slip switching of the first iterations.
 #[derive(Debug)]
 pub(super) struct Predictor {
-    /// Whether `du` and `df` hold a converged increment that ended in `u`, `f_ext`.
-    pub(super) ready: bool,
-    /// Whether `u`, `f_ext` are the state the current increment started from.
+    /// Whether `last.u`, `last.f_ext` are the state the current increment started from.
     pub(super) anchored: bool,
-    /// Displacements and external forces (all dofs) at the end of the last converged increment.
-    pub(super) u: Vec<f64>,
-    pub(super) f_ext: Vec<f64>,
-    /// Their changes over that increment.
-    pub(super) du: Vec<f64>,
-    pub(super) df: Vec<f64>,
+    pub(super) last: LastIncrement,
+}
+
+/// The last converged increment as the predictor keeps it: where it ended and what changed
+/// over it. A restart record holds it (when the predictor is on), so that a resumed run
+/// extrapolates its first increment as the uninterrupted run would.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LastIncrement {
+    /// Whether `du` and `df` are the changes of a converged increment that started where
+    /// the one before it ended (else only `u` and `f_ext` are set).
+    pub ready: bool,
+    /// Displacements and external forces (all dofs) at its end.
+    pub u: Vec<f64>,
+    pub f_ext: Vec<f64>,
+    /// Their changes over it.
+    pub du: Vec<f64>,
+    pub df: Vec<f64>,
 }
 
 /// Relative tolerance of the proportionality of two load changes (they come from the same
@@ -32,13 +41,26 @@ impl Predictor {
     /// A record of the unloaded state u = 0 with `n` dofs.
     pub(super) fn new(n: usize) -> Self {
         Self {
-            ready: false,
             anchored: true,
-            u: vec![0.0; n],
-            f_ext: vec![0.0; n],
-            du: vec![0.0; n],
-            df: vec![0.0; n],
+            last: LastIncrement {
+                ready: false,
+                u: vec![0.0; n],
+                f_ext: vec![0.0; n],
+                du: vec![0.0; n],
+                df: vec![0.0; n],
+            },
         }
+    }
+
+    /// The last converged increment (the unloaded state before the first).
+    pub(super) fn last(&self) -> &LastIncrement {
+        &self.last
+    }
+
+    /// Continues from `last`, the converged increment of an interrupted run (of this size).
+    pub(super) fn restore(&mut self, last: LastIncrement) {
+        self.last = last;
+        self.anchored = true;
     }
 
     /// Starts an increment from `u` (prescribed dofs already at their new values) with the
@@ -46,13 +68,14 @@ impl Predictor {
     /// proportional to the last converged one. Returns s (0: no prediction).
     pub(super) fn predict(&mut self, dofs: &DofMap, u: &mut [f64], f_ext: &[f64]) -> f64 {
         let free = |d: usize| dofs.equation(d).is_some();
-        self.anchored = (0..u.len()).all(|d| !free(d) || u[d] == self.u[d]);
-        if !(self.ready && self.anchored) {
+        let last = &self.last;
+        self.anchored = (0..u.len()).all(|d| !free(d) || u[d] == last.u[d]);
+        if !(last.ready && self.anchored) {
             return 0.0;
         }
         let prescribed = (0..u.len()).filter(|&d| !free(d));
-        let s_u = proportion(prescribed.map(|d| (u[d] - self.u[d], self.du[d])));
-        let s_f = proportion((0..u.len()).map(|d| (f_ext[d] - self.f_ext[d], self.df[d])));
+        let s_u = proportion(prescribed.map(|d| (u[d] - last.u[d], last.du[d])));
+        let s_f = proportion((0..u.len()).map(|d| (f_ext[d] - last.f_ext[d], last.df[d])));
         let s = match (s_u, s_f) {
             (Some(Some(a)), Some(Some(b))) if (a - b).abs() <= PROPORTIONAL * a.abs() => a,
             (Some(Some(a)), None) | (None, Some(Some(a))) => a,
@@ -64,7 +87,7 @@ impl Predictor {
         }
         for (d, x) in u.iter_mut().enumerate() {
             if free(d) {
-                *x += s * self.du[d];
+                *x += s * last.du[d];
             }
         }
         s
@@ -72,22 +95,23 @@ impl Predictor {
 
     /// Records the converged increment that ended in `u` under `f_ext`.
     pub(super) fn record(&mut self, u: &[f64], f_ext: &[f64]) {
+        let last = &mut self.last;
         if self.anchored {
-            for (((du, df), (x, f)), (x0, f0)) in self
+            for (((du, df), (x, f)), (x0, f0)) in last
                 .du
                 .iter_mut()
-                .zip(self.df.iter_mut())
+                .zip(last.df.iter_mut())
                 .zip(u.iter().zip(f_ext))
-                .zip(self.u.iter().zip(&self.f_ext))
+                .zip(last.u.iter().zip(&last.f_ext))
             {
                 *du = x - x0;
                 *df = f - f0;
             }
         }
-        self.ready = self.anchored;
+        last.ready = self.anchored;
         self.anchored = true;
-        self.u.copy_from_slice(u);
-        self.f_ext.copy_from_slice(f_ext);
+        last.u.copy_from_slice(u);
+        last.f_ext.copy_from_slice(f_ext);
     }
 }
 
