@@ -117,6 +117,22 @@ impl Grid {
         self.cell_types.push(vtk_type);
     }
 
+    /// Bytes of memory its arrays hold (points, cells and the values of its fields).
+    pub fn heap_bytes(&self) -> usize {
+        let fields = self.point_data.iter().chain(&self.cell_data);
+        let values: usize = fields
+            .map(|f| match &f.values {
+                FieldValues::F64(v) => v.len() * size_of::<f64>(),
+                FieldValues::I32(v) => v.len() * size_of::<i32>(),
+                FieldValues::Str(v) => v.iter().map(String::len).sum(),
+            })
+            .sum();
+        self.points.len() * size_of::<[f64; 2]>()
+            + (self.connectivity.len() + self.offsets.len()) * size_of::<u64>()
+            + self.cell_types.len()
+            + values
+    }
+
     /// Number of cells.
     pub fn cell_count(&self) -> usize {
         self.cell_types.len()

@@ -35,6 +35,18 @@ pub enum Content {
 }
 
 impl Content {
+    /// Bytes of memory the content holds (its arrays; names and small indexes left out).
+    fn heap_bytes(&self) -> usize {
+        match self {
+            Content::Vtu(grid) => grid.heap_bytes(),
+            Content::Csv(table) => table.rows.len() * table.columns.len() * size_of::<f64>(),
+            Content::Table(table) => table.rows.len() * table.columns.len() * size_of::<Cell>(),
+            Content::Record(bytes) | Content::Text(bytes) => bytes.len(),
+            Content::Append(append) => append.bytes.len(),
+            Content::Pvd(_) | Content::Vtm(_) => 0,
+        }
+    }
+
     /// Writes the file, a VTU file through `buffer` (the writer thread's, reused).
     fn write(&self, path: &Path, buffer: &mut Vec<u8>) -> Result<()> {
         match self {
@@ -56,6 +68,13 @@ const MAX_WAITING_FILES: usize = 32;
 
 /// Bytes of rows that may wait to be appended before a commit waits for the writer thread.
 const MAX_APPENDED: usize = 16 << 20;
+
+/// Bytes of content (grids, tables, the record) that may wait for the writer thread before a
+/// commit waits for it: a step's files at tens of thousands of unknowns (~10 MB) wait, a
+/// million-unknown step's (~150 MB of grids) does not. Once the thread is slower than the
+/// solver, a second such step waiting would add its size to the run's peak memory and save
+/// nothing: the run goes at the thread's pace either way.
+const MAX_WAITING_BYTES: usize = 64 << 20;
 
 /// Writes a run's committed files in the background: the files of a converged step (VTU,
 /// CSV), the restart record of a converged increment (`case` is the case file's text, which
@@ -95,6 +114,8 @@ pub struct RecordWriter {
     worker: Option<Worker>,
     /// Whether a commit is being written (its outcome not yet received).
     in_flight: bool,
+    /// Bytes of memory the commit in flight holds.
+    in_flight_bytes: usize,
     /// A record buffer to encode into: reusing it spares the page faults of ~10 MB of
     /// fresh memory per record.
     spare: Vec<u8>,
@@ -178,7 +199,10 @@ impl RecordWriter {
         }
         self.merge(files);
         if self.in_flight && !self.poll()? {
-            if self.waiting.len() <= MAX_WAITING_FILES && self.waiting_appends() <= MAX_APPENDED {
+            if self.waiting.len() <= MAX_WAITING_FILES
+                && self.waiting_appends() <= MAX_APPENDED
+                && self.waiting_bytes() <= MAX_WAITING_BYTES
+            {
                 return Ok(());
             }
             // Files that no later commit replaces (each step's VTU and contact tables) and
@@ -230,12 +254,18 @@ impl RecordWriter {
         appends.sum()
     }
 
+    /// Bytes of memory the waiting files hold.
+    fn waiting_bytes(&self) -> usize {
+        self.waiting.iter().map(|(_, c)| c.heap_bytes()).sum()
+    }
+
     /// Hands the waiting files, if any, to the writer thread (started at the first commit).
     fn send_waiting(&mut self) {
         let files = std::mem::take(&mut self.waiting);
         if files.is_empty() {
             return;
         }
+        self.in_flight_bytes = files.iter().map(|(_, c)| c.heap_bytes()).sum();
         let worker = self.worker.get_or_insert_with(Worker::start);
         if worker.commits.send(files).is_err() {
             // The thread is gone, which only a panic does.
@@ -252,6 +282,18 @@ impl RecordWriter {
             bytes.clear();
             self.spare = bytes;
         }
+    }
+
+    /// To be called before making a step's files: waits for the commit in flight if it holds
+    /// more than [`MAX_WAITING_BYTES`] (a million-unknown step's grids), so that no more than
+    /// one such step is in memory at a time, then hands the thread the files waiting behind
+    /// it. Smaller commits are left to overlap the next ones.
+    pub fn make_room(&mut self) -> Result<()> {
+        if self.in_flight && self.in_flight_bytes > MAX_WAITING_BYTES && !self.poll()? {
+            self.wait()?;
+            self.send_waiting();
+        }
+        Ok(())
     }
 
     /// Queues and commits the record of a converged increment.
@@ -431,6 +473,30 @@ mod tests {
         );
         assert!(matches!(&writer.waiting[2].1, Content::Record(b) if b == &[2]));
         writer.waiting.clear();
+    }
+
+    /// A commit larger than [`MAX_WAITING_BYTES`] never waits behind another, and
+    /// `make_room` returns only once such a commit is written: at most one is in memory.
+    #[test]
+    fn a_large_commit_is_written_before_the_next_large_step_is_made() {
+        let dir = tempfile::tempdir().unwrap();
+        let large = || Content::Record(vec![7; MAX_WAITING_BYTES + 1]);
+        let mut writer = RecordWriter::default();
+        writer.queue(dir.path().join("a.bin"), large());
+        writer.commit().unwrap();
+        assert!(writer.in_flight && writer.in_flight_bytes > MAX_WAITING_BYTES);
+        writer.queue(dir.path().join("b.bin"), large());
+        writer.commit().unwrap();
+        // The second did not wait behind the first: the first was written, the second sent.
+        assert!(writer.waiting.is_empty());
+        assert_eq!(
+            std::fs::metadata(dir.path().join("a.bin")).unwrap().len() as usize,
+            MAX_WAITING_BYTES + 1
+        );
+        writer.make_room().unwrap();
+        assert!(!writer.in_flight && writer.waiting.is_empty());
+        assert!(dir.path().join("b.bin").exists());
+        writer.finish().unwrap();
     }
 
     #[test]

@@ -343,6 +343,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         let start = Instant::now();
         let mut entries = Vec::new();
         if self.vtu && fields {
+            self.out.records.make_room()?;
             let info = StepInfo {
                 step: step.step,
                 time,
