@@ -75,6 +75,7 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::linalg::{SupernodalThreshold, SymbolicSupernodalParams};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
+use std::sync::Mutex;
 
 use crate::assembly::SparsityPattern;
 use crate::solver::interface_lu::InterfaceLu;
@@ -231,6 +232,9 @@ pub struct CondensedSolver {
     schur_in_factor: Option<usize>,
     /// Dense LU of S_c + K_if.
     dense: InterfaceLu,
+    /// The gather buffers of the backward substitution's parallel tasks, kept from solve to
+    /// solve.
+    backward_gathers: Mutex<Vec<Vec<f64>>>,
     /// Right-hand side / solution in elimination order, and a gather buffer.
     x: Vec<f64>,
     gather: Vec<f64>,
@@ -519,6 +523,7 @@ impl CondensedSolver {
             )?,
             x: vec![0.0; n],
             gather: vec![0.0; gather_len],
+            backward_gathers: Mutex::new(Vec::new()),
             par,
             tree,
             symbolic,
@@ -1111,7 +1116,15 @@ impl CondensedSolver {
         }
         // Now x_I = r_I − K_IB K_BB⁻¹ r_B, the condensed right-hand side.
         self.dense.solve_in_place(&mut self.x[n_bulk..]);
-        backward_bulk(llt, n_bulk, &mut self.x, &mut self.gather);
+        let gathers = &self.backward_gathers;
+        backward_bulk(
+            llt,
+            &self.tree,
+            n_bulk,
+            &mut self.x,
+            gathers,
+            self.gather.len(),
+        );
     }
 
     /// The solve of [`Self::solve_in_place`] in elimination order (in `self.x`) with the
@@ -1291,45 +1304,98 @@ fn forward_bulk(
 }
 
 /// Backward substitution with the bulk columns of the factor, x_I holding the interface
-/// solution: x_B ← L_BB⁻ᵀ (x_B − L_IBᵀ x_I).
+/// solution: x_B ← L_BB⁻ᵀ (x_B − L_IBᵀ x_I). Sibling subtrees of the elimination tree share
+/// no columns, so they run as parallel tasks ([`TreeCholesky::top_down`]), each supernode
+/// after its ancestors; every supernode is computed by the same operations whichever task
+/// runs it, so the result has the same bits on any number of threads. `gathers`: the tasks'
+/// gather buffers (`gather_len`, the longest row pattern of a supernode, each).
 fn backward_bulk(
     llt: SupernodalLltRef<'_, u32, f64>,
+    tree: &TreeCholesky,
     n_bulk: usize,
     x: &mut [f64],
+    gathers: &Mutex<Vec<Vec<f64>>>,
+    gather_len: usize,
+) {
+    let bulk = bulk_supernodes(llt.symbolic(), n_bulk);
+    let shared = SharedSolution(x.as_mut_ptr());
+    tree.top_down(
+        gathers,
+        || vec![0.0; gather_len],
+        |s, gather| {
+            if s < bulk {
+                backward_supernode(llt, s, n_bulk, shared, gather);
+            }
+        },
+    );
+}
+
+/// The solution vector of a backward substitution, shared by its tasks: each writes the
+/// columns of its own supernodes and reads those of their ancestors, which are final by
+/// then ([`TreeCholesky::top_down`] visits a supernode after its parent).
+#[derive(Clone, Copy)]
+struct SharedSolution(*mut f64);
+// SAFETY: the tasks write disjoint columns (their supernodes') and read only columns no task
+// writes any more (their ancestors', see `backward_supernode`).
+unsafe impl Send for SharedSolution {}
+unsafe impl Sync for SharedSolution {}
+
+impl SharedSolution {
+    /// The pointer. A method (not a field access) so that closures capture the whole
+    /// `Sync` wrapper rather than the bare pointer.
+    #[inline]
+    fn get(self) -> *mut f64 {
+        self.0
+    }
+}
+
+/// The backward substitution of bulk supernode `s` in `x` (see [`backward_bulk`]).
+fn backward_supernode(
+    llt: SupernodalLltRef<'_, u32, f64>,
+    s: usize,
+    n_bulk: usize,
+    x: SharedSolution,
     gather: &mut [f64],
 ) {
-    let symbolic = llt.symbolic();
-    for s in (0..bulk_supernodes(symbolic, n_bulk)).rev() {
-        let node = llt.supernode(s);
-        let (start, ls, pattern) = (node.start(), node.val(), node.pattern());
-        let width = ls.ncols();
-        let k = width.min(n_bulk - start);
-        let m = pattern.len();
+    let node = llt.supernode(s);
+    let (start, ls, pattern) = (node.start(), node.val(), node.pattern());
+    let width = ls.ncols();
+    let k = width.min(n_bulk - start);
+    let m = pattern.len();
+    let x = x.get();
+    // SAFETY: the rows of `pattern` and the interface columns of a supernode straddling the
+    // border (after its bulk columns) belong to ancestors of `s`, solved before it and
+    // written by no task any more; its own bulk columns `start..start + k` are written by
+    // this call alone. All lie within the solution vector of the factor's order.
+    let (x_top, tail) = unsafe {
         for (g, &row) in gather[..m].iter_mut().zip(pattern) {
-            *g = x[row as usize];
+            *g = *x.add(row as usize);
         }
-        let (head, tail) = x.split_at_mut(start + k);
-        let mut x_top = MatMut::from_column_major_slice_mut(&mut head[start..], k, 1);
+        (
+            std::slice::from_raw_parts_mut(x.add(start), k),
+            std::slice::from_raw_parts(x.add(start + k), width - k),
+        )
+    };
+    let mut x_top = MatMut::from_column_major_slice_mut(x_top, k, 1);
+    matmul(
+        x_top.rb_mut(),
+        Accum::Add,
+        ls.submatrix(width, 0, m, k).transpose(),
+        MatRef::from_column_major_slice(&gather[..m], m, 1),
+        -1.0,
+        Par::Seq,
+    );
+    if k < width {
         matmul(
             x_top.rb_mut(),
             Accum::Add,
-            ls.submatrix(width, 0, m, k).transpose(),
-            MatRef::from_column_major_slice(&gather[..m], m, 1),
+            ls.submatrix(k, 0, width - k, k).transpose(),
+            MatRef::from_column_major_slice(tail, width - k, 1),
             -1.0,
             Par::Seq,
         );
-        if k < width {
-            matmul(
-                x_top.rb_mut(),
-                Accum::Add,
-                ls.submatrix(k, 0, width - k, k).transpose(),
-                MatRef::from_column_major_slice(&tail[..width - k], width - k, 1),
-                -1.0,
-                Par::Seq,
-            );
-        }
-        solve_upper_triangular_in_place(ls.submatrix(0, 0, k, k).transpose(), x_top, Par::Seq);
     }
+    solve_upper_triangular_in_place(ls.submatrix(0, 0, k, k).transpose(), x_top, Par::Seq);
 }
 
 #[cfg(test)]

@@ -287,6 +287,31 @@ impl TreeCholesky {
         count
     }
 
+    /// Calls `visit(s, scratch)` for every supernode s after its parent (a backward
+    /// substitution's order: s reads the solution of its ancestors' columns and writes its
+    /// own), running sibling subtrees as parallel tasks as [`Self::factorize`] does, each
+    /// task with a scratch taken from `pool` (made by `make` when the pool is empty, given
+    /// back at the task's end: the solves after the first allocate nothing) and its
+    /// subtree's supernodes in decreasing order. Without a schedule (supernodes not in
+    /// postorder) one task visits them all in decreasing order, which is after their parents
+    /// too.
+    pub(crate) fn top_down<S: Send>(
+        &self,
+        pool: &Mutex<Vec<S>>,
+        make: impl Fn() -> S + Sync,
+        visit: impl Fn(usize, &mut S) + Sync,
+    ) {
+        let walk = TopDown {
+            pool,
+            make: &make,
+            visit: &visit,
+        };
+        match &self.schedule {
+            Some(schedule) => walk.forest(schedule, &schedule.roots),
+            None => walk.task((0..self.parent.len()).rev()),
+        }
+    }
+
     /// Scratch for one task: from the pool, or new.
     fn take_scratch(&self, n: usize) -> Scratch {
         if let Some(s) = self.pool.lock().expect("scratch pool").pop() {
@@ -417,6 +442,44 @@ impl Schedule {
             work,
             grain,
         })
+    }
+}
+
+/// A walk of [`TreeCholesky::top_down`].
+struct TopDown<'a, S, F, V> {
+    pool: &'a Mutex<Vec<S>>,
+    make: &'a F,
+    visit: &'a V,
+}
+
+impl<S: Send, F: Fn() -> S + Sync, V: Fn(usize, &mut S) + Sync> TopDown<'_, S, F, V> {
+    /// The subtrees of `roots`, as parallel tasks.
+    fn forest(&self, schedule: &Schedule, roots: &[u32]) {
+        match roots {
+            [r] => self.subtree(schedule, *r as usize),
+            _ => roots
+                .par_iter()
+                .for_each(|&r| self.subtree(schedule, r as usize)),
+        }
+    }
+
+    /// The subtree of `s`: one task below the schedule's grain, else `s` and then its
+    /// children's subtrees.
+    fn subtree(&self, schedule: &Schedule, s: usize) {
+        if schedule.work[s] < schedule.grain {
+            return self.task((schedule.first[s] as usize..=s).rev());
+        }
+        self.task(std::iter::once(s));
+        let kids = schedule.child_ptr[s] as usize..schedule.child_ptr[s + 1] as usize;
+        self.forest(schedule, &schedule.children[kids]);
+    }
+
+    /// Visits `supernodes` in one task, with a scratch of the pool.
+    fn task(&self, supernodes: impl Iterator<Item = usize>) {
+        let taken = self.pool.lock().expect("scratch pool").pop();
+        let mut scratch = taken.unwrap_or_else(self.make);
+        supernodes.for_each(|t| (self.visit)(t, &mut scratch));
+        self.pool.lock().expect("scratch pool").push(scratch);
     }
 }
 
@@ -969,6 +1032,59 @@ mod tests {
         );
         let residual = &sym * &x - &b;
         assert!(residual.norm_max() <= 1e-12 * b.norm_max());
+    }
+
+    /// `top_down` visits every supernode exactly once and each after its parent, with the
+    /// schedule on one and two threads and without it.
+    #[test]
+    fn top_down_visits_every_supernode_once_after_its_parent() {
+        let (_, symbolic) = grid_case(40, 30);
+        let s = supernodal(&symbolic);
+        let order_on = |threads: usize, scheduled: bool| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let mut tree = TreeCholesky::new(s, threads);
+                if !scheduled {
+                    tree.schedule = None;
+                }
+                let visits = Mutex::new(Vec::new());
+                // Each task's scratch counts the supernodes it visits.
+                let pool = Mutex::new(Vec::new());
+                tree.top_down(
+                    &pool,
+                    || 0usize,
+                    |t, count| {
+                        visits.lock().unwrap().push(t);
+                        *count += 1;
+                    },
+                );
+                let tasks = pool.into_inner().unwrap().len();
+                (tree, visits.into_inner().unwrap(), tasks)
+            })
+        };
+        for (threads, scheduled) in [(1, true), (2, true), (2, false)] {
+            let (tree, order, tasks) = order_on(threads, scheduled);
+            let mut when = vec![usize::MAX; s.n_supernodes()];
+            for (k, &t) in order.iter().enumerate() {
+                assert_eq!(when[t], usize::MAX, "supernode {t} visited twice");
+                when[t] = k;
+            }
+            assert!(
+                when.iter().all(|&k| k != usize::MAX),
+                "a supernode not visited"
+            );
+            for (t, &p) in tree.parent.iter().enumerate() {
+                if p != NONE {
+                    assert!(when[p as usize] < when[t], "{t} before its parent {p}");
+                }
+            }
+            // With the schedule the tree is cut into several tasks, whose scratches the pool
+            // keeps (as many as ran at once: at least one).
+            assert!(tasks >= 1, "{tasks} scratches");
+        }
     }
 
     #[test]
