@@ -465,12 +465,17 @@ impl GlobalSystem {
     /// Zeroes the matrix values (if `with_tangent`) and the internal force.
     pub fn clear(&mut self, with_tangent: bool) {
         if with_tangent {
-            self.values.fill(0.0);
-            if let Some(r) = &mut self.reference {
-                r.off_reference_current = false;
-            }
+            self.clear_values();
         }
         self.internal_force.fill(0.0);
+    }
+
+    /// Zeroes the matrix values alone.
+    pub fn clear_values(&mut self) {
+        self.values.fill(0.0);
+        if let Some(r) = &mut self.reference {
+            r.off_reference_current = false;
+        }
     }
 
     /// The assembled matrix as a faer view.
@@ -540,7 +545,9 @@ impl GlobalSystem {
     /// all elements' reference matrices is made by the first call and kept; a tangent
     /// assembly is K_ref plus k_e − k_ref,e of the elements whose trial tangent is not their
     /// reference one, and evaluates the others ("frozen") for their forces and states only.
-    /// The result depends on the trial states alone, not on earlier assemblies (a resumed
+    /// Unlike [`Self::assemble`], a tangent assembly sets the matrix values (whatever they
+    /// held) rather than adding to them; the forces are added. The result depends on the
+    /// trial states alone, not on earlier assemblies (a resumed
     /// run repeats the uninterrupted one bit for bit), and equals [`Self::assemble`]'s up to
     /// rounding. Meant for one set per system (K_ref is made again if another set's size is
     /// seen); the first call allocates K_ref (one value array) and the flags.
@@ -580,8 +587,10 @@ impl GlobalSystem {
                 })
             }
         };
+        // The values are set, not added to: 0 + K_ref, the bits of K_ref added to a cleared
+        // matrix, in one pass over it instead of two.
         for (v, r) in self.values.iter_mut().zip(&reference.values) {
-            *v += r;
+            *v = 0.0 + r;
         }
         let targets = Targets {
             values: Some(SharedMut(self.values.as_mut_ptr())),

@@ -204,6 +204,9 @@ impl Problem for Mechanics<'_> {
         let m = self.model;
         let (bodies, cc, ct) = self.bodies();
         if !bodies.has_history() && m.continuum.is_linear() {
+            if input.tangent {
+                system.clear_values();
+            }
             system.assemble(input, &bodies, &m.continuum_coloring, cc, ct);
         } else {
             system.assemble_reusing(input, &bodies, &m.continuum_coloring, cc, ct);

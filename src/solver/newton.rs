@@ -162,7 +162,8 @@ pub trait Problem {
         true
     }
 
-    /// Adds the bulk's internal force (and, if `input.tangent`, its tangent) into `system`.
+    /// Adds the bulk's internal force into `system` and, if `input.tangent`, sets its matrix
+    /// values to the bulk's tangent (whatever they held: no need to clear them first).
     fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput);
 
     /// Evaluates the bulk's trial states at `input.u` alone (no force, no tangent): those of
@@ -488,7 +489,9 @@ impl<'a> Newton<'a> {
         let system = &mut self.system;
         c.extrapolated = false;
         if !c.linear_bulk {
-            system.clear(tangent);
+            // The bulk's tangent assembly sets the matrix (a plastic bulk's from its kept
+            // elastic sum in one pass, without zeroing it first).
+            system.clear(false);
             problem.assemble_bulk(system, &input);
             bulk_work.since(t);
             if tangent {
