@@ -206,20 +206,21 @@ impl<'a> StoredIncrement<'a> {
     }
 
     /// The increment read back for a record whose displacements are `u`, or `None` if its
-    /// vectors are not all of `u`'s length (a damaged record).
+    /// vectors are not all of `u`'s length (a damaged record; checked before anything of
+    /// the stated length is allocated).
     fn into_last(self, u: &[f64]) -> Option<LastIncrement> {
-        let last = LastIncrement {
+        let n = u.len();
+        let own_u = self.u.as_ref().is_none_or(|v| v.len() == n);
+        if !(own_u && self.du.len() == n && self.f_ext.len == n && self.df.len == n) {
+            return None;
+        }
+        Some(LastIncrement {
             ready: self.ready,
             u: self.u.map_or_else(|| u.to_vec(), Cow::into_owned),
             du: self.du.into_owned(),
             f_ext: self.f_ext.to_vec()?,
             df: self.df.to_vec()?,
-        };
-        let n = u.len();
-        [&last.u, &last.du, &last.f_ext, &last.df]
-            .iter()
-            .all(|v| v.len() == n)
-            .then_some(last)
+        })
     }
 }
 
@@ -482,13 +483,19 @@ mod tests {
 
         let short = LastIncrement {
             du: vec![1.0],
+            ..last.clone()
+        };
+        let long_loads = LastIncrement {
+            f_ext: vec![1.0; 3],
             ..last
         };
-        let reason = refusal(&record_with("case", Some(&short)));
-        assert!(
-            reason.contains("last increment is not of the model's dofs"),
-            "{reason}"
-        );
+        for wrong in [short, long_loads] {
+            let reason = refusal(&record_with("case", Some(&wrong)));
+            assert!(
+                reason.contains("last increment is not of the model's dofs"),
+                "{reason}"
+            );
+        }
     }
 
     fn read_record_bytes(bytes: &[u8]) -> Record {
