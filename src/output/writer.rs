@@ -285,9 +285,9 @@ impl RecordWriter {
     }
 
     /// To be called before making a step's files: waits for the commit in flight if it holds
-    /// more than [`MAX_WAITING_BYTES`] (a million-unknown step's grids), so that no more than
-    /// one such step is in memory at a time, then hands the thread the files waiting behind
-    /// it. Smaller commits are left to overlap the next ones.
+    /// more than `MAX_WAITING_BYTES` (64 MiB: a million-unknown step's grids), so that no
+    /// more than one such step is in memory at a time, then hands the thread the files
+    /// waiting behind it. Smaller commits are left to overlap the next ones.
     pub fn make_room(&mut self) -> Result<()> {
         if self.in_flight && self.in_flight_bytes > MAX_WAITING_BYTES && !self.poll()? {
             self.wait()?;
