@@ -368,12 +368,13 @@ struct Reference {
     off_reference_current: bool,
 }
 
-/// A raw pointer that may be shared between threads; writes through it are made disjoint by
-/// the element colouring (see [`GlobalSystem::assemble`]).
+/// A raw pointer that may be shared between threads; its users make the writes through it
+/// disjoint (the element colouring of [`GlobalSystem::assemble`]; the subtrees of the
+/// condensed solver's backward substitution).
 #[derive(Clone, Copy)]
-struct SharedMut<T>(*mut T);
-// SAFETY: only used to write locations that the colouring guarantees no other thread
-// touches at the same time.
+pub(crate) struct SharedMut<T>(pub(crate) *mut T);
+// SAFETY: only used to write locations that no other thread touches at the same time (the
+// users' disjointness argument is at each use).
 unsafe impl<T: Send> Send for SharedMut<T> {}
 unsafe impl<T: Send> Sync for SharedMut<T> {}
 
@@ -381,7 +382,7 @@ impl<T> SharedMut<T> {
     /// The pointer. A method (not a field access) so that closures capture the whole
     /// `Sync` wrapper rather than the bare pointer.
     #[inline]
-    fn get(self) -> *mut T {
+    pub(crate) fn get(self) -> *mut T {
         self.0
     }
 }

@@ -77,7 +77,7 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRe
 use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 use std::sync::Mutex;
 
-use crate::assembly::SparsityPattern;
+use crate::assembly::{SharedMut, SparsityPattern};
 use crate::solver::interface_lu::InterfaceLu;
 use crate::solver::linear::SparseLu;
 use crate::solver::tree_cholesky::TreeCholesky;
@@ -1318,7 +1318,9 @@ fn backward_bulk(
     gather_len: usize,
 ) {
     let bulk = bulk_supernodes(llt.symbolic(), n_bulk);
-    let shared = SharedSolution(x.as_mut_ptr());
+    // Shared by the tasks: each writes the columns of its own supernodes and reads those of
+    // their ancestors, final by then (`top_down` visits a supernode after its parent).
+    let shared = SharedMut(x.as_mut_ptr());
     tree.top_down(
         gathers,
         || vec![0.0; gather_len],
@@ -1330,31 +1332,12 @@ fn backward_bulk(
     );
 }
 
-/// The solution vector of a backward substitution, shared by its tasks: each writes the
-/// columns of its own supernodes and reads those of their ancestors, which are final by
-/// then ([`TreeCholesky::top_down`] visits a supernode after its parent).
-#[derive(Clone, Copy)]
-struct SharedSolution(*mut f64);
-// SAFETY: the tasks write disjoint columns (their supernodes') and read only columns no task
-// writes any more (their ancestors', see `backward_supernode`).
-unsafe impl Send for SharedSolution {}
-unsafe impl Sync for SharedSolution {}
-
-impl SharedSolution {
-    /// The pointer. A method (not a field access) so that closures capture the whole
-    /// `Sync` wrapper rather than the bare pointer.
-    #[inline]
-    fn get(self) -> *mut f64 {
-        self.0
-    }
-}
-
 /// The backward substitution of bulk supernode `s` in `x` (see [`backward_bulk`]).
 fn backward_supernode(
     llt: SupernodalLltRef<'_, u32, f64>,
     s: usize,
     n_bulk: usize,
-    x: SharedSolution,
+    x: SharedMut<f64>,
     gather: &mut [f64],
 ) {
     let node = llt.supernode(s);

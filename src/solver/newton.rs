@@ -123,9 +123,10 @@ impl NewtonSettings {
 
 /// A problem the Newton loop can solve: it assembles internal forces and the tangent.
 pub trait Problem {
-    /// Assembles the internal force over all dofs (and the tangent over the free dofs if
-    /// `input.tangent`) into the cleared `system` at the displacements `input.u`, updating
-    /// trial states. Returns whether the tangent is symmetric.
+    /// Adds the internal force over all dofs into `system` (its forces cleared) and, if
+    /// `input.tangent`, sets its matrix values to the tangent over the free dofs (whatever
+    /// they held), at the displacements `input.u`, updating trial states. Returns whether
+    /// the tangent is symmetric.
     fn assemble(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) -> bool;
 
     /// The free equations of the interface elements' nodes, sorted: empty if the problem has
@@ -477,7 +478,8 @@ impl<'a> Newton<'a> {
         };
         let t = Instant::now();
         let Some(c) = self.condensed.as_mut() else {
-            self.system.clear(tangent);
+            // The assembly sets the matrix values (the bulk's first): forces alone are cleared.
+            self.system.clear(false);
             let symmetric = problem.assemble(&mut self.system, &input);
             bulk_work.since(t);
             if tangent {
