@@ -121,8 +121,9 @@ impl NewtonSettings {
     }
 }
 
-/// A problem the Newton loop can solve: it assembles internal forces and the tangent.
-pub trait Problem {
+/// A problem the Newton loop can solve: it assembles internal forces and the tangent (on
+/// one thread while the solver analyses its pattern on another, hence `Send`).
+pub trait Problem: Send {
     /// Adds the internal force over all dofs into `system` (its forces cleared) and, if
     /// `input.tangent`, sets its matrix values to the tangent over the free dofs (whatever
     /// they held), at the displacements `input.u`, updating trial states. Returns whether
@@ -400,26 +401,58 @@ impl<'a> Newton<'a> {
     }
 
     /// Makes the condensed solver for `problem` if the settings ask for it and it has an
-    /// interface (once; later calls return at once). Returns the seconds it took.
-    fn prepare_condensed(&mut self, problem: &impl Problem) -> Result<f64> {
+    /// interface (once; later calls return at once). Given the `start` displacements, a
+    /// linear bulk whose force is K_c u is assembled there beside the solver's analysis (its
+    /// stiffness, force and states). Returns the seconds of the analysis and those the
+    /// assembly took beyond them.
+    fn prepare_condensed(
+        &mut self,
+        problem: &mut impl Problem,
+        start: Option<&[f64]>,
+    ) -> Result<(f64, f64)> {
         if self.settings.linear_solver != LinearSolver::Condensed
             || self.condensed.is_some()
             || self.no_interface
         {
-            return Ok(0.0);
+            return Ok((0.0, 0.0));
         }
         let t = std::time::Instant::now();
         let interface = problem.interface_equations(self.dofs);
         if interface.is_empty() {
             self.no_interface = true;
-            return Ok(0.0);
+            return Ok((0.0, 0.0));
         }
-        let solver = CondensedSolver::new(&self.system.pattern, &interface)?;
-        let map = problem.interface_scatter(self.dofs, &|eq| solver.local_index(eq));
-        let n_i = solver.interface_equations().len();
         let n = self.dofs.dof_count();
         let linear_bulk = problem.bulk_is_linear();
         let by_product = linear_bulk && !problem.bulk_loads_vary();
+        // A linear bulk's stiffness over all dofs is assembled while the solver orders and
+        // analyses the free pattern: the ordering and the symbolic factorisation run on one
+        // core, the element loop takes the other (and both once the analysis is done).
+        let stiffness_at = start.filter(|_| by_product);
+        let (pattern, dofs, algorithm) = (
+            &self.system.pattern,
+            self.dofs,
+            self.settings.contact_algorithm,
+        );
+        let ((solver, solver_seconds), whole) = rayon::join(
+            || {
+                let t = Instant::now();
+                (
+                    CondensedSolver::new(pattern, &interface),
+                    t.elapsed().as_secs_f64(),
+                )
+            },
+            || {
+                stiffness_at.map(|u| {
+                    let t = Instant::now();
+                    let whole = assemble_all_dofs(problem, dofs, u, algorithm);
+                    (whole, t.elapsed().as_secs_f64())
+                })
+            },
+        );
+        let solver = solver?;
+        let map = problem.interface_scatter(self.dofs, &|eq| solver.local_index(eq));
+        let n_i = solver.interface_equations().len();
         // Only a linear bulk under a temperature field continues from a reference state.
         let reference_len = if linear_bulk && !by_product { n } else { 0 };
         tracing::debug!(
@@ -445,7 +478,18 @@ impl<'a> Newton<'a> {
             by_product,
             states_stale: false,
         });
-        Ok(t.elapsed().as_secs_f64())
+        let Some((whole, assembly_seconds)) = whole else {
+            return Ok((t.elapsed().as_secs_f64(), 0.0));
+        };
+        let t_keep = Instant::now();
+        let c = self.condensed.as_mut().expect("made above");
+        keep_linear_bulk(&mut self.system, c, self.dofs, &whole);
+        self.work
+            .tangent_assemblies
+            .add(assembly_seconds + t_keep.elapsed().as_secs_f64());
+        // The analysis is the solver's share of the time both took together.
+        let analysis = solver_seconds.min(t.elapsed().as_secs_f64());
+        Ok((analysis, t.elapsed().as_secs_f64() - analysis))
     }
 
     /// Assembles the internal force at `u` (and the tangent if `tangent`), on the condensed
@@ -510,25 +554,8 @@ impl<'a> Newton<'a> {
                 // The continuum's elements over all dofs, once: K_c (the system keeps its
                 // free block, and the entries of prescribed rows and columns are kept for
                 // K·u), with the force and states at u.
-                let n = self.dofs.dof_count();
-                let all = DofMap::new(&vec![false; n]);
-                let mut whole = GlobalSystem::new(problem.bulk_pattern(&all), n);
-                let input = AssemblyInput {
-                    dofs: &all,
-                    tangent: true,
-                    ..input
-                };
-                problem.assemble_bulk(&mut whole, &input);
-                system.restrict_from(&whole, self.dofs);
-                let stiffness = BulkStiffness::new(&whole, self.dofs);
-                tracing::debug!(
-                    all_dof_entries = whole.pattern.nnz(),
-                    prescribed_entries = stiffness.len(),
-                    "linear bulk stiffness"
-                );
-                c.stiffness = Some(stiffness);
-                c.bulk_dirty = true;
-                c.bulk_ready = true;
+                let whole = assemble_all_dofs(problem, self.dofs, u, input.algorithm);
+                keep_linear_bulk(system, c, self.dofs, &whole);
                 work.tangent_assemblies.since(t);
             } else if fresh && c.by_product {
                 problem.bulk_states(&force_input);
@@ -781,14 +808,16 @@ impl<'a> Newton<'a> {
         let mut log = NewtonLog::default();
         let fixed_loads = !problem.bulk_loads_vary();
         if fixed_loads {
-            log.factorization_seconds = self.prepare_condensed(problem)?;
+            (log.factorization_seconds, log.assembly_seconds) =
+                self.prepare_condensed(problem, Some(u))?;
         }
+        // A bulk whose force is K_c u was assembled at u beside the analysis.
         let by_product = self.condensed.as_ref().is_some_and(|c| c.by_product);
-        let t = Instant::now();
-        if by_product || states {
-            self.evaluate(problem, u, by_product, true);
+        if states && !by_product {
+            let t = Instant::now();
+            self.evaluate(problem, u, false, true);
+            log.assembly_seconds += t.elapsed().as_secs_f64();
         }
-        log.assembly_seconds = t.elapsed().as_secs_f64();
         Ok(log)
     }
 
@@ -797,11 +826,11 @@ impl<'a> Newton<'a> {
     /// factor is kept only for an unchanged tangent (the tangent itself depends on the trial
     /// states alone, `GlobalSystem::assemble_reusing`). Makes the condensed solver at the
     /// first increment; returns the seconds that took.
-    fn begin_increment(&mut self, problem: &impl Problem) -> Result<f64> {
+    fn begin_increment(&mut self, problem: &mut impl Problem) -> Result<f64> {
         if let Some(c) = &mut self.condensed {
             c.solver.start_increment();
         }
-        self.prepare_condensed(problem)
+        Ok(self.prepare_condensed(problem, None)?.0)
     }
 
     /// Factors the tangent of the last evaluation: on the condensed path the bulk (when its
@@ -906,6 +935,48 @@ impl<'a> Newton<'a> {
         self.dofs.add_free(best.1, &self.residual, u);
         (best.1, None)
     }
+}
+
+/// A linear bulk's stiffness K_c over all dofs, with the force and the states at `u`: the
+/// continuum's elements over every dof, once per model.
+fn assemble_all_dofs(
+    problem: &mut impl Problem,
+    dofs: &DofMap,
+    u: &[f64],
+    algorithm: ContactAlgorithm,
+) -> GlobalSystem {
+    let n = dofs.dof_count();
+    let all = DofMap::new(&vec![false; n]);
+    let mut whole = GlobalSystem::new(problem.bulk_pattern(&all), n);
+    let input = AssemblyInput {
+        dofs: &all,
+        u,
+        tangent: true,
+        algorithm,
+    };
+    problem.assemble_bulk(&mut whole, &input);
+    whole
+}
+
+/// Keeps a linear bulk's stiffness `whole` (assembled over all dofs, [`assemble_all_dofs`]):
+/// its free block and its force in `system` (the block is factored next), its entries in a
+/// prescribed row or column for K·u.
+fn keep_linear_bulk(
+    system: &mut GlobalSystem,
+    c: &mut Condensed,
+    dofs: &DofMap,
+    whole: &GlobalSystem,
+) {
+    system.restrict_from(whole, dofs);
+    let stiffness = BulkStiffness::new(whole, dofs);
+    tracing::debug!(
+        all_dof_entries = whole.pattern.nnz(),
+        prescribed_entries = stiffness.len(),
+        "linear bulk stiffness"
+    );
+    c.stiffness = Some(stiffness);
+    c.bulk_dirty = true;
+    c.bulk_ready = true;
 }
 
 /// The out-of-balance force Q − F over the free dofs, from the external forces `external`
