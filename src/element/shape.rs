@@ -12,6 +12,24 @@ pub struct ShapeValues {
     pub deta: [f64; 8],
 }
 
+/// The shape functions of `kind` at the points of its integration rule
+/// ([`cell_rule`](super::quadrature::cell_rule)), in the rule's order: computed once, read by
+/// every evaluation of a cell (the same values [`cell_shape`] gives there, bit for bit).
+pub fn rule_shapes(kind: CellKind) -> &'static [ShapeValues] {
+    static TABLES: std::sync::LazyLock<[Vec<ShapeValues>; 2]> = std::sync::LazyLock::new(|| {
+        [CellKind::Quad8, CellKind::Tri6].map(|kind| {
+            super::quadrature::cell_rule(kind)
+                .iter()
+                .map(|p| cell_shape(kind, p.xi, p.eta))
+                .collect()
+        })
+    });
+    match kind {
+        CellKind::Quad8 => &TABLES[0],
+        CellKind::Tri6 => &TABLES[1],
+    }
+}
+
 /// Shape functions of `kind` at natural coordinates (ξ, η). Quad8: ξ, η ∈ [−1, 1];
 /// tri6: area coordinates ξ, η ≥ 0, ξ + η ≤ 1.
 #[inline(always)]
