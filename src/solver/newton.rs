@@ -574,15 +574,15 @@ impl<'a> Newton<'a> {
             } else {
                 // f_c(u) = K_c u, or f_c(u_ref) + K_c (u − u_ref), over all dofs.
                 let t = Instant::now();
-                let stiffness = c.stiffness.as_ref().expect("linear bulk");
+                let stiffness = c.stiffness.as_mut().expect("linear bulk");
                 let f = &mut system.internal_force;
                 if c.by_product {
-                    stiffness.multiply(&system.pattern, &system.values, self.dofs, u, f);
+                    stiffness.multiply(&system.pattern, &system.values, u, f);
                 } else {
                     for ((d, a), b) in c.du.iter_mut().zip(u).zip(&c.u_ref) {
                         *d = a - b;
                     }
-                    stiffness.multiply(&system.pattern, &system.values, self.dofs, &c.du, f);
+                    stiffness.multiply(&system.pattern, &system.values, &c.du, f);
                     for (f, f0) in f.iter_mut().zip(&c.bulk_force) {
                         *f += f0;
                     }
