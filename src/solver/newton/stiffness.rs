@@ -66,19 +66,18 @@ impl BulkStiffness {
     }
 
     /// y = K_c x over all dofs, the free block K_ff having the values `values` over
-    /// `pattern` (the free dofs; entries K_c lacks are zero there). Free rows: the free
+    /// `pattern` (the free dofs of `dofs`; entries K_c lacks are zero there). Free rows: the free
     /// block's columns read as rows, in parallel (see the module's note); then the stored
     /// prescribed rows and columns, column by column in dof order.
     pub(super) fn multiply(
         &mut self,
         pattern: &SparsityPattern,
         values: &[f64],
+        dofs: &DofMap,
         x: &[f64],
         y: &mut [f64],
     ) {
-        for (xf, &dof) in self.x_free.iter_mut().zip(&self.dof_of) {
-            *xf = x[dof as usize];
-        }
+        dofs.gather_free(x, &mut self.x_free);
         let symbolic = pattern.symbolic();
         let (cp, ri) = (symbolic.col_ptr(), symbolic.row_idx());
         let x_free = &self.x_free;
@@ -180,7 +179,7 @@ mod tests {
             }
         }
         let mut y = vec![f64::NAN; 14];
-        stiffness.multiply(&free.pattern, &free.values, &x, &mut y);
+        stiffness.multiply(&free.pattern, &free.values, &dofs, &x, &mut y);
         // Summed in another order: equal within a few roundings of the largest term (entries
         // up to 1e3, x up to 1, at most 10 terms a row).
         for (a, b) in y.iter().zip(&expected) {
