@@ -82,6 +82,15 @@ pub fn contraction(a: &Voigt, b: &Voigt) -> f64 {
     dot(a, b) + SHEAR.iter().map(|&i| a[i] * b[i]).sum::<f64>()
 }
 
+/// The equivalent strain √(⅔ ε:ε) of an engineering strain in Voigt order (tensor shears
+/// are half the engineering ones, so each shear enters as ½ γ²). The plane terms are summed
+/// first, so that without twist the value is bit for bit the four-component one.
+pub fn equivalent_strain(e: &Voigt) -> f64 {
+    let plane = e[0] * e[0] + e[1] * e[1] + e[ZZ] * e[ZZ] + 0.5 * e[2] * e[2];
+    let twist = 0.5 * (e[R_THETA] * e[R_THETA] + e[Z_THETA] * e[Z_THETA]);
+    (2.0 / 3.0 * (plane + twist)).sqrt()
+}
+
 /// A stress-like (tensor-component) Voigt vector as a strain-like one (engineering shear):
 /// the shear components doubled.
 pub fn engineering(tensor: &Voigt) -> Voigt {

@@ -19,6 +19,7 @@ use crate::error::ArcFailure;
 use crate::model::timeline::Frame;
 use crate::model::{ArcLength, Model};
 use crate::solver::diagnosis::implausible_increment;
+use crate::solver::energy::BodySums;
 use crate::solver::newton::{
     ArcConverged, ArcIncrement, Newton, NewtonLog, NewtonSettings, distance,
 };
@@ -96,7 +97,7 @@ pub fn run_arc_length(
         );
         log.converged = outcome.is_ok();
         stats.add_work(&log);
-        let (radius, converged) = match outcome {
+        let (radius, converged, scan) = match outcome {
             Ok(converged) => converged,
             Err(reason) => {
                 stats.cutbacks += 1;
@@ -135,7 +136,7 @@ pub fn run_arc_length(
             *f = lambda * r;
         }
         let internal_force = newton.system().internal_force.as_slice();
-        solution.record_energy(model, &converged_u, &f_ext, internal_force);
+        solution.record_energy(model, &converged_u, &f_ext, internal_force, scan);
         solution.commit();
         converged_u.copy_from_slice(&solution.u);
         stats.last_residual = *log.residuals.last().unwrap_or(&0.0);
@@ -190,7 +191,7 @@ pub fn run_arc_length(
 /// One attempt at the next increment from the converged displacements `converged_u` (also in
 /// `solution.u`): the predictor's tangent, the arc (the first increment's is set from that
 /// tangent), the corrector, and the plausibility of the result. Returns the arc with the
-/// converged increment.
+/// converged increment and its pass over the point states (for the energy ledger).
 fn attempt(
     model: &Model,
     arc: &ArcLength,
@@ -199,7 +200,7 @@ fn attempt(
     converged_u: &[f64],
     path: &mut ArcState,
     log: &mut NewtonLog,
-) -> std::result::Result<(f64, ArcConverged), ArcFailure> {
+) -> std::result::Result<(f64, ArcConverged, BodySums), ArcFailure> {
     let (u, mut problem) = solution.split(model);
     let tangent = newton.arc_tangent(&mut problem, u, log)?;
     let radius = match path.radius {
@@ -218,9 +219,10 @@ fn attempt(
         previous: &path.previous_increment,
     };
     let converged = newton.solve_arc_increment(&mut problem, u, &increment, log)?;
-    match implausible_increment(model, solution, converged_u) {
+    let scan = solution.scan_increment(model);
+    match implausible_increment(model, solution, converged_u, scan.strain_increment) {
         Some(reason) => Err(ArcFailure::Implausible(reason)),
-        None => Ok((radius, converged)),
+        None => Ok((radius, converged, scan)),
     }
 }
 

@@ -132,20 +132,31 @@ fn touching(model: &Model, bodies: &[FreeBody], which: impl Fn(usize) -> bool) -
 /// Why a converged increment from `converged_u` to `solution` is implausible for
 /// small-strain theory, if it is: a nodal displacement increment larger than
 /// `[solver] max_displacement_increment` × the model size, or an equivalent strain increment
-/// √(⅔ Δε:Δε) larger than `[solver] max_strain_increment` at an integration point. Such an
-/// "equilibrium" is a locked mesh or a mechanism, not an answer.
+/// √(⅔ Δε:Δε) larger than `[solver] max_strain_increment` at an integration point (the
+/// increment's `strain_increment`, from its pass over the point states,
+/// [`crate::solver::state::Solution::scan_increment`]). Such an "equilibrium" is a locked
+/// mesh or a mechanism, not an answer.
 pub fn implausible_increment(
     model: &Model,
     solution: &Solution,
     converged_u: &[f64],
+    strain_increment: f64,
 ) -> Option<Implausible> {
     let control = &model.control;
     let limit = control.max_displacement_increment * model.size;
+    // A node's whole displacement increment (u_θ's too, with twist).
+    let d = model.analysis.dofs_per_node();
     let (node, du) = solution
         .u
-        .chunks_exact(2)
-        .zip(converged_u.chunks_exact(2))
-        .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+        .chunks_exact(d)
+        .zip(converged_u.chunks_exact(d))
+        .map(|(a, b)| {
+            let plane = (a[0] - b[0]).hypot(a[1] - b[1]);
+            a.iter()
+                .zip(b)
+                .skip(2)
+                .fold(plane, |m, (a, b)| m.hypot(a - b))
+        })
         .enumerate()
         .fold(
             (0, 0.0),
@@ -164,22 +175,11 @@ pub fn implausible_increment(
             size: model.size,
         });
     }
-    let de = solution
-        .trial
-        .iter()
-        .zip(&solution.committed)
-        .map(|(t, c)| equivalent_strain(&(t.strain - c.strain)))
-        .fold(0.0, f64::max);
+    let de = strain_increment;
     (!de.is_finite() || de > control.max_strain_increment).then_some(Implausible::Strain {
         increment: de,
         limit: control.max_strain_increment,
     })
-}
-
-/// √(⅔ ε:ε) of a strain in Voigt order (xx, yy, γ_xy, zz), γ the engineering shear strain.
-fn equivalent_strain(e: &crate::material::Voigt) -> f64 {
-    let tensor = e[0] * e[0] + e[1] * e[1] + e[3] * e[3] + 0.5 * e[2] * e[2];
-    (2.0 / 3.0 * tensor).sqrt()
 }
 
 /// The error of a step that could not be completed: [`Error::Collapse`] when its load

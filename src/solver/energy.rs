@@ -32,7 +32,7 @@ use crate::element::interface6::{InterfacePoint, interface_point, relative_displ
 use crate::element::quadrature::{MAX_CELL_POINTS, cell_rule};
 use crate::element::set::ContinuumCell;
 use crate::element::set::{INTERFACE_POINTS, InternalLayout};
-use crate::material::{PointState, dot};
+use crate::material::{PointState, dot, equivalent_strain};
 use crate::model::Model;
 
 /// Energy totals from the unloaded start (N·mm = mJ; per unit thickness as the forces are).
@@ -225,10 +225,16 @@ impl EnergyLedger {
     /// states.
     ///
     /// Returns the increment's plastic dissipation per body.
-    pub fn record_increment(&mut self, model: &Model, increment: &Increment) -> Vec<f64> {
+    /// `bodies` is the increment's pass over its point states ([`Self::scan_bodies`]).
+    pub fn record_increment(
+        &mut self,
+        model: &Model,
+        increment: &Increment,
+        bodies: BodySums,
+    ) -> Vec<f64> {
         self.weights.ensure(model);
         self.total.external_work += self.external_work(model, increment);
-        let bodies = self.record_bodies(model, increment);
+        let bodies = self.record_bodies(model, increment, bodies);
         let i = self.interface_work(model, increment);
         let t = &mut self.total;
         t.friction_dissipation += i.friction;
@@ -285,26 +291,40 @@ impl EnergyLedger {
         work
     }
 
-    /// The bodies' stored energy (from the trial states), plastic work and the numerical
-    /// part of the trapezoidal rule on it; returns the plastic dissipation per body.
-    fn record_bodies(&mut self, model: &Model, increment: &Increment) -> Vec<f64> {
+    /// One pass over the point states of an increment from `committed` to `trial`: the
+    /// bodies' energy terms and the largest equivalent strain increment. The drivers make it
+    /// for a converged increment before they judge it ([`BodySums::strain_increment`]) and
+    /// hand it to [`Self::record_increment`] if they keep it: the states are read once.
+    pub fn scan_bodies(
+        &mut self,
+        model: &Model,
+        committed: &[PointState],
+        trial: &[PointState],
+    ) -> BodySums {
         use rayon::prelude::*;
+        self.weights.ensure(model);
         // Blocks of cells in parallel, their sums added in block order: the same bits on any
         // number of threads.
         let block = ENERGY_BLOCK * MAX_CELL_POINTS;
-        let sums = model
+        model
             .continuum
             .cells
             .par_chunks(ENERGY_BLOCK)
-            .zip(increment.trial.par_chunks(block))
-            .zip(increment.committed.par_chunks(block))
+            .zip(trial.par_chunks(block))
+            .zip(committed.par_chunks(block))
             .zip(self.weights.volumes.par_chunks(block))
             .map(|(((cells, trial), committed), volumes)| {
                 body_sums(model, cells, trial, committed, volumes)
             })
             .collect::<Vec<_>>()
             .into_iter()
-            .fold(BodySums::new(model), BodySums::add);
+            .fold(BodySums::new(model), BodySums::add)
+    }
+
+    /// The bodies' stored energy (from the trial states), plastic work and the numerical
+    /// part of the trapezoidal rule on it, from the increment's pass `sums`; returns the
+    /// plastic dissipation per body.
+    fn record_bodies(&mut self, model: &Model, increment: &Increment, sums: BodySums) -> Vec<f64> {
         let mut bodies = sums.bodies;
         let (stored, released) =
             hardening_energy(model, increment, &self.weights.volumes, &mut bodies);
@@ -360,14 +380,19 @@ impl EnergyLedger {
 /// threads).
 const ENERGY_BLOCK: usize = 4096;
 
-/// The bodies' energy terms of some cells' integration points.
-struct BodySums {
+/// The bodies' energy terms of some cells' integration points over an increment, and its
+/// largest strain increment ([`EnergyLedger::scan_bodies`]).
+#[derive(Clone, Debug)]
+pub struct BodySums {
     elastic: f64,
     plastic: f64,
     numerical: f64,
     thermal: f64,
     /// Plastic work per body.
     bodies: Vec<f64>,
+    /// The largest equivalent strain increment √(⅔ Δε:Δε) of any point (0 without points;
+    /// NaN if a strain is not a number).
+    pub strain_increment: f64,
 }
 
 impl BodySums {
@@ -378,6 +403,7 @@ impl BodySums {
             numerical: 0.0,
             thermal: 0.0,
             bodies: vec![0.0; model.bodies.len()],
+            strain_increment: 0.0,
         }
     }
 
@@ -389,8 +415,14 @@ impl BodySums {
         for (a, b) in self.bodies.iter_mut().zip(other.bodies) {
             *a += b;
         }
+        self.strain_increment = largest(self.strain_increment, other.strain_increment);
         self
     }
+}
+
+/// The larger of `a` and `b`, NaN if either is (f64::max would drop a NaN).
+fn largest(a: f64, b: f64) -> f64 {
+    if a.is_nan() || a > b { a } else { b }
 }
 
 /// The stored energy (from the trial states), plastic work, numerical dissipation and
@@ -413,6 +445,10 @@ fn body_sums(
         let expands = model.continuum.expansions[cell.body as usize] != 0.0;
         let points = cell_rule(cell.kind).len();
         for ((t, c), &dv) in trial.iter().zip(committed).zip(volumes).take(points) {
+            sums.strain_increment = largest(
+                sums.strain_increment,
+                equivalent_strain(&(t.strain - c.strain)),
+            );
             let plastic_increment = t.plastic_strain - c.plastic_strain;
             let stored = material.elastic_energy(t);
             let point_plastic = dot(&t.stress, &plastic_increment);

@@ -18,7 +18,7 @@ use crate::material::PointState;
 use crate::model::Model;
 use crate::model::timeline::Frame;
 use crate::solver::cycles;
-use crate::solver::energy::{EnergyLedger, Increment};
+use crate::solver::energy::{BodySums, EnergyLedger, Increment};
 use crate::solver::floor::Work;
 use crate::solver::mechanics::Mechanics;
 use crate::solver::newton::{ForceAverage, LastIncrement, NewtonLog};
@@ -127,12 +127,14 @@ impl Solution {
     /// from `u_old` to `self.u`) in the energy ledger; `external_force` and `internal_force`
     /// are those of the converged state over all dofs. The drivers call this just before
     /// [`Self::commit`].
+    /// `bodies` is the increment's pass over the point states ([`Self::scan_increment`]).
     pub fn record_energy(
         &mut self,
         model: &Model,
         u_old: &[f64],
         external_force: &[f64],
         internal_force: &[f64],
+        bodies: BodySums,
     ) {
         let increment = Increment {
             u_old,
@@ -147,8 +149,16 @@ impl Solution {
             external_force,
             internal_force,
         };
-        let bodies = self.energy.record_increment(model, &increment);
+        let bodies = self.energy.record_increment(model, &increment, bodies);
         self.internal.cycles.record(&bodies);
+    }
+
+    /// One pass over the point states of the increment from the committed to the trial
+    /// states ([`EnergyLedger::scan_bodies`]): its largest strain increment, which
+    /// [`crate::solver::diagnosis::implausible_increment`] judges, and the bodies' energy
+    /// terms [`Self::record_energy`] takes.
+    pub fn scan_increment(&mut self, model: &Model) -> BodySums {
+        self.energy.scan_bodies(model, &self.committed, &self.trial)
     }
 
     /// Starts a load cycle (or a step) at every interface point of the committed state

@@ -134,12 +134,17 @@ pub fn run_steps_from(
                 &f_ext,
                 state.force_floor,
             );
-            let implausible = match &attempt {
-                Ok(log) if log.converged => implausible_increment(model, &solution, &converged_u),
+            // A converged increment's point states are read once: for its strain
+            // increment here, for the energy ledger if it is kept.
+            let scan = match &attempt {
+                Ok(log) if log.converged => Some(solution.scan_increment(model)),
                 _ => None,
             };
-            match attempt {
-                Ok(log) if log.converged && implausible.is_none() => {
+            let implausible = scan.as_ref().and_then(|scan| {
+                implausible_increment(model, &solution, &converged_u, scan.strain_increment)
+            });
+            match (attempt, scan) {
+                (Ok(log), Some(scan)) if log.converged && implausible.is_none() => {
                     stats.add(&log);
                     stats.work.increments += 1;
                     state.iterations += log.iterations;
@@ -149,7 +154,7 @@ pub fn run_steps_from(
                         distance(&solution.u, &converged_u),
                     );
                     let internal_force = newton.system().internal_force.as_slice();
-                    solution.record_energy(model, &converged_u, &f_ext, internal_force);
+                    solution.record_energy(model, &converged_u, &f_ext, internal_force, scan);
                     solution.commit();
                     state.force_average = newton.force_average();
                     converged_u.copy_from_slice(&solution.u);
@@ -168,7 +173,7 @@ pub fn run_steps_from(
                     };
                     observer.increment(&progress)?;
                 }
-                outcome => {
+                (outcome, _) => {
                     let singular = matches!(&outcome, Err(Error::Linear(_)));
                     let failure = match (implausible, &outcome) {
                         (Some(i), _) => Some(AttemptFailure::Implausible(i)),
@@ -404,7 +409,8 @@ fn settle_once(
         Err(e) => return Err(e.to_string()),
     };
     let internal_force = newton.system().internal_force.as_slice();
-    solution.record_energy(model, converged_u, external_force, internal_force);
+    let scan = solution.scan_increment(model);
+    solution.record_energy(model, converged_u, external_force, internal_force, scan);
     solution.commit();
     converged_u.copy_from_slice(&solution.u);
     tracing::info!(
