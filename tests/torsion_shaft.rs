@@ -244,3 +244,34 @@ fn a_tube_that_nothing_holds_in_twist_is_refused_as_free_to_turn() {
         "{e}"
     );
 }
+
+#[test]
+fn an_implausible_twist_names_the_node_that_turned_most() {
+    // A rotation φ of the top moves the node at (b, L) by u_θ = φ b = 0.5 mm, and nothing
+    // else as far: above 1 % of the model's size, so the increment is implausible, and
+    // without cut-backs the step fails naming that node (a node's u_θ is part of its
+    // displacement increment; the check once paired a twist model's dofs two by two).
+    let phi = 0.05;
+    let case = twisted()
+        .support("top", &[("rotation", phi)])
+        .set("solver", "max_displacement_increment", 0.01)
+        .set("solver", "max_cutbacks", 0)
+        .case();
+    let model = model(tube(), &case).expect("the tube's model builds");
+    let error = run_steps(&model, &settings(&case), |_| Ok(0.0))
+        .err()
+        .expect("the increment is implausible")
+        .to_string();
+    let corner = (0..model.mesh.nodes.len())
+        .find(|&n| {
+            let [r, z] = model.mesh.nodes[n];
+            (r - B).abs() < 1e-9 && (z - L).abs() < 1e-9
+        })
+        .expect("the tube has a node at (b, L)");
+    let expected = format!(
+        "node {} moves by {:.3e} mm",
+        model.mesh.node_tags[corner],
+        phi * B
+    );
+    assert!(error.contains(&expected), "{expected} not in: {error}");
+}
