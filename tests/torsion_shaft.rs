@@ -259,8 +259,7 @@ fn an_implausible_twist_names_the_node_that_turned_most() {
         .case();
     let model = model(tube(), &case).expect("the tube's model builds");
     let error = run_steps(&model, &settings(&case), |_| Ok(0.0))
-        .err()
-        .expect("the increment is implausible")
+        .expect_err("the increment is implausible")
         .to_string();
     let corner = (0..model.mesh.nodes.len())
         .find(|&n| {

@@ -144,20 +144,26 @@ impl Grid {
     /// over the cells and each part's own points, so the cost is the grid's size however many
     /// parts there are.
     pub fn split(&self, part: &[u32], parts: usize) -> Vec<Grid> {
-        use rayon::prelude::*;
+        self.split_by(&self.split_plan(part, parts))
+    }
+
+    /// How [`Self::split`] divides this grid's cells among `parts` parts (`part[c]` the part
+    /// of cell c): each part's cells, its points and its cells renumbered. Made once, it
+    /// splits every grid with the same cells ([`Self::split_by`]): the frames of a run.
+    pub fn split_plan(&self, part: &[u32], parts: usize) -> SplitPlan {
         debug_assert_eq!(part.len(), self.cell_count());
         let mut cells = vec![Vec::new(); parts];
         for (c, &p) in part.iter().enumerate() {
-            cells[p as usize].push(c);
+            cells[p as usize].push(c as u32);
         }
         // The part that numbered each point last, and the point's index in it.
         let mut owner = vec![usize::MAX; self.points.len()];
         let mut local = vec![0u64; self.points.len()];
-        let mut grids = Vec::with_capacity(parts);
-        for (k, cells) in cells.iter().enumerate() {
+        let mut plan = Vec::with_capacity(parts);
+        for (k, cells) in cells.into_iter().enumerate() {
             let mut points = Vec::new();
-            let mut grid = Grid::default();
-            for &c in cells {
+            let mut topology = Grid::default();
+            for c in cells.iter().map(|&c| c as usize) {
                 let start = if c == 0 {
                     0
                 } else {
@@ -169,43 +175,83 @@ impl Grid {
                     if owner[p] != k {
                         owner[p] = k;
                         local[p] = points.len() as u64;
-                        points.push(p);
+                        points.push(p as u32);
                     }
                     local[p]
                 });
-                grid.push_cell(self.cell_types[c], renumbered);
+                topology.push_cell(self.cell_types[c], renumbered);
             }
-            grids.push((grid, points));
+            plan.push(SplitPart {
+                cells,
+                points,
+                topology,
+            });
         }
-        // The arrays restricted to each part's points and cells, on all threads.
-        grids
-            .into_par_iter()
-            .zip(cells)
-            .map(|((mut grid, points), cells)| {
-                grid.points = points.par_iter().map(|&p| self.points[p]).collect();
-                grid.point_data = (self.point_data.par_iter())
-                    .map(|f| f.select(&points))
-                    .collect();
-                grid.cell_data = self
-                    .cell_data
-                    .par_iter()
-                    .map(|f| f.select(&cells))
-                    .collect();
-                grid.field_data = self.field_data.clone();
-                grid
+        SplitPlan {
+            points: self.points.len(),
+            parts: plan,
+        }
+    }
+
+    /// The grids of the parts of `plan` (made by [`Self::split_plan`] from a grid with the
+    /// same cells): each part's cells as the plan numbers them, this grid's point
+    /// coordinates and arrays restricted to the part, on all threads.
+    pub fn split_by(&self, plan: &SplitPlan) -> Vec<Grid> {
+        use rayon::prelude::*;
+        debug_assert_eq!(plan.points, self.points.len());
+        plan.parts
+            .par_iter()
+            .map(|part| Grid {
+                points: (part.points.par_iter())
+                    .map(|&p| self.points[p as usize])
+                    .collect(),
+                connectivity: part.topology.connectivity.clone(),
+                offsets: part.topology.offsets.clone(),
+                cell_types: part.topology.cell_types.clone(),
+                point_data: (self.point_data.par_iter())
+                    .map(|f| f.select(&part.points))
+                    .collect(),
+                cell_data: (self.cell_data.par_iter())
+                    .map(|f| f.select(&part.cells))
+                    .collect(),
+                field_data: self.field_data.clone(),
             })
             .collect()
     }
+
+    /// Whether `plan` was made for a grid of this one's size (its cells are taken to be the
+    /// same: a run's frames share them).
+    pub fn fits(&self, plan: &SplitPlan) -> bool {
+        plan.points == self.points.len()
+            && plan.parts.iter().map(|p| p.cells.len()).sum::<usize>() == self.cell_count()
+    }
+}
+
+/// How a grid's cells are divided among parts ([`Grid::split_plan`]).
+#[derive(Clone, Debug)]
+pub struct SplitPlan {
+    /// Points of the grid it was made for.
+    points: usize,
+    parts: Vec<SplitPart>,
+}
+
+/// A part of a [`SplitPlan`]: its cells and points (indices into the whole grid's), and its
+/// cells with their points renumbered in the part (no coordinates, no arrays).
+#[derive(Clone, Debug)]
+struct SplitPart {
+    cells: Vec<u32>,
+    points: Vec<u32>,
+    topology: Grid,
 }
 
 impl Field {
     /// The field at the tuples `indices`, in that order.
-    fn select(&self, indices: &[usize]) -> Field {
+    fn select(&self, indices: &[u32]) -> Field {
         let n = self.components;
-        fn pick<T: Clone>(values: &[T], indices: &[usize], n: usize) -> Vec<T> {
+        fn pick<T: Clone>(values: &[T], indices: &[u32], n: usize) -> Vec<T> {
             indices
                 .iter()
-                .flat_map(|&i| values[i * n..(i + 1) * n].iter().cloned())
+                .flat_map(|&i| values[i as usize * n..(i as usize + 1) * n].iter().cloned())
                 .collect()
         }
         let values = match &self.values {

@@ -11,6 +11,7 @@
 use std::sync::OnceLock;
 
 use nalgebra::DMatrix;
+use rayon::prelude::*;
 
 use crate::assembly::filled_in_parallel;
 use crate::element::quadrature::cell_rule;
@@ -60,6 +61,9 @@ pub struct BodyPoints {
     /// point p's are `cells[start[p]..start[p + 1]]`.
     start: Vec<u32>,
     cells: Vec<(u32, u8)>,
+    /// Whether each point is the first of its mesh node's (a node two bodies share has a
+    /// point in each).
+    first_of_node: Vec<bool>,
 }
 
 impl BodyPoints {
@@ -98,11 +102,16 @@ impl BodyPoints {
                 *slot += 1;
             }
         }
+        let mut seen = vec![false; nodes];
+        let first_of_node = (points.iter())
+            .map(|&(_, n)| !std::mem::replace(&mut seen[n as usize], true))
+            .collect();
         Self {
             points,
             index,
             start,
             cells,
+            first_of_node,
         }
     }
 
@@ -171,7 +180,6 @@ pub fn nodal_value(
 /// [`nodal_value`] of every output point, points in parallel (the same bits on any number of
 /// threads).
 pub fn nodal_values(model: &Model, points: &BodyPoints, states: &[PointState]) -> Vec<NodalValues> {
-    use rayon::prelude::*;
     (0..points.points.len())
         .into_par_iter()
         .with_min_len(4096)
@@ -184,7 +192,6 @@ pub fn nodal_values(model: &Model, points: &BodyPoints, states: &[PointState]) -
 /// Points in parallel, each written into its place of the final arrays (no array of
 /// [`NodalValues`] between: at 3.8M unknowns that was 190 MB of fresh memory per frame).
 fn nodal_fields(model: &Model, points: &BodyPoints, states: &[PointState]) -> [Vec<f64>; 4] {
-    use rayon::prelude::*;
     let n = points.points.len();
     let [mut stress, mut strain] = [(); 2].map(|()| filled_in_parallel(0.0, 6 * n));
     let [mut mises, mut plastic] = [(); 2].map(|()| filled_in_parallel(0.0, n));
@@ -216,9 +223,7 @@ fn nodal_fields(model: &Model, points: &BodyPoints, states: &[PointState]) -> [V
 pub fn body_grid(model: &Model, points: &BodyPoints, u: &[f64], states: &[PointState]) -> Grid {
     let [stress, strain, mises, plastic_strain] = nodal_fields(model, points, states);
     let mut grid = Grid {
-        points: points
-            .points
-            .iter()
+        points: (points.points.iter())
             .map(|&(_, n)| model.mesh.nodes[n as usize])
             .collect(),
         ..Grid::default()
@@ -234,8 +239,9 @@ pub fn body_grid(model: &Model, points: &BodyPoints, u: &[f64], states: &[PointS
     let nodes: Vec<u32> = points.points.iter().map(|&(_, n)| n).collect();
     let names = tensor_component_names(model.analysis.is_axisymmetric());
     let ppe = crate::element::quadrature::MAX_CELL_POINTS;
-    let plastic = (0..model.continuum.cells.len())
-        .map(|e| states[e * ppe..(e + 1) * ppe].iter().any(|s| s.yielding) as i32)
+    let plastic = (states.par_chunks(ppe))
+        .with_min_len(4096)
+        .map(|cell| cell.iter().any(|s| s.yielding) as i32)
         .collect();
     let dofs = model.analysis.dofs_per_node();
     grid.point_data = vec![
@@ -261,9 +267,9 @@ pub fn body_grid(model: &Model, points: &BodyPoints, u: &[f64], states: &[PointS
 /// node) at the mesh nodes `nodes`: the third component is the circumferential one with
 /// twist (`dofs` = 3), zero otherwise.
 pub fn nodal_vector(name: &str, nodes: &[u32], v: &[f64], dofs: usize) -> Field {
-    let values = nodes
-        .iter()
-        .flat_map(|&n| {
+    let values = (nodes.par_iter())
+        .with_min_len(4096)
+        .flat_map_iter(|&n| {
             let d = dofs * n as usize;
             let theta = if dofs == 3 { v[d + 2] } else { 0.0 };
             [v[d], v[d + 1], theta]
@@ -323,15 +329,12 @@ pub fn step_grids(
     let solution = step.solution;
     let mut bodies = body_grid(model, points, &solution.u, &solution.committed);
     let rf = nodal_reactions(model, step.internal_force, step.external_force);
-    let mut written = vec![false; model.mesh.nodes.len()];
     let dofs = model.analysis.dofs_per_node();
-    let values = points
-        .points
-        .iter()
-        .flat_map(|&(_, n)| {
-            let first = !std::mem::replace(&mut written[n as usize], true);
+    let values = (points.points.par_iter().enumerate())
+        .with_min_len(4096)
+        .flat_map_iter(|(p, &(_, n))| {
             let d = dofs * n as usize;
-            if first {
+            if points.first_of_node[p] {
                 [rf[d], rf[d + 1], if dofs == 3 { rf[d + 2] } else { 0.0 }]
             } else {
                 [0.0; 3]

@@ -10,7 +10,6 @@ use super::history::{HistoryLayout, read_rows};
 use super::progress::{RunBar, progress_bar};
 use crate::config::{Case, CycleFrames};
 use crate::model::Model;
-use crate::output::Grid;
 use crate::output::append::{self, AppendedFile};
 use crate::output::csv::GrowingCsv;
 use crate::output::pvd::PvdEntry;
@@ -21,6 +20,7 @@ use crate::output::restart::{
 use crate::output::summary::{EnergyMark, Summary};
 use crate::output::vtm::VtmBlock;
 use crate::output::writer::{Content, RecordWriter};
+use crate::output::{Grid, SplitPlan};
 use crate::post::fretting::{FrettingTables, TracedPoint, trace_point};
 use crate::post::interface::{InterfaceOutput, resultants};
 use crate::post::quantities::{evaluate, pair_quantities};
@@ -37,6 +37,9 @@ pub(super) struct StepWriter<'m, 's, F> {
     model: &'m Model,
     points: BodyPoints,
     interface: InterfaceOutput,
+    /// How the frames' grids of the bodies and of the contacts are divided into one file per
+    /// body and per pair, made at the first frame (their cells are the same in every frame).
+    splits: [Option<SplitPlan>; 2],
     folder: &'m OutputFolder,
     vtu: bool,
     /// Field output at every frame of a cyclic step (`[output] cycle_frames = "all"`).
@@ -141,6 +144,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
             model,
             points: BodyPoints::new(model),
             interface: InterfaceOutput::new(model),
+            splits: [None, None],
             folder: session.folder,
             vtu: case.output.vtu,
             all_frames: case.output.cycle_frames == CycleFrames::All,
@@ -391,26 +395,28 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         let model = self.model;
         let cells: Vec<u32> = model.continuum.cells.iter().map(|c| c.body).collect();
         let names = model.bodies.iter().map(String::as_str);
+        let mut plan = self.splits[0].take();
         let body_block = self.queue_parts(
-            "bodies",
-            bodies,
-            &cells,
+            ("bodies", bodies),
+            (&cells, &mut plan),
             names,
             RunFile::Bodies(step),
             |k| RunFile::Body(step, k),
         )?;
+        self.splits[0] = plan;
         let mut blocks = vec![body_block];
         if let Some(interface) = interface {
             let cells: Vec<u32> = model.interface.elements.iter().map(|e| e.pair).collect();
             let names = model.interface.pairs.iter().map(|p| p.name.as_str());
+            let mut plan = self.splits[1].take();
             blocks.push(self.queue_parts(
-                "contacts",
-                interface,
-                &cells,
+                ("contacts", interface),
+                (&cells, &mut plan),
                 names,
                 RunFile::Interface(step),
                 |k| RunFile::Pair(step, k),
             )?);
+            self.splits[1] = plan;
         }
         let path = self.folder.path(RunFile::Frame(step))?;
         self.out.records.queue(path, Content::Vtm(blocks));
@@ -419,13 +425,14 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
 
     /// Queues the cells of `grid`, each in one file: as `whole` when they are all one part's,
     /// else each part's cells (`part[c]` the part of cell c) as `part_file(k)` (k 1-based), so
-    /// a frame's output grows with the model, not with the model times its parts. Returns the
-    /// block `name` of the frame's multiblock file that lists the files by the parts' names.
+    /// a frame's output grows with the model, not with the model times its parts. `plan` is
+    /// the division of the last frame's grid, made here if there is none that fits. Returns
+    /// the block `name` of the frame's multiblock file that lists the files by the parts'
+    /// names.
     fn queue_parts<'n>(
         &mut self,
-        name: &str,
-        grid: Grid,
-        part: &[u32],
+        (name, grid): (&str, Grid),
+        (part, plan): (&[u32], &mut Option<SplitPlan>),
         parts: impl ExactSizeIterator<Item = &'n str>,
         whole: RunFile,
         part_file: impl Fn(usize) -> RunFile<'static>,
@@ -437,7 +444,10 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
                 .records
                 .queue(self.folder.path(whole)?, Content::Vtu(grid));
         } else {
-            let grids = grid.split(part, parts.len());
+            let fitting = plan.take().filter(|p| grid.fits(p));
+            let division = fitting.unwrap_or_else(|| grid.split_plan(part, parts.len()));
+            let grids = grid.split_by(&division);
+            *plan = Some(division);
             for (k, (part_name, grid)) in parts.zip(grids).enumerate() {
                 let file = part_file(k + 1);
                 self.out
