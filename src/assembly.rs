@@ -923,7 +923,7 @@ fn scatter<S: ElementSet>(
         let output = ElementOutput {
             trial: &mut *trial_e,
             k: (matrix && !was_frozen).then_some(&mut *ke),
-            f: &mut *fe,
+            f: Some(&mut *fe),
         };
         set.evaluate(e, &element_input, output);
         let global = |a: usize| d * nodes[a / d] as usize + a % d;
@@ -969,7 +969,7 @@ fn scatter<S: ElementSet>(
                 let output = ElementOutput {
                     trial: &mut *trial_e,
                     k: Some(&mut *ke),
-                    f: &mut ElementVector::zeros(),
+                    f: None,
                 };
                 set.evaluate(e, &element_input, output);
             }
@@ -1023,7 +1023,7 @@ pub fn evaluate_states<S: ElementSet>(
             let output = ElementOutput {
                 trial,
                 k: None,
-                f: &mut ElementVector::zeros(),
+                f: None,
             };
             set.evaluate(e, &element_input, output);
         });

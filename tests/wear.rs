@@ -98,7 +98,7 @@ impl Driver {
             let output = ElementOutput {
                 trial: &mut self.solution.interface_trial[e * p..(e + 1) * p],
                 k: None,
-                f: &mut ElementVector::zeros(),
+                f: None,
             };
             set.evaluate(e, &input, output);
         }

@@ -227,7 +227,11 @@ fn evaluate_points<const D: usize, const R: usize, const W: usize>(
         committed,
         algorithm,
     } = *input;
-    let ElementOutput { trial, mut k, f } = output;
+    let ElementOutput {
+        trial,
+        mut k,
+        mut f,
+    } = output;
     for (g, &(xi, w)) in element.rule.points().iter().enumerate() {
         let p = interface_point(analysis, &element.b_coords, xi, w);
         let b = operator::<D, R, W>(&p);
@@ -246,7 +250,9 @@ fn evaluate_points<const D: usize, const R: usize, const W: usize>(
         let relative = [jump[0], jump[1] + g0 - interference + worn, circumferential];
         let (state, tangent) = law.update(relative, before);
         let stress = SVector::<f64, R>::from_fn(|i, _| state.stress[i]);
-        f.fixed_rows_mut::<W>(0).gemv_tr(p.da, &b, &stress, 1.0);
+        if let Some(f) = f.as_deref_mut() {
+            f.fixed_rows_mut::<W>(0).gemv_tr(p.da, &b, &stress, 1.0);
+        }
         let used = algorithm.tangent(law, &state, tangent);
         let used: SMatrix<f64, R, R> = used.fixed_view::<R, R>(0, 0).into_owned();
         if let Some(k) = k.as_deref_mut() {
@@ -292,7 +298,7 @@ mod tests {
         let output = ElementOutput {
             trial: &mut trial,
             k,
-            f,
+            f: Some(f),
         };
         evaluate_interface(analysis, e, 0.0, law, None, &input, output);
     }

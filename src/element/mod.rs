@@ -53,8 +53,9 @@ pub struct ElementOutput<'a, S> {
     pub trial: &'a mut [S],
     /// Tangent, or `None` for residual-only evaluations (line search).
     pub k: Option<&'a mut ElementMatrix>,
-    /// Internal force.
-    pub f: &'a mut ElementVector,
+    /// Internal force, or `None` where only the trial states are wanted (a converged
+    /// state's point states, a tangent alone).
+    pub f: Option<&'a mut ElementVector>,
 }
 
 /// The 2D idealisation of the 3D problem.

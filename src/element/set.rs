@@ -134,7 +134,7 @@ impl ElementSet for ContinuumSet {
         let output = ElementOutput {
             trial: &mut scratch,
             k: Some(k),
-            f: &mut ElementVector::zeros(),
+            f: None,
         };
         self.evaluate(e, &input, output);
     }
