@@ -125,7 +125,7 @@ struct RawSolverSpec {
     extrapolate: bool,
     /// Plausibility bound: a converged increment in which a node moves by more than this
     /// fraction of the model size (bounding-box diagonal) is a failed increment and is cut back
-    /// (default 0.1).
+    /// (default 0.1). With twist a node's circumferential displacement u_θ counts too.
     max_displacement_increment: f64,
     /// Plausibility bound: a converged increment with an equivalent strain increment
     /// √(⅔ Δε:Δε) above this at any integration point is a failed increment and is cut back

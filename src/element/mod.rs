@@ -13,6 +13,7 @@ pub mod interface6;
 pub mod quadrature;
 pub mod set;
 pub mod shape;
+mod small;
 
 use nalgebra::{SMatrix, SVector};
 use serde::Deserialize;
