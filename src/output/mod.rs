@@ -342,5 +342,14 @@ mod tests {
         assert_eq!(b.cell_data[0].values, FieldValues::I32(vec![1]));
         assert_eq!(a.field_data, grid.field_data);
         assert_eq!(a.cell_types, [21, 21]);
+        // The plan made from this frame's grid splits the next frame's (the same cells, other
+        // coordinates and values) as a fresh split of it does.
+        let plan = grid.split_plan(&[0, 1, 0], 2);
+        let mut next = grid.clone();
+        next.points.iter_mut().for_each(|p| p[1] = 1.0 + p[0]);
+        next.point_data[0].values = FieldValues::F64((0..14).map(|i| f64::from(i) * 0.5).collect());
+        assert!(next.fits(&plan));
+        assert_eq!(next.split_by(&plan), next.split(&[0, 1, 0], 2));
+        assert!(!Grid::default().fits(&plan));
     }
 }
