@@ -8,7 +8,9 @@ For every case in CASES (case files in benches/calculix/cases/, geometry in geo/
      penalty contact with the same linear pressure-overclosure slope k_N and stick slope k_T,
      the same increments as fixed increments) and run `ccx` (SPOOLES, OMP_NUM_THREADS=2);
   4. compare the displacement under the load (the case's probe point) to 2e-3 relative and
-     print wall time, Newton iterations and peak memory of both side by side.
+     print wall time, Newton iterations and peak memory of both side by side. asperity runs
+     --repeat times (default 5) and its median wall time is the one compared (the machine's
+     moments decide less); CalculiX, whose runs take minutes, runs once.
 
 Usage (from the repository root; `make bench-calculix` runs the full mode with --write):
     .venv/bin/python benches/calculix/bench_calculix.py --quick            # small meshes, minutes
