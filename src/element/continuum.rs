@@ -407,15 +407,6 @@ fn evaluate_cell_inline(
                 state.strain[c] += eigen;
             }
         }
-        let stress_plane = state.stress.fixed_rows::<PLANE_STRAINS>(0);
-        if twist && f.is_some() {
-            add_transposed_product(
-                &mut f_theta,
-                pk.dvol,
-                &pk.twist,
-                &state.stress.fixed_rows::<2>(R_THETA),
-            );
-        }
         if let Some(k) = k.as_deref_mut() {
             let d_plane = d.fixed_view::<PLANE_STRAINS, PLANE_STRAINS>(0, 0);
             let db = matrix_product(&d_plane, &pk.b);
@@ -429,15 +420,17 @@ fn evaluate_cell_inline(
                 ),
             }
         }
-        match f.as_deref_mut() {
-            Some(_) if twist => add_transposed_product(&mut f_plane, pk.dvol, &pk.b, &stress_plane),
-            Some(f) => add_transposed_product(
-                &mut f.fixed_rows_mut::<16>(0),
-                pk.dvol,
-                &pk.b,
-                &stress_plane,
-            ),
-            None => {}
+        if let Some(f) = f.as_deref_mut() {
+            // With twist the plane and circumferential parts are kept apart until the end.
+            let stress_plane = state.stress.fixed_rows::<PLANE_STRAINS>(0);
+            if twist {
+                let stress_theta = state.stress.fixed_rows::<2>(R_THETA);
+                add_transposed_product(&mut f_plane, pk.dvol, &pk.b, &stress_plane);
+                add_transposed_product(&mut f_theta, pk.dvol, &pk.twist, &stress_theta);
+            } else {
+                let mut f = f.fixed_rows_mut::<16>(0);
+                add_transposed_product(&mut f, pk.dvol, &pk.b, &stress_plane);
+            }
         }
         trial[g] = state;
     }
