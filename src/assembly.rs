@@ -174,71 +174,70 @@ impl SparsityPattern {
     pub fn new<'a, E: Into<ElementNodes<'a>>>(
         node_count: usize,
         dofs: &DofMap,
-        connectivity: impl Iterator<Item = E> + Clone,
+        connectivity: impl Iterator<Item = E>,
     ) -> Self {
-        let connectivity = connectivity.map(Into::into);
-        // node → elements (CSR), then node → neighbouring nodes.
-        let mut start = vec![0usize; node_count + 1];
-        let mut element_count = 0;
-        for element in connectivity.clone() {
-            for &n in element.nodes {
-                start[n as usize + 1] += 1;
-            }
-            element_count += 1;
-        }
-        for i in 0..node_count {
-            start[i + 1] += start[i];
-        }
-        let mut fill = start.clone();
-        let mut node_elements = vec![0u32; start[node_count]];
-        let mut elements: Vec<ElementNodes> = Vec::with_capacity(element_count);
-        for (e, element) in connectivity.enumerate() {
-            for &n in element.nodes {
-                node_elements[fill[n as usize]] = e as u32;
-                fill[n as usize] += 1;
-            }
-            elements.push(element);
-        }
-        // Each neighbour with whether some element couples twist between the two.
-        let neighbours: Vec<Vec<(u32, bool)>> = (0..node_count)
+        let elements: Vec<ElementNodes> = connectivity.map(Into::into).collect();
+        let node_elements = NodeElements::new(node_count, &elements);
+        let d = dofs.dof_count() / node_count.max(1);
+        // On all cores, by blocks of nodes: the nodes' neighbours and their columns' lengths,
+        // then (once the columns' starts are known) their rows, written in place.
+        const NODES_PER_BLOCK: usize = 4096;
+        let blocks: Vec<NodeBlock> = (0..node_count.div_ceil(NODES_PER_BLOCK))
             .into_par_iter()
-            .map(|n| {
-                let mut v: Vec<(u32, bool)> = node_elements[start[n]..start[n + 1]]
-                    .iter()
-                    .flat_map(|&e| {
-                        let element = elements[e as usize];
-                        element
-                            .nodes
-                            .iter()
-                            .map(move |&m| (m, element.couples_twist))
-                    })
-                    .collect();
-                // Coupled entries last among equal nodes, so dedup keeps them.
-                v.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(b.1.cmp(&a.1)));
-                v.dedup_by_key(|x| x.0);
-                v
+            .map(|b| {
+                let nodes = b * NODES_PER_BLOCK..((b + 1) * NODES_PER_BLOCK).min(node_count);
+                let mut block = NodeBlock {
+                    nodes: nodes.clone(),
+                    ..Default::default()
+                };
+                let mut adjacent = Vec::new();
+                for node in nodes {
+                    node_elements.neighbours(node, &elements, &mut adjacent);
+                    block.neighbours.extend_from_slice(&adjacent);
+                    block.start.push(block.neighbours.len() as u32);
+                    for c in 0..d {
+                        if let Some(column) = column_rows(dofs, d, node, c, &adjacent) {
+                            block.lengths.push(column.count() as u32);
+                        }
+                    }
+                }
+                block
             })
             .collect();
-        let d = dofs.dof_count() / node_count.max(1);
         let mut col_ptr = Vec::with_capacity(dofs.free_count() + 1);
         col_ptr.push(0u32);
-        let mut row_idx = Vec::new();
-        for (node, adjacent) in neighbours.iter().enumerate() {
-            for c in 0..d {
-                if dofs.equation(d * node + c).is_none() {
-                    continue;
-                }
-                for &(m, coupled) in adjacent {
-                    row_idx.extend(
-                        (0..d)
-                            .filter(|&k| coupled || same_block(c, k))
-                            .filter_map(|k| dofs.equation(d * m as usize + k))
-                            .map(|e| e as u32),
-                    );
-                }
-                col_ptr.push(row_idx.len() as u32);
+        for block in &blocks {
+            for &l in &block.lengths {
+                col_ptr.push(col_ptr[col_ptr.len() - 1] + l);
             }
         }
+        let mut row_idx = vec![0u32; col_ptr[col_ptr.len() - 1] as usize];
+        let mut rest = row_idx.as_mut_slice();
+        let mut parts = Vec::with_capacity(blocks.len());
+        for block in &blocks {
+            let len = block.lengths.iter().map(|&l| l as usize).sum();
+            let (part, tail) = rest.split_at_mut(len);
+            parts.push((part, block));
+            rest = tail;
+        }
+        parts.into_par_iter().for_each(|(part, block)| {
+            let mut slots = part.iter_mut();
+            let mut from = 0;
+            for (node, &to) in block.nodes.clone().zip(&block.start) {
+                let adjacent = &block.neighbours[from..to as usize];
+                for c in 0..d {
+                    for (eq, slot) in column_rows(dofs, d, node, c, adjacent)
+                        .into_iter()
+                        .flatten()
+                        .zip(&mut slots)
+                    {
+                        *slot = eq as u32;
+                    }
+                }
+                from = to as usize;
+            }
+        });
+        drop(blocks);
         let n = dofs.free_count();
         let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
         Self {
@@ -260,6 +259,79 @@ impl SparsityPattern {
     pub fn symbolic(&self) -> &SymbolicSparseColMat<u32> {
         &self.symbolic
     }
+}
+
+/// The elements at each node of a mesh (compressed rows), for the nodes' neighbours.
+struct NodeElements {
+    start: Vec<usize>,
+    elements: Vec<u32>,
+}
+
+impl NodeElements {
+    fn new(node_count: usize, elements: &[ElementNodes]) -> Self {
+        let mut start = vec![0usize; node_count + 1];
+        for element in elements {
+            for &n in element.nodes {
+                start[n as usize + 1] += 1;
+            }
+        }
+        for i in 0..node_count {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut at_node = vec![0u32; start[node_count]];
+        for (e, element) in elements.iter().enumerate() {
+            for &n in element.nodes {
+                at_node[fill[n as usize]] = e as u32;
+                fill[n as usize] += 1;
+            }
+        }
+        Self {
+            start,
+            elements: at_node,
+        }
+    }
+
+    /// The nodes sharing an element with `node` (itself included), ascending, each with
+    /// whether some element couples twist between the two, into `out`.
+    fn neighbours(&self, node: usize, elements: &[ElementNodes], out: &mut Vec<(u32, bool)>) {
+        out.clear();
+        for &e in &self.elements[self.start[node]..self.start[node + 1]] {
+            let element = elements[e as usize];
+            out.extend(element.nodes.iter().map(|&m| (m, element.couples_twist)));
+        }
+        // Coupled entries first among equal nodes, so dedup keeps them.
+        out.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(b.1.cmp(&a.1)));
+        out.dedup_by_key(|x| x.0);
+    }
+}
+
+/// The rows of column `c` (component `c` of `node`, `d` components per node) in a pattern whose
+/// `node` has neighbours `adjacent` ([`NodeElements::neighbours`]); `None` if the column's dof
+/// is prescribed.
+fn column_rows<'a>(
+    dofs: &'a DofMap,
+    d: usize,
+    node: usize,
+    c: usize,
+    adjacent: &'a [(u32, bool)],
+) -> Option<impl Iterator<Item = usize> + 'a> {
+    dofs.equation(d * node + c)?;
+    Some(adjacent.iter().flat_map(move |&(m, coupled)| {
+        (0..d)
+            .filter(move |&k| coupled || same_block(c, k))
+            .filter_map(move |k| dofs.equation(d * m as usize + k))
+    }))
+}
+
+/// A block of consecutive nodes in [`SparsityPattern::new`]: each node's neighbours (those
+/// of node `nodes.start + i` end at `start[i]`) and the lengths of its free columns.
+#[derive(Default)]
+struct NodeBlock {
+    nodes: std::ops::Range<usize>,
+    start: Vec<u32>,
+    neighbours: Vec<(u32, bool)>,
+    lengths: Vec<u32>,
 }
 
 /// Marker for a dof outside the dense block in [`DenseScatter`].
