@@ -138,18 +138,11 @@ impl Grid {
         self.cell_types.len()
     }
 
-    /// The grids of the parts of this grid's cells, `part[c]` (below `parts`) the part of cell
-    /// c: each holds its cells in order, their points renumbered in the order of first use,
-    /// the point and cell arrays restricted to them and the field data unchanged. One pass
-    /// over the cells and each part's own points, so the cost is the grid's size however many
-    /// parts there are.
-    pub fn split(&self, part: &[u32], parts: usize) -> Vec<Grid> {
-        self.split_by(&self.split_plan(part, parts))
-    }
-
-    /// How [`Self::split`] divides this grid's cells among `parts` parts (`part[c]` the part
-    /// of cell c): each part's cells, its points and its cells renumbered. Made once, it
-    /// splits every grid with the same cells ([`Self::split_by`]): the frames of a run.
+    /// How this grid's cells are divided among `parts` parts (`part[c]`, below `parts`, the
+    /// part of cell c): each part's cells in order, its points in the order of first use and
+    /// its cells renumbered to them. One pass over the cells and each part's own points, so
+    /// the cost is the grid's size however many parts there are. Made once, it divides every
+    /// grid with the same cells ([`GridView::part`]): the frames of a run.
     pub fn split_plan(&self, part: &[u32], parts: usize) -> SplitPlan {
         debug_assert_eq!(part.len(), self.cell_count());
         let mut cells = vec![Vec::new(); parts];
@@ -193,32 +186,6 @@ impl Grid {
         }
     }
 
-    /// The grids of the parts of `plan` (made by [`Self::split_plan`] from a grid with the
-    /// same cells): each part's cells as the plan numbers them, this grid's point
-    /// coordinates and arrays restricted to the part, on all threads.
-    pub fn split_by(&self, plan: &SplitPlan) -> Vec<Grid> {
-        use rayon::prelude::*;
-        debug_assert_eq!(plan.points, self.points.len());
-        plan.parts
-            .par_iter()
-            .map(|part| Grid {
-                points: (part.points.par_iter())
-                    .map(|&p| self.points[p as usize])
-                    .collect(),
-                connectivity: part.topology.connectivity.clone(),
-                offsets: part.topology.offsets.clone(),
-                cell_types: part.topology.cell_types.clone(),
-                point_data: (self.point_data.par_iter())
-                    .map(|f| f.select(&part.points))
-                    .collect(),
-                cell_data: (self.cell_data.par_iter())
-                    .map(|f| f.select(&part.cells))
-                    .collect(),
-                field_data: self.field_data.clone(),
-            })
-            .collect()
-    }
-
     /// Whether `plan` was made for a grid of this one's size (its cells are taken to be the
     /// same: a run's frames share them).
     pub fn fits(&self, plan: &SplitPlan) -> bool {
@@ -244,26 +211,96 @@ struct SplitPart {
     topology: Grid,
 }
 
-impl Field {
-    /// The field at the tuples `indices`, in that order.
-    fn select(&self, indices: &[u32]) -> Field {
-        let n = self.components;
-        fn pick<T: Clone>(values: &[T], indices: &[u32], n: usize) -> Vec<T> {
-            indices
-                .iter()
-                .flat_map(|&i| values[i as usize * n..(i as usize + 1) * n].iter().cloned())
-                .collect()
+impl SplitPlan {
+    /// Number of parts.
+    pub fn len(&self) -> usize {
+        self.parts.len()
+    }
+
+    /// Whether the plan has no parts.
+    pub fn is_empty(&self) -> bool {
+        self.parts.is_empty()
+    }
+
+    /// The share of the grid's cells that part `k` holds (for the memory a file of it
+    /// accounts for).
+    pub fn share(&self, k: usize) -> f64 {
+        let cells: usize = self.parts.iter().map(|p| p.cells.len()).sum();
+        self.parts[k].cells.len() as f64 / cells.max(1) as f64
+    }
+}
+
+/// What one file holds of a grid: the whole grid, or one part of a [`SplitPlan`] (its
+/// points' coordinates and its point and cell arrays' tuples read from the grid's through
+/// the plan's indices, its cells the plan's), without a copy of the grid.
+#[derive(Clone, Copy, Debug)]
+pub struct GridView<'a> {
+    pub grid: &'a Grid,
+    part: Option<&'a SplitPart>,
+}
+
+/// Whether a field's tuples are a grid's points', cells' or neither (field data).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Attachment {
+    Points,
+    Cells,
+    None,
+}
+
+impl<'a> GridView<'a> {
+    /// The whole `grid`.
+    pub fn whole(grid: &'a Grid) -> Self {
+        Self { grid, part: None }
+    }
+
+    /// Part `k` of `plan`, made by [`Grid::split_plan`] from a grid with the cells of
+    /// `grid` ([`Grid::fits`]).
+    pub fn part(grid: &'a Grid, plan: &'a SplitPlan, k: usize) -> Self {
+        debug_assert!(grid.fits(plan));
+        Self {
+            grid,
+            part: Some(&plan.parts[k]),
         }
-        let values = match &self.values {
-            FieldValues::F64(v) => FieldValues::F64(pick(v, indices, n)),
-            FieldValues::I32(v) => FieldValues::I32(pick(v, indices, n)),
-            FieldValues::Str(v) => FieldValues::Str(pick(v, indices, n)),
+    }
+
+    /// The cells (connectivity, offsets, types) the view holds, numbered to its points.
+    pub fn topology(&self) -> &'a Grid {
+        self.part.map_or(self.grid, |p| &p.topology)
+    }
+
+    pub fn point_count(&self) -> usize {
+        self.part.map_or(self.grid.points.len(), |p| p.points.len())
+    }
+
+    pub fn cell_count(&self) -> usize {
+        self.topology().cell_count()
+    }
+
+    /// The tuples of `values` (`n` components each, attached as `at`) the view holds, in
+    /// its order: each call of `each` gets one tuple.
+    pub fn for_each_tuple<T>(
+        &self,
+        values: &'a [T],
+        n: usize,
+        at: Attachment,
+        mut each: impl FnMut(&'a [T]),
+    ) {
+        let indices = match (self.part, at) {
+            (Some(p), Attachment::Points) => &p.points,
+            (Some(p), Attachment::Cells) => &p.cells,
+            _ => return values.chunks_exact(n).for_each(each),
         };
-        Field {
-            name: self.name.clone(),
-            components: n,
-            component_names: self.component_names.clone(),
-            values,
+        for &i in indices {
+            each(&values[i as usize * n..(i as usize + 1) * n]);
+        }
+    }
+
+    /// The number of tuples of a field attached as `at` with `len` values of `n` components.
+    pub fn tuple_count(&self, len: usize, n: usize, at: Attachment) -> usize {
+        match at {
+            Attachment::Points => self.point_count(),
+            Attachment::Cells => self.cell_count(),
+            Attachment::None => len / n.max(1),
         }
     }
 }
@@ -307,10 +344,11 @@ pub fn vtk_cell_type(kind: CellKind) -> u8 {
 mod tests {
     use super::*;
 
-    /// Three edges (VTK 21) in two parts, point 4 shared by both: each part
-    /// gets its own cells and points in order of first use, and its arrays' tuples.
+    /// Three edges (VTK 21) in two parts, point 4 shared by both: each part's file gets
+    /// its own cells and points in order of first use, and its arrays' tuples, read from
+    /// the whole grid through the plan.
     #[test]
-    fn split_gives_each_part_its_cells_points_and_arrays() {
+    fn a_part_holds_its_cells_points_and_arrays() {
         let mut grid = Grid {
             points: (0..7).map(|i| [i as f64, 0.0]).collect(),
             ..Grid::default()
@@ -325,15 +363,22 @@ mod tests {
         )];
         grid.cell_data = vec![Field::new("pair", 1, FieldValues::I32(vec![0, 1, 0]))];
         grid.field_data = vec![Field::strings("pair_names", vec!["a".into(), "b".into()])];
-        let parts = grid.split(&[0, 1, 0], 2);
-        assert_eq!(parts.len(), 2);
-        let [a, b] = [&parts[0], &parts[1]];
+        let plan = grid.split_plan(&[0, 1, 0], 2);
+        assert_eq!(plan.len(), 2);
+        assert_eq!([plan.share(0), plan.share(1)], [2.0 / 3.0, 1.0 / 3.0]);
+        let dir = tempfile::tempdir().unwrap();
+        let written = |grid: &Grid, k: usize| {
+            let path = dir.path().join(format!("part_{k}.vtu"));
+            vtu::write_vtu_with(&path, GridView::part(grid, &plan, k), &mut Vec::new()).unwrap();
+            vtu::read_vtu(&path).unwrap()
+        };
+        let [a, b] = [written(&grid, 0), written(&grid, 1)];
         assert_eq!(a.connectivity, [0, 1, 2, 3, 4, 5]);
         assert_eq!(a.offsets, [3, 6]);
         let xs = |g: &Grid| g.points.iter().map(|p| p[0]).collect::<Vec<_>>();
-        assert_eq!(xs(a), [0.0, 2.0, 1.0, 4.0, 6.0, 5.0]);
+        assert_eq!(xs(&a), [0.0, 2.0, 1.0, 4.0, 6.0, 5.0]);
         assert_eq!(b.connectivity, [0, 1, 2]);
-        assert_eq!(xs(b), [2.0, 4.0, 3.0]);
+        assert_eq!(xs(&b), [2.0, 4.0, 3.0]);
         assert_eq!(
             b.point_data[0].values,
             FieldValues::F64(vec![4.0, 5.0, 8.0, 9.0, 6.0, 7.0])
@@ -342,14 +387,50 @@ mod tests {
         assert_eq!(b.cell_data[0].values, FieldValues::I32(vec![1]));
         assert_eq!(a.field_data, grid.field_data);
         assert_eq!(a.cell_types, [21, 21]);
-        // The plan made from this frame's grid splits the next frame's (the same cells, other
-        // coordinates and values) as a fresh split of it does.
-        let plan = grid.split_plan(&[0, 1, 0], 2);
+        // The plan made from this frame's grid divides the next frame's (the same cells,
+        // other coordinates and values): part 1 holds its points' new values.
         let mut next = grid.clone();
         next.points.iter_mut().for_each(|p| p[1] = 1.0 + p[0]);
         next.point_data[0].values = FieldValues::F64((0..14).map(|i| f64::from(i) * 0.5).collect());
         assert!(next.fits(&plan));
-        assert_eq!(next.split_by(&plan), next.split(&[0, 1, 0], 2));
         assert!(!Grid::default().fits(&plan));
+        let b = written(&next, 1);
+        assert_eq!(b.points, [[2.0, 3.0], [4.0, 5.0], [3.0, 4.0]]);
+        assert_eq!(
+            b.point_data[0].values,
+            FieldValues::F64(vec![2.0, 2.5, 4.0, 4.5, 3.0, 3.5])
+        );
+        // The whole grid's file is the grid.
+        let path = dir.path().join("whole.vtu");
+        vtu::write_vtu(&path, &next).unwrap();
+        assert_eq!(vtu::read_vtu(&path).unwrap(), next);
+    }
+
+    /// A non-finite value is named by its index in the part's file, and a value outside the
+    /// part does not stop it.
+    #[test]
+    fn a_part_names_a_bad_value_by_its_index_in_the_file() {
+        let mut grid = Grid {
+            points: (0..5).map(|i| [i as f64, 0.0]).collect(),
+            ..Grid::default()
+        };
+        grid.push_cell(21, [0, 2, 1]);
+        grid.push_cell(21, [2, 4, 3]);
+        let mut values: Vec<f64> = (0..5).map(f64::from).collect();
+        values[0] = f64::NAN;
+        grid.point_data = vec![Field::scalar("p", values)];
+        let plan = grid.split_plan(&[0, 1], 2);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("part.vtu");
+        vtu::write_vtu_with(&path, GridView::part(&grid, &plan, 1), &mut Vec::new()).unwrap();
+        grid.point_data[0].values = FieldValues::F64(vec![0.0, 1.0, 2.0, f64::INFINITY, 4.0]);
+        let err = vtu::write_vtu_with(&path, GridView::part(&grid, &plan, 1), &mut Vec::new())
+            .unwrap_err()
+            .to_string();
+        // Part 1's points are 2, 4, 3: the grid's point 3 is the file's point 2.
+        assert!(
+            err.contains("`p`") && err.contains("(point 2, component 0)"),
+            "{err}"
+        );
     }
 }

@@ -33,7 +33,7 @@ use std::path::Path;
 
 use super::atomic::{invalid_data, write_bytes};
 use super::pvd::escape_attr;
-use super::{Field, FieldValues, Grid};
+use super::{Attachment, Field, FieldValues, Grid, GridView};
 use crate::Result;
 
 /// Bytes of the per-array size header (`header_type="UInt64"`).
@@ -48,25 +48,26 @@ const HEADER_BYTES: usize = 8;
 /// empty field name, or a NaN/infinite coordinate or value. The error names the array and
 /// the first bad index.
 pub fn write_vtu(path: &Path, grid: &Grid) -> Result<()> {
-    write_vtu_with(path, grid, &mut Vec::new())
+    write_vtu_with(path, GridView::whole(grid), &mut Vec::new())
 }
 
-/// [`write_vtu`] encoding the whole file into `buffer` first (cleared; kept for the next
-/// file by a caller writing many), then writing it with one call: no write buffer, no
-/// staging copy, and no fresh memory per file.
-pub fn write_vtu_with(path: &Path, grid: &Grid, buffer: &mut Vec<u8>) -> Result<()> {
-    validate(grid).map_err(|msg| invalid_data(path, msg))?;
-    let head = head(grid);
+/// [`write_vtu`] of what `view` holds of a grid (the whole grid or one part of it, read
+/// through the part's indices: no copy of the grid), encoding the whole file into `buffer`
+/// first (cleared; kept for the next file by a caller writing many), then writing it with
+/// one call: no write buffer, no staging copy, and no fresh memory per file.
+pub fn write_vtu_with(path: &Path, view: GridView, buffer: &mut Vec<u8>) -> Result<()> {
+    validate(&view).map_err(|msg| invalid_data(path, msg))?;
+    let head = head(&view);
     buffer.clear();
     buffer.reserve(
         head.len()
-            + arrays(grid)
-                .map(|a| HEADER_BYTES + a.data_bytes(grid))
+            + arrays(view.grid)
+                .map(|a| HEADER_BYTES + a.data_bytes(&view))
                 .sum::<usize>(),
     );
     buffer.extend_from_slice(head.as_bytes());
-    for array in arrays(grid) {
-        array.encode_data(grid, buffer);
+    for array in arrays(view.grid) {
+        array.encode_data(&view, buffer);
     }
     buffer.extend_from_slice(b"\n</AppendedData>\n</VTKFile>\n");
     write_bytes(path, buffer)
@@ -75,7 +76,7 @@ pub fn write_vtu_with(path: &Path, grid: &Grid, buffer: &mut Vec<u8>) -> Result<
 /// One `<DataArray>` of the file.
 #[derive(Clone, Copy)]
 enum Array<'a> {
-    Field(&'a Field),
+    Field(&'a Field, Attachment),
     Points,
     Connectivity,
     Offsets,
@@ -84,11 +85,12 @@ enum Array<'a> {
 
 /// The arrays of `grid` in file order: field data, point data, cell data, points, cells.
 fn arrays(grid: &Grid) -> impl Iterator<Item = Array<'_>> {
-    grid.field_data
-        .iter()
-        .chain(&grid.point_data)
-        .chain(&grid.cell_data)
-        .map(Array::Field)
+    fn attached(fields: &[Field], at: Attachment) -> impl Iterator<Item = Array<'_>> {
+        fields.iter().map(move |f| Array::Field(f, at))
+    }
+    attached(&grid.field_data, Attachment::None)
+        .chain(attached(&grid.point_data, Attachment::Points))
+        .chain(attached(&grid.cell_data, Attachment::Cells))
         .chain([
             Array::Points,
             Array::Connectivity,
@@ -98,39 +100,46 @@ fn arrays(grid: &Grid) -> impl Iterator<Item = Array<'_>> {
 }
 
 impl Array<'_> {
-    /// (Name, VTK type, components, number of values).
-    fn describe<'g>(&'g self, grid: &'g Grid) -> (&'g str, &'static str, usize, usize) {
+    /// (Name, VTK type, components, number of values) in the file of `view`.
+    fn describe<'g>(&'g self, view: &GridView<'g>) -> (&'g str, &'static str, usize, usize) {
+        let cells = view.topology();
         match self {
-            Array::Field(f) => match &f.values {
-                FieldValues::F64(v) => (&f.name, "Float64", f.components, v.len()),
-                FieldValues::I32(v) => (&f.name, "Int32", f.components, v.len()),
-                FieldValues::Str(v) => (&f.name, "String", f.components, v.len()),
-            },
-            Array::Points => ("Points", "Float64", 3, 3 * grid.points.len()),
-            Array::Connectivity => ("connectivity", "UInt64", 1, grid.connectivity.len()),
-            Array::Offsets => ("offsets", "UInt64", 1, grid.offsets.len()),
-            Array::Types => ("types", "UInt8", 1, grid.cell_types.len()),
+            Array::Field(f, at) => {
+                let n = f.components * view.tuple_count(f.len(), f.components, *at);
+                match &f.values {
+                    FieldValues::F64(_) => (&f.name, "Float64", f.components, n),
+                    FieldValues::I32(_) => (&f.name, "Int32", f.components, n),
+                    FieldValues::Str(_) => (&f.name, "String", f.components, n),
+                }
+            }
+            Array::Points => ("Points", "Float64", 3, 3 * view.point_count()),
+            Array::Connectivity => ("connectivity", "UInt64", 1, cells.connectivity.len()),
+            Array::Offsets => ("offsets", "UInt64", 1, cells.offsets.len()),
+            Array::Types => ("types", "UInt8", 1, cells.cell_types.len()),
         }
     }
 
     /// Bytes of the values (without the size header). Strings are written as VTK does,
     /// each followed by a NUL byte.
-    fn data_bytes(&self, grid: &Grid) -> usize {
-        if let Array::Field(Field {
-            values: FieldValues::Str(v),
-            ..
-        }) = self
+    fn data_bytes(&self, view: &GridView) -> usize {
+        if let Array::Field(
+            Field {
+                values: FieldValues::Str(v),
+                ..
+            },
+            _,
+        ) = self
         {
             return v.iter().map(|s| s.len() + 1).sum();
         }
-        let (_, ty, _, n) = self.describe(grid);
+        let (_, ty, _, n) = self.describe(view);
         n * scalar_size(ty)
     }
 
     /// The `<DataArray .../>` tag pointing at `offset` in the appended data. Field data
     /// arrays state their `NumberOfTuples` (VTK cannot infer it from a point or cell count).
-    fn tag(&self, grid: &Grid, offset: usize, field_data: bool) -> String {
-        let (name, ty, components, n) = self.describe(grid);
+    fn tag(&self, view: &GridView, offset: usize, field_data: bool) -> String {
+        let (name, ty, components, n) = self.describe(view);
         let mut tag = format!("<DataArray type=\"{ty}\" Name=\"{}\"", escape_attr(name));
         if components != 1 {
             let _ = write!(tag, " NumberOfComponents=\"{components}\"");
@@ -138,7 +147,7 @@ impl Array<'_> {
         if field_data {
             let _ = write!(tag, " NumberOfTuples=\"{}\"", n / components);
         }
-        if let Array::Field(f) = self {
+        if let Array::Field(f, _) = self {
             for (i, c) in f.component_names.iter().enumerate() {
                 let _ = write!(tag, " ComponentName{i}=\"{}\"", escape_attr(c));
             }
@@ -148,36 +157,58 @@ impl Array<'_> {
     }
 
     /// Appends the array's size header and values (little-endian) to `out`.
-    fn encode_data(&self, grid: &Grid, out: &mut Vec<u8>) {
-        out.extend_from_slice(&(self.data_bytes(grid) as u64).to_le_bytes());
+    fn encode_data(&self, view: &GridView, out: &mut Vec<u8>) {
+        out.extend_from_slice(&(self.data_bytes(view) as u64).to_le_bytes());
+        let cells = view.topology();
         match self {
-            Array::Field(f) => match &f.values {
-                FieldValues::F64(v) => encode_le(out, v, |x| x.to_le_bytes()),
-                FieldValues::I32(v) => encode_le(out, v, |x| x.to_le_bytes()),
-                FieldValues::Str(v) => v.iter().for_each(|s| {
-                    out.extend_from_slice(s.as_bytes());
-                    out.push(0);
-                }),
-            },
-            Array::Points => encode_le(out, &grid.points, |&[x, y]| {
-                let mut b = [0u8; 24];
-                b[..8].copy_from_slice(&x.to_le_bytes());
-                b[8..16].copy_from_slice(&y.to_le_bytes());
-                b
-            }),
-            Array::Connectivity => encode_le(out, &grid.connectivity, |x| x.to_le_bytes()),
-            Array::Offsets => encode_le(out, &grid.offsets, |x| x.to_le_bytes()),
-            Array::Types => out.extend_from_slice(&grid.cell_types),
+            Array::Field(f, at) => {
+                let n = f.components;
+                match &f.values {
+                    FieldValues::F64(v) => encode_le(out, view, (v, n, *at), |x| x.to_le_bytes()),
+                    FieldValues::I32(v) => encode_le(out, view, (v, n, *at), |x| x.to_le_bytes()),
+                    FieldValues::Str(v) => v.iter().for_each(|s| {
+                        out.extend_from_slice(s.as_bytes());
+                        out.push(0);
+                    }),
+                }
+            }
+            Array::Points => {
+                let points = (&view.grid.points[..], 1, Attachment::Points);
+                encode_le(out, view, points, |&[x, y]| {
+                    let mut b = [0u8; 24];
+                    b[..8].copy_from_slice(&x.to_le_bytes());
+                    b[8..16].copy_from_slice(&y.to_le_bytes());
+                    b
+                })
+            }
+            Array::Connectivity => {
+                let whole = GridView::whole(cells);
+                let connectivity = (&cells.connectivity[..], 1, Attachment::None);
+                encode_le(out, &whole, connectivity, |x| x.to_le_bytes())
+            }
+            Array::Offsets => {
+                let whole = GridView::whole(cells);
+                let offsets = (&cells.offsets[..], 1, Attachment::None);
+                encode_le(out, &whole, offsets, |x| x.to_le_bytes())
+            }
+            Array::Types => out.extend_from_slice(&cells.cell_types),
         }
     }
 }
 
-/// Appends `values` converted by `bytes` (independent of the host's byte order).
-fn encode_le<T, const N: usize>(out: &mut Vec<u8>, values: &[T], bytes: impl Fn(&T) -> [u8; N]) {
-    out.reserve(N * values.len());
-    for v in values {
-        out.extend_from_slice(&bytes(v));
-    }
+/// Appends the tuples `view` holds of `values` (`n` components each, attached as `at`),
+/// converted by `bytes` (independent of the host's byte order).
+fn encode_le<T, const N: usize>(
+    out: &mut Vec<u8>,
+    view: &GridView,
+    (values, n, at): (&[T], usize, Attachment),
+    bytes: impl Fn(&T) -> [u8; N],
+) {
+    view.for_each_tuple(values, n, at, |tuple| {
+        for v in tuple {
+            out.extend_from_slice(&bytes(v));
+        }
+    });
 }
 
 /// Size in bytes of a VTK scalar type written or read here.
@@ -191,12 +222,13 @@ fn scalar_size(ty: &str) -> usize {
 }
 
 /// The XML up to and including the `_` that starts the appended data.
-fn head(grid: &Grid) -> String {
+fn head(view: &GridView) -> String {
+    let grid = view.grid;
     let mut offset = 0;
     let mut tags = Vec::new();
     for (i, a) in arrays(grid).enumerate() {
-        tags.push(a.tag(grid, offset, i < grid.field_data.len()));
-        offset += HEADER_BYTES + a.data_bytes(grid);
+        tags.push(a.tag(view, offset, i < grid.field_data.len()));
+        offset += HEADER_BYTES + a.data_bytes(view);
     }
     let (field_tags, rest) = tags.split_at(grid.field_data.len());
     let (point_tags, rest) = rest.split_at(grid.point_data.len());
@@ -215,8 +247,8 @@ fn head(grid: &Grid) -> String {
     let _ = writeln!(
         head,
         "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
-        grid.points.len(),
-        grid.cell_count(),
+        view.point_count(),
+        view.cell_count(),
     );
     for (tag, fields, tags) in [
         ("PointData", &grid.point_data, point_tags),
@@ -525,45 +557,49 @@ fn known_cell_type(t: u8) -> bool {
     matches!(t, 1..=14 | 21..=35 | 41 | 42 | 51..=56 | 60..=81)
 }
 /// Checks `grid` as documented on [`write_vtu`].
-fn validate(grid: &Grid) -> std::result::Result<(), String> {
-    let n_points = grid.points.len();
-    let n_cells = grid.cell_types.len();
+fn validate(view: &GridView) -> std::result::Result<(), String> {
+    let grid = view.grid;
+    let cells = view.topology();
+    let n_points = view.point_count();
+    let n_cells = cells.cell_types.len();
     if u32::try_from(n_points).is_err() || u32::try_from(n_cells).is_err() {
         return Err(format!(
             "{n_points} points / {n_cells} cells exceed VTK's 32-bit counts"
         ));
     }
-    if let Some(i) = grid
-        .points
-        .iter()
-        .position(|p| !p.iter().all(|c| c.is_finite()))
-    {
+    if let Some((i, p)) = first_bad(view, &grid.points, 1, Attachment::Points, |p| {
+        p.iter().all(|c| c.is_finite())
+    }) {
         return Err(format!(
             "points: coordinate of point {i} is not finite: {:?}",
-            grid.points[i]
+            p[0]
         ));
     }
-    if grid.offsets.len() != n_cells {
+    if cells.offsets.len() != n_cells {
         return Err(format!(
             "offsets: {} entries for {n_cells} cell types",
-            grid.offsets.len()
+            cells.offsets.len()
         ));
     }
-    if let Some(i) = grid.connectivity.iter().position(|&p| p >= n_points as u64) {
+    if let Some(i) = cells
+        .connectivity
+        .iter()
+        .position(|&p| p >= n_points as u64)
+    {
         return Err(format!(
             "connectivity: index {i} refers to point {} but there are {n_points} points",
-            grid.connectivity[i]
+            cells.connectivity[i]
         ));
     }
     let mut start = 0u64;
-    for (i, (&end, &t)) in grid.offsets.iter().zip(&grid.cell_types).enumerate() {
+    for (i, (&end, &t)) in cells.offsets.iter().zip(&cells.cell_types).enumerate() {
         if !known_cell_type(t) {
             return Err(format!("cell {i}: unknown VTK cell type {t}"));
         }
-        if end < start || end > grid.connectivity.len() as u64 {
+        if end < start || end > cells.connectivity.len() as u64 {
             return Err(format!(
                 "offsets: cell {i} ends at {end}, outside {start}..={}",
-                grid.connectivity.len()
+                cells.connectivity.len()
             ));
         }
         if let Some(n) = nodes_of(t)
@@ -576,25 +612,55 @@ fn validate(grid: &Grid) -> std::result::Result<(), String> {
         }
         start = end;
     }
-    if start != grid.connectivity.len() as u64 {
+    if start != cells.connectivity.len() as u64 {
         return Err(format!(
             "offsets: the last cell ends at {start} but connectivity has {} entries",
-            grid.connectivity.len()
+            cells.connectivity.len()
         ));
     }
-    check_fields("point", &grid.point_data, Some(n_points))?;
-    check_fields("cell", &grid.cell_data, Some(n_cells))?;
-    check_fields("field-data", &grid.field_data, None)
+    check_fields(view, "point", &grid.point_data, Attachment::Points)?;
+    check_fields(view, "cell", &grid.cell_data, Attachment::Cells)?;
+    check_fields(view, "field-data", &grid.field_data, Attachment::None)
 }
 
-/// Checks names, lengths, component names and values of the `kind` arrays ("point", "cell"
-/// with `count` tuples each, or "field-data" with any whole number of tuples). Strings are
-/// allowed in field data only and must not contain NUL (VTK's separator).
+/// The first tuple (its index in `view`'s file, and the tuple) of `values` (`n` components
+/// each, attached as `at`) that `view` holds and that fails `good`.
+fn first_bad<'v, T>(
+    view: &GridView<'v>,
+    values: &'v [T],
+    n: usize,
+    at: Attachment,
+    good: impl Fn(&T) -> bool,
+) -> Option<(usize, &'v [T])> {
+    let (mut index, mut bad) = (0, None);
+    view.for_each_tuple(values, n, at, |tuple| {
+        if bad.is_none() {
+            if tuple.iter().all(&good) {
+                index += 1;
+            } else {
+                bad = Some(tuple);
+            }
+        }
+    });
+    bad.map(|tuple| (index, tuple))
+}
+
+/// Checks names, lengths, component names and values of the `kind` arrays `fields`
+/// attached as `at` ("point" or "cell": as many tuples as the grid's points or cells;
+/// "field-data": any whole number of tuples), the values only of the tuples `view` holds
+/// (a non-finite value is named by its index in the file). Strings are allowed in field
+/// data only and must not contain NUL (VTK's separator).
 fn check_fields(
+    view: &GridView,
     kind: &str,
     fields: &[Field],
-    count: Option<usize>,
+    at: Attachment,
 ) -> std::result::Result<(), String> {
+    let count = match at {
+        Attachment::Points => Some(view.grid.points.len()),
+        Attachment::Cells => Some(view.grid.cell_count()),
+        Attachment::None => None,
+    };
     let mut names = HashSet::new();
     for f in fields {
         let name = &f.name;
@@ -632,14 +698,14 @@ fn check_fields(
             }
         }
         if let FieldValues::F64(v) = &f.values
-            && let Some(i) = v.iter().position(|x| !x.is_finite())
+            && let Some((tuple, values)) = first_bad(view, v, f.components, at, |x| x.is_finite())
         {
+            let component = values.iter().position(|x| !x.is_finite()).unwrap_or(0);
             return Err(format!(
-                "{kind} field `{name}` has the non-finite value {} at index {i} \
-                 ({kind} {}, component {})",
-                v[i],
-                i / f.components,
-                i % f.components
+                "{kind} field `{name}` has the non-finite value {} at index {} \
+                 ({kind} {tuple}, component {component})",
+                values[component],
+                tuple * f.components + component,
             ));
         }
     }

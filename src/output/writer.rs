@@ -3,9 +3,8 @@
 //! written in order on one thread while the next increment computes.
 
 use std::path::{Path, PathBuf};
-use std::sync::mpsc;
+use std::sync::{Arc, mpsc};
 
-use super::Grid;
 use super::append::Append;
 use super::atomic::write_bytes;
 use super::csv::{Cell, CsvTable, write_csv};
@@ -13,6 +12,7 @@ use super::pvd::{PvdEntry, write_pvd};
 use super::restart::{ContinuumStates, OutputState, encode_record};
 use super::vtm::{VtmBlock, write_vtm};
 use super::vtu::write_vtu_with;
+use super::{Grid, GridView, SplitPlan};
 use crate::solver::state::Progress;
 use crate::{Error, Result};
 
@@ -20,6 +20,9 @@ use crate::{Error, Result};
 #[derive(Debug)]
 pub enum Content {
     Vtu(Grid),
+    /// Part `k` of a grid divided by a plan ([`GridView::part`]): the grid and the plan are
+    /// shared by the files of its parts, each written without a copy of the grid.
+    VtuPart(Arc<Grid>, Arc<SplitPlan>, usize),
     Csv(CsvTable),
     /// A table with text or empty cells.
     Table(CsvTable<Cell>),
@@ -39,6 +42,7 @@ impl Content {
     fn heap_bytes(&self) -> usize {
         match self {
             Content::Vtu(grid) => grid.heap_bytes(),
+            Content::VtuPart(grid, plan, k) => (grid.heap_bytes() as f64 * plan.share(*k)) as usize,
             Content::Csv(table) => table.rows.len() * table.columns.len() * size_of::<f64>(),
             Content::Table(table) => table.rows.len() * table.columns.len() * size_of::<Cell>(),
             Content::Record(bytes) | Content::Text(bytes) => bytes.len(),
@@ -50,7 +54,10 @@ impl Content {
     /// Writes the file, a VTU file through `buffer` (the writer thread's, reused).
     fn write(&self, path: &Path, buffer: &mut Vec<u8>) -> Result<()> {
         match self {
-            Content::Vtu(grid) => write_vtu_with(path, grid, buffer),
+            Content::Vtu(grid) => write_vtu_with(path, GridView::whole(grid), buffer),
+            Content::VtuPart(grid, plan, k) => {
+                write_vtu_with(path, GridView::part(grid, plan, *k), buffer)
+            }
             Content::Csv(table) => write_csv(path, table),
             Content::Table(table) => write_csv(path, table),
             Content::Pvd(entries) => write_pvd(path, entries),

@@ -2,6 +2,7 @@
 //! restart record, the growing tables and the indexes on the background writer, in the order
 //! that keeps the folder consistent at every moment (see [`crate::run`]).
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use super::Session;
@@ -39,7 +40,7 @@ pub(super) struct StepWriter<'m, 's, F> {
     interface: InterfaceOutput,
     /// How the frames' grids of the bodies and of the contacts are divided into one file per
     /// body and per pair, made at the first frame (their cells are the same in every frame).
-    splits: [Option<SplitPlan>; 2],
+    splits: [Option<Arc<SplitPlan>>; 2],
     folder: &'m OutputFolder,
     vtu: bool,
     /// Field output at every frame of a cyclic step (`[output] cycle_frames = "all"`).
@@ -425,14 +426,16 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
 
     /// Queues the cells of `grid`, each in one file: as `whole` when they are all one part's,
     /// else each part's cells (`part[c]` the part of cell c) as `part_file(k)` (k 1-based), so
-    /// a frame's output grows with the model, not with the model times its parts. `plan` is
-    /// the division of the last frame's grid, made here if there is none that fits. Returns
+    /// a frame's output grows with the model, not with the model times its parts. The parts'
+    /// files share the grid and are written from it through `plan` (no copy of the grid per
+    /// part, on the writer thread). `plan` is the division of the last frame's grid, made
+    /// here if there is none that fits. Returns
     /// the block `name` of the frame's multiblock file that lists the files by the parts'
     /// names.
     fn queue_parts<'n>(
         &mut self,
         (name, grid): (&str, Grid),
-        (part, plan): (&[u32], &mut Option<SplitPlan>),
+        (part, plan): (&[u32], &mut Option<Arc<SplitPlan>>),
         parts: impl ExactSizeIterator<Item = &'n str>,
         whole: RunFile,
         part_file: impl Fn(usize) -> RunFile<'static>,
@@ -445,16 +448,15 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
                 .queue(self.folder.path(whole)?, Content::Vtu(grid));
         } else {
             let fitting = plan.take().filter(|p| grid.fits(p));
-            let division = fitting.unwrap_or_else(|| grid.split_plan(part, parts.len()));
-            let grids = grid.split_by(&division);
-            *plan = Some(division);
-            for (k, (part_name, grid)) in parts.zip(grids).enumerate() {
+            let division = fitting.unwrap_or_else(|| Arc::new(grid.split_plan(part, parts.len())));
+            let grid = Arc::new(grid);
+            for (k, part_name) in parts.enumerate() {
                 let file = part_file(k + 1);
-                self.out
-                    .records
-                    .queue(self.folder.path(file)?, Content::Vtu(grid));
+                let content = Content::VtuPart(grid.clone(), division.clone(), k);
+                self.out.records.queue(self.folder.path(file)?, content);
                 datasets.push((part_name.to_string(), file.name().into()));
             }
+            *plan = Some(division);
         }
         Ok(VtmBlock {
             name: name.into(),
