@@ -3,7 +3,7 @@
 //! against the closed form; plus a mesh-refinement study of the displacement error.
 mod common;
 
-use asperity::element::continuum::point_kinematics;
+use asperity::element::kinematics::point_kinematics;
 use asperity::element::quadrature::cell_rule;
 use asperity::mesh::Mesh;
 use common::*;

@@ -159,7 +159,7 @@ struct CylinderStep {
 /// within 1 % for ν = 0.3 over the fraction of a cell this moves), but not past the
 /// outermost yielded point (if the two overlap in radius, their mean).
 fn boundary_radius(model: &Model, states: &[asperity::material::PointState]) -> f64 {
-    use asperity::element::continuum::point_kinematics;
+    use asperity::element::kinematics::point_kinematics;
     use asperity::element::quadrature::{MAX_CELL_POINTS, cell_rule};
     let (mut plastic, mut elastic) = (A, (B, SY));
     for (e, c) in model.continuum.cells.iter().enumerate() {

@@ -76,7 +76,7 @@ fn radial_conduction_through_a_hollow_cylinder_and_its_thermal_stresses() {
             .iter()
             .enumerate()
         {
-            let x = asperity::element::continuum::point_kinematics(
+            let x = asperity::element::kinematics::point_kinematics(
                 &model.analysis,
                 cell.kind,
                 &cell.coords,

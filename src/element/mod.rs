@@ -10,6 +10,7 @@
 
 pub mod continuum;
 pub mod interface6;
+pub mod kinematics;
 pub mod quadrature;
 pub mod set;
 pub mod shape;

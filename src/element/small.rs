@@ -110,7 +110,7 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::element::continuum::StrainDisplacement;
+    use crate::element::kinematics::StrainDisplacement;
     use crate::material::Tangent;
 
     /// The written-out products give nalgebra's bits (the kernel's outputs must not move),

@@ -28,10 +28,10 @@ pub use thermal_spec::{BodyHeatSource, BodyTemperature, ThermalBoundary, Thermal
 use crate::assembly::{Coloring, DofMap, ElementNodes, SparsityPattern};
 use crate::contact::laws::{self, LawDescriptor};
 use crate::element::Analysis;
-use crate::element::continuum::min_jacobian;
 use crate::element::interface6::{
     InterfaceElement, InterfaceRule, chord_length, surface_compliance,
 };
+use crate::element::kinematics::min_jacobian;
 use crate::element::set::{ContactPair, ContinuumCell, ContinuumSet, ElementSet, InterfaceSet};
 use crate::error::{GroupKind, GroupProblem, TopologyProblem};
 use crate::mesh::interface::{InterfaceTopology, insert_interface};

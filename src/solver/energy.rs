@@ -27,8 +27,8 @@ use std::ops::Sub;
 
 use crate::contact::{self, InterfaceState};
 use crate::element::ElementVector;
-use crate::element::continuum::point_kinematics;
 use crate::element::interface6::{InterfacePoint, interface_point, relative_displacement};
+use crate::element::kinematics::point_kinematics;
 use crate::element::quadrature::{MAX_CELL_POINTS, cell_rule};
 use crate::element::set::ContinuumCell;
 use crate::element::set::{INTERFACE_POINTS, InternalLayout};

@@ -4,8 +4,8 @@
 
 use super::{Conduction, JointConductance, JointPoint, ThermalCondition, ThermalSupport};
 use crate::contact::InterfaceState;
-use crate::element::continuum::point_kinematics;
 use crate::element::interface6::interface_point;
+use crate::element::kinematics::point_kinematics;
 use crate::element::quadrature::{GAUSS3, cell_rule};
 use crate::element::set::{ContinuumSet, INTERFACE_POINTS, InterfaceSet};
 use crate::element::shape::{cell_shape, line3};

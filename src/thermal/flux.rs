@@ -1,7 +1,7 @@
 //! The heat flux −k ∇T at the mesh nodes, for output.
 
 use super::Conduction;
-use crate::element::continuum::point_kinematics;
+use crate::element::kinematics::point_kinematics;
 use crate::element::quadrature::QuadPoint;
 use crate::element::set::ContinuumSet;
 use crate::element::shape::node_coordinates;
