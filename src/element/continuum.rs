@@ -147,7 +147,7 @@ pub struct CellBody<'a> {
 /// Each integration point's material is updated from `committed[g]` into `trial[g]`, and,
 /// for a material with internal variables, from the cell's `history` (point after point,
 /// [`Material::internal_variables`] each). The tangent is accumulated into `k` only when `k`
-/// is given (residual-only evaluations skip it). Cells must have passed [`min_jacobian`] at
+/// is given (residual-only evaluations skip it). Cells must have passed [`min_jacobian`](super::kinematics::min_jacobian) at
 /// model set-up.
 ///
 /// With a `temperature`, the material sees the mechanical strain ε − α ΔT m (the thermal
