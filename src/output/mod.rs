@@ -344,18 +344,25 @@ pub fn vtk_cell_type(kind: CellKind) -> u8 {
 mod tests {
     use super::*;
 
-    /// Three edges (VTK 21) in two parts, point 4 shared by both: each part's file gets
+    /// `n` quadratic edges (VTK 21) along x, each sharing its last point with the next: edge
+    /// k is (2k, 2k + 2, 2k + 1), point i at (i, 0).
+    fn chain_of_edges(n: u64) -> Grid {
+        let mut grid = Grid {
+            points: (0..2 * n + 1).map(|i| [i as f64, 0.0]).collect(),
+            ..Grid::default()
+        };
+        for k in 0..n {
+            grid.push_cell(21, [2 * k, 2 * k + 2, 2 * k + 1]);
+        }
+        grid
+    }
+
+    /// Three edges in two parts, point 4 shared by both: each part's file gets
     /// its own cells and points in order of first use, and its arrays' tuples, read from
     /// the whole grid through the plan.
     #[test]
     fn a_part_holds_its_cells_points_and_arrays() {
-        let mut grid = Grid {
-            points: (0..7).map(|i| [i as f64, 0.0]).collect(),
-            ..Grid::default()
-        };
-        grid.push_cell(21, [0, 2, 1]);
-        grid.push_cell(21, [2, 4, 3]);
-        grid.push_cell(21, [4, 6, 5]);
+        let mut grid = chain_of_edges(3);
         grid.point_data = vec![Field::new(
             "u",
             2,
@@ -410,12 +417,7 @@ mod tests {
     /// part does not stop it.
     #[test]
     fn a_part_names_a_bad_value_by_its_index_in_the_file() {
-        let mut grid = Grid {
-            points: (0..5).map(|i| [i as f64, 0.0]).collect(),
-            ..Grid::default()
-        };
-        grid.push_cell(21, [0, 2, 1]);
-        grid.push_cell(21, [2, 4, 3]);
+        let mut grid = chain_of_edges(2);
         let mut values: Vec<f64> = (0..5).map(f64::from).collect();
         values[0] = f64::NAN;
         grid.point_data = vec![Field::scalar("p", values)];
