@@ -186,22 +186,7 @@ impl SparsityPattern {
             .into_par_iter()
             .map(|b| {
                 let nodes = b * NODES_PER_BLOCK..((b + 1) * NODES_PER_BLOCK).min(node_count);
-                let mut block = NodeBlock {
-                    nodes: nodes.clone(),
-                    ..Default::default()
-                };
-                let mut adjacent = Vec::new();
-                for node in nodes {
-                    node_elements.neighbours(node, &elements, &mut adjacent);
-                    block.neighbours.extend_from_slice(&adjacent);
-                    block.start.push(block.neighbours.len() as u32);
-                    for c in 0..d {
-                        if let Some(column) = column_rows(dofs, d, node, c, &adjacent) {
-                            block.lengths.push(column.count() as u32);
-                        }
-                    }
-                }
-                block
+                NodeBlock::new(nodes, (dofs, d), &node_elements, &elements)
             })
             .collect();
         let mut col_ptr = Vec::with_capacity(dofs.free_count() + 1);
@@ -220,23 +205,9 @@ impl SparsityPattern {
             parts.push((part, block));
             rest = tail;
         }
-        parts.into_par_iter().for_each(|(part, block)| {
-            let mut slots = part.iter_mut();
-            let mut from = 0;
-            for (node, &to) in block.nodes.clone().zip(&block.start) {
-                let adjacent = &block.neighbours[from..to as usize];
-                for c in 0..d {
-                    for (eq, slot) in column_rows(dofs, d, node, c, adjacent)
-                        .into_iter()
-                        .flatten()
-                        .zip(&mut slots)
-                    {
-                        *slot = eq as u32;
-                    }
-                }
-                from = to as usize;
-            }
-        });
+        parts
+            .into_par_iter()
+            .for_each(|(part, block)| block.write_rows((dofs, d), part));
         drop(blocks);
         let n = dofs.free_count();
         let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
@@ -332,6 +303,54 @@ struct NodeBlock {
     start: Vec<u32>,
     neighbours: Vec<(u32, bool)>,
     lengths: Vec<u32>,
+}
+
+impl NodeBlock {
+    /// The neighbours of `nodes` and the lengths of their columns (`d` components per node,
+    /// numbered by `dofs`).
+    fn new(
+        nodes: std::ops::Range<usize>,
+        (dofs, d): (&DofMap, usize),
+        node_elements: &NodeElements,
+        elements: &[ElementNodes],
+    ) -> Self {
+        let mut block = NodeBlock {
+            nodes: nodes.clone(),
+            ..Default::default()
+        };
+        let mut adjacent = Vec::new();
+        for node in nodes {
+            node_elements.neighbours(node, elements, &mut adjacent);
+            block.neighbours.extend_from_slice(&adjacent);
+            block.start.push(block.neighbours.len() as u32);
+            for c in 0..d {
+                if let Some(column) = column_rows(dofs, d, node, c, &adjacent) {
+                    block.lengths.push(column.count() as u32);
+                }
+            }
+        }
+        block
+    }
+
+    /// Writes the rows of the block's columns, in order, into `rows` (as long as the
+    /// lengths' sum).
+    fn write_rows(&self, (dofs, d): (&DofMap, usize), rows: &mut [u32]) {
+        let mut slots = rows.iter_mut();
+        let mut from = 0;
+        for (node, &to) in self.nodes.clone().zip(&self.start) {
+            let adjacent = &self.neighbours[from..to as usize];
+            for c in 0..d {
+                let column = column_rows(dofs, d, node, c, adjacent)
+                    .into_iter()
+                    .flatten();
+                for (eq, slot) in column.zip(&mut slots) {
+                    *slot = eq as u32;
+                }
+            }
+            from = to as usize;
+        }
+        debug_assert!(slots.next().is_none(), "the rows fill the block's columns");
+    }
 }
 
 /// Marker for a dof outside the dense block in [`DenseScatter`].

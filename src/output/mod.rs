@@ -212,16 +212,6 @@ struct SplitPart {
 }
 
 impl SplitPlan {
-    /// Number of parts.
-    pub fn len(&self) -> usize {
-        self.parts.len()
-    }
-
-    /// Whether the plan has no parts.
-    pub fn is_empty(&self) -> bool {
-        self.parts.is_empty()
-    }
-
     /// The share of the grid's cells that part `k` holds (for the memory a file of it
     /// accounts for).
     pub fn share(&self, k: usize) -> f64 {
@@ -236,7 +226,8 @@ impl SplitPlan {
 #[derive(Clone, Copy, Debug)]
 pub struct GridView<'a> {
     pub grid: &'a Grid,
-    part: Option<&'a SplitPart>,
+    /// The plan and the part's index in it.
+    part: Option<(&'a SplitPlan, usize)>,
 }
 
 /// Whether a field's tuples are a grid's points', cells' or neither (field data).
@@ -256,20 +247,29 @@ impl<'a> GridView<'a> {
     /// Part `k` of `plan`, made by [`Grid::split_plan`] from a grid with the cells of
     /// `grid` ([`Grid::fits`]).
     pub fn part(grid: &'a Grid, plan: &'a SplitPlan, k: usize) -> Self {
-        debug_assert!(grid.fits(plan));
         Self {
             grid,
-            part: Some(&plan.parts[k]),
+            part: Some((plan, k)),
         }
+    }
+
+    /// Whether the grid has the points and cells of the plan the view reads it through.
+    pub fn fits(&self) -> bool {
+        self.part.is_none_or(|(plan, _)| self.grid.fits(plan))
+    }
+
+    fn split_part(&self) -> Option<&'a SplitPart> {
+        self.part.map(|(plan, k)| &plan.parts[k])
     }
 
     /// The cells (connectivity, offsets, types) the view holds, numbered to its points.
     pub fn topology(&self) -> &'a Grid {
-        self.part.map_or(self.grid, |p| &p.topology)
+        self.split_part().map_or(self.grid, |p| &p.topology)
     }
 
     pub fn point_count(&self) -> usize {
-        self.part.map_or(self.grid.points.len(), |p| p.points.len())
+        self.split_part()
+            .map_or(self.grid.points.len(), |p| p.points.len())
     }
 
     pub fn cell_count(&self) -> usize {
@@ -285,7 +285,7 @@ impl<'a> GridView<'a> {
         at: Attachment,
         mut each: impl FnMut(&'a [T]),
     ) {
-        let indices = match (self.part, at) {
+        let indices = match (self.split_part(), at) {
             (Some(p), Attachment::Points) => &p.points,
             (Some(p), Attachment::Cells) => &p.cells,
             _ => return values.chunks_exact(n).for_each(each),
@@ -371,7 +371,6 @@ mod tests {
         grid.cell_data = vec![Field::new("pair", 1, FieldValues::I32(vec![0, 1, 0]))];
         grid.field_data = vec![Field::strings("pair_names", vec!["a".into(), "b".into()])];
         let plan = grid.split_plan(&[0, 1, 0], 2);
-        assert_eq!(plan.len(), 2);
         assert_eq!([plan.share(0), plan.share(1)], [2.0 / 3.0, 1.0 / 3.0]);
         let dir = tempfile::tempdir().unwrap();
         let written = |grid: &Grid, k: usize| {
@@ -401,6 +400,12 @@ mod tests {
         next.point_data[0].values = FieldValues::F64((0..14).map(|i| f64::from(i) * 0.5).collect());
         assert!(next.fits(&plan));
         assert!(!Grid::default().fits(&plan));
+        let path = dir.path().join("unfit.vtu");
+        let empty = Grid::default();
+        let other = GridView::part(&empty, &plan, 0);
+        let err = vtu::write_vtu_with(&path, other, &mut Vec::new()).unwrap_err();
+        assert!(err.to_string().contains("division into files"), "{err}");
+        assert!(!path.exists());
         let b = written(&next, 1);
         assert_eq!(b.points, [[2.0, 3.0], [4.0, 5.0], [3.0, 4.0]]);
         assert_eq!(

@@ -181,15 +181,14 @@ impl Array<'_> {
                     b
                 })
             }
+            // The view's own cells: every value (attached to nothing the view selects).
             Array::Connectivity => {
-                let whole = GridView::whole(cells);
                 let connectivity = (&cells.connectivity[..], 1, Attachment::None);
-                encode_le(out, &whole, connectivity, |x| x.to_le_bytes())
+                encode_le(out, view, connectivity, |x| x.to_le_bytes())
             }
             Array::Offsets => {
-                let whole = GridView::whole(cells);
                 let offsets = (&cells.offsets[..], 1, Attachment::None);
-                encode_le(out, &whole, offsets, |x| x.to_le_bytes())
+                encode_le(out, view, offsets, |x| x.to_le_bytes())
             }
             Array::Types => out.extend_from_slice(&cells.cell_types),
         }
@@ -559,6 +558,13 @@ fn known_cell_type(t: u8) -> bool {
 /// Checks `grid` as documented on [`write_vtu`].
 fn validate(view: &GridView) -> std::result::Result<(), String> {
     let grid = view.grid;
+    if !view.fits() {
+        return Err(format!(
+            "the grid's {} points and {} cells are not those its division into files was made for",
+            grid.points.len(),
+            grid.cell_count()
+        ));
+    }
     let cells = view.topology();
     let n_points = view.point_count();
     let n_cells = cells.cell_types.len();
