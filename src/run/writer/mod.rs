@@ -2,6 +2,8 @@
 //! restart record, the growing tables and the indexes on the background writer, in the order
 //! that keeps the folder consistent at every moment (see [`crate::run`]).
 
+mod frames;
+
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -11,6 +13,7 @@ use super::history::{HistoryLayout, read_rows};
 use super::progress::{RunBar, progress_bar};
 use crate::config::{Case, CycleFrames};
 use crate::model::Model;
+use crate::output::SplitPlan;
 use crate::output::append::{self, AppendedFile};
 use crate::output::csv::GrowingCsv;
 use crate::output::pvd::PvdEntry;
@@ -19,16 +22,15 @@ use crate::output::restart::{
     ENERGY_MARKS, OutputState, Record, encode_energy_mark, read_energy_marks,
 };
 use crate::output::summary::{EnergyMark, Summary};
-use crate::output::vtm::VtmBlock;
 use crate::output::writer::{Content, RecordWriter};
-use crate::output::{Grid, SplitPlan};
 use crate::post::fretting::{FrettingTables, TracedPoint, trace_point};
 use crate::post::interface::{InterfaceOutput, resultants};
 use crate::post::quantities::{evaluate, pair_quantities};
-use crate::post::{BodyPoints, StepInfo, reactions, step_grids};
+use crate::post::{BodyPoints, reactions};
 use crate::solver::newton::NewtonLog;
 use crate::solver::state::{Observer, Progress, Resume, Solution, StepResult};
 use crate::{Error, Result};
+use frames::frame_entry;
 
 /// Writes the files of each converged step and the restart record of each converged
 /// increment, keeps the series and history up to date, and records the steps in the
@@ -340,130 +342,6 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         }
     }
 
-    /// Queues the files of a state at pseudo-time `time` (each complete or absent once
-    /// written; not yet listed anywhere): with `fields` its VTU and contact CSV files;
-    /// returns its history row.
-    fn write_step_files(&mut self, step: &StepResult, time: f64, fields: bool) -> Result<Vec<f64>> {
-        let (mut post, mut vtu) = (0.0, 0.0);
-        let start = Instant::now();
-        let mut entries = Vec::new();
-        if self.vtu && fields {
-            self.out.records.make_room()?;
-            let info = StepInfo {
-                step: step.step,
-                time,
-                load_factor: step.load_factor,
-            };
-            let t = Instant::now();
-            let (bodies, interface) =
-                step_grids(self.model, &self.points, &self.interface, step, info);
-            post += t.elapsed().as_secs_f64();
-            let t = Instant::now();
-            self.queue_frame(step.step, bodies, interface)?;
-            entries.push(frame_entry(step.step, time));
-            vtu += t.elapsed().as_secs_f64();
-        }
-        let tables = if fields {
-            self.interface.fretting_tables(self.model, step.solution)
-        } else {
-            Vec::new()
-        };
-        for (pair, table) in self.model.interface.pairs.iter().zip(tables) {
-            let file = RunFile::Contact(&pair.name, step.step);
-            self.out
-                .records
-                .queue(self.folder.path(file)?, Content::Csv(table));
-        }
-        self.tables
-            .fretting
-            .record(self.model, &self.interface, step, time)?;
-        let row = self.row(step, time)?;
-        self.out.series.extend(entries);
-        tracing::debug!(
-            step = step.step,
-            post,
-            vtu,
-            rest = start.elapsed().as_secs_f64() - post - vtu,
-            "output seconds (body recovery, VTU files queued, contact tables)"
-        );
-        Ok(row)
-    }
-
-    /// Queues the VTU files of output frame `step` (the grids of its `bodies` and of its
-    /// `interface`, if the model has one: each cell in one file, see [`Self::queue_parts`])
-    /// and the frame's multiblock file naming them.
-    fn queue_frame(&mut self, step: usize, bodies: Grid, interface: Option<Grid>) -> Result<()> {
-        let model = self.model;
-        let cells: Vec<u32> = model.continuum.cells.iter().map(|c| c.body).collect();
-        let names = model.bodies.iter().map(String::as_str);
-        let mut plan = self.splits[0].take();
-        let body_block = self.queue_parts(
-            ("bodies", bodies),
-            (&cells, &mut plan),
-            names,
-            RunFile::Bodies(step),
-            |k| RunFile::Body(step, k),
-        )?;
-        self.splits[0] = plan;
-        let mut blocks = vec![body_block];
-        if let Some(interface) = interface {
-            let cells: Vec<u32> = model.interface.elements.iter().map(|e| e.pair).collect();
-            let names = model.interface.pairs.iter().map(|p| p.name.as_str());
-            let mut plan = self.splits[1].take();
-            blocks.push(self.queue_parts(
-                ("contacts", interface),
-                (&cells, &mut plan),
-                names,
-                RunFile::Interface(step),
-                |k| RunFile::Pair(step, k),
-            )?);
-            self.splits[1] = plan;
-        }
-        let path = self.folder.path(RunFile::Frame(step))?;
-        self.out.records.queue(path, Content::Vtm(blocks));
-        Ok(())
-    }
-
-    /// Queues the cells of `grid`, each in one file: as `whole` when they are all one part's,
-    /// else each part's cells (`part[c]` the part of cell c) as `part_file(k)` (k 1-based), so
-    /// a frame's output grows with the model, not with the model times its parts. The parts'
-    /// files share the grid and are written from it through `plan` (no copy of the grid per
-    /// part, on the writer thread). `plan` is the division of the last frame's grid, made
-    /// here if there is none that fits. Returns
-    /// the block `name` of the frame's multiblock file that lists the files by the parts'
-    /// names.
-    fn queue_parts<'n>(
-        &mut self,
-        (name, grid): (&str, Grid),
-        (part, plan): (&[u32], &mut Option<Arc<SplitPlan>>),
-        parts: impl ExactSizeIterator<Item = &'n str>,
-        whole: RunFile,
-        part_file: impl Fn(usize) -> RunFile<'static>,
-    ) -> Result<VtmBlock> {
-        let mut datasets = Vec::new();
-        if parts.len() == 1 {
-            datasets.extend(parts.map(|n| (n.to_string(), whole.name().into())));
-            self.out
-                .records
-                .queue(self.folder.path(whole)?, Content::Vtu(grid));
-        } else {
-            let fitting = plan.take().filter(|p| grid.fits(p));
-            let division = fitting.unwrap_or_else(|| Arc::new(grid.split_plan(part, parts.len())));
-            let grid = Arc::new(grid);
-            for (k, part_name) in parts.enumerate() {
-                let file = part_file(k + 1);
-                let content = Content::VtuPart(grid.clone(), division.clone(), k);
-                self.out.records.queue(self.folder.path(file)?, content);
-                datasets.push((part_name.to_string(), file.name().into()));
-            }
-            *plan = Some(division);
-        }
-        Ok(VtmBlock {
-            name: name.into(),
-            datasets,
-        })
-    }
-
     /// The history row of a state at pseudo-time `time`.
     fn row(&self, step: &StepResult, time: f64) -> Result<Vec<f64>> {
         let model = self.model;
@@ -635,16 +513,5 @@ impl Drop for Committer {
         if let Err(e) = self.records.commit() {
             tracing::warn!("{e}");
         }
-    }
-}
-
-/// The entry of output frame `step` in the series at pseudo-time `time`: its multiblock
-/// file, which names the frame's bodies and contact pairs.
-fn frame_entry(step: usize, time: f64) -> PvdEntry {
-    PvdEntry {
-        time,
-        part: 0,
-        name: "model".into(),
-        file: RunFile::Frame(step).name().into(),
     }
 }
