@@ -232,6 +232,60 @@ impl SparsityPattern {
     }
 }
 
+/// The entries of a set's matrix in prescribed rows and columns, over every dof (numbered by
+/// dof): the set's elements with a prescribed dof, assembled beside the free system by
+/// [`GlobalSystem::assemble_with_prescribed`]. With the free system's matrix they are the
+/// whole matrix over every dof (its product with every dof's displacements gives the
+/// reactions too), for the pattern and values of the supports' elements instead of those of
+/// a second matrix over every dof.
+#[derive(Debug)]
+pub struct PrescribedCouplings {
+    /// The flagged elements' pattern over every dof; it also holds their entries between
+    /// free dofs, which the free system has.
+    pattern: SparsityPattern,
+    values: Vec<f64>,
+    /// Every dof free.
+    all: DofMap,
+    /// Whether each element has a prescribed dof.
+    elements: Vec<bool>,
+}
+
+impl PrescribedCouplings {
+    /// Zeroed couplings of the elements `connectivity` (as in [`SparsityPattern::new`]) of a
+    /// mesh of `node_count` nodes whose dofs are numbered by `dofs`.
+    pub fn new<'a, E: Into<ElementNodes<'a>>>(
+        node_count: usize,
+        dofs: &DofMap,
+        connectivity: impl Iterator<Item = E>,
+    ) -> Self {
+        let connectivity: Vec<ElementNodes> = connectivity.map(Into::into).collect();
+        let d = dofs.dof_count() / node_count.max(1);
+        let held = |element: &ElementNodes| {
+            let node_held = |&n: &u32| (0..d).any(|c| dofs.equation(d * n as usize + c).is_none());
+            element.nodes.iter().any(node_held)
+        };
+        let elements: Vec<bool> = connectivity.par_iter().map(held).collect();
+        let all = DofMap::new(&vec![false; dofs.dof_count()]);
+        let held_elements = connectivity
+            .iter()
+            .zip(&elements)
+            .filter(|&(_, &h)| h)
+            .map(|(&element, _)| element);
+        let pattern = SparsityPattern::new(node_count, &all, held_elements);
+        Self {
+            values: vec![0.0; pattern.nnz()],
+            pattern,
+            all,
+            elements,
+        }
+    }
+
+    /// The couplings as a matrix over every dof.
+    pub fn matrix(&self) -> SparseColMatRef<'_, u32, f64> {
+        SparseColMatRef::new(self.pattern.symbolic().as_ref(), &self.values)
+    }
+}
+
 /// The elements at each node of a mesh (compressed rows), for the nodes' neighbours.
 struct NodeElements {
     start: Vec<usize>,
@@ -486,9 +540,6 @@ pub struct DenseBlock<'a> {
     pub map: &'a DenseScatter,
 }
 
-/// Free columns per task of [`GlobalSystem::restrict_from`].
-const RESTRICT_BLOCK: usize = 1 << 14;
-
 /// `n` copies of `value`, written by the pool's threads: the kernel maps a large vector's
 /// pages at that first write, in parallel (first touches cost about ten times a later write
 /// on the virtual machines measured), and a vector of zeros written so is not left to a
@@ -498,42 +549,6 @@ pub fn filled_in_parallel<T: Clone + Send + Sync>(value: T, n: usize) -> Vec<T> 
     let mut v = Vec::with_capacity(n);
     v.par_extend(rayon::iter::repeat_n(value, n));
     v
-}
-
-/// The values of the free columns `first..first + dofs_of.len()` (whose dofs are `dofs_of`)
-/// of `target`'s pattern, taken from `all` (over all dofs) into `values`.
-fn restrict_columns(
-    all: &GlobalSystem,
-    target: &SparsityPattern,
-    dofs: &DofMap,
-    first: usize,
-    dofs_of: &[usize],
-    values: &mut [f64],
-) {
-    let (cp, ri) = (target.symbolic.col_ptr(), target.symbolic.row_idx());
-    let (all_cp, all_ri) = (
-        all.pattern.symbolic.col_ptr(),
-        all.pattern.symbolic.row_idx(),
-    );
-    let offset = cp[first] as usize;
-    for (k, &dof) in dofs_of.iter().enumerate() {
-        let column = first + k;
-        let source = all_cp[dof] as usize..all_cp[dof + 1] as usize;
-        let mut from = all_ri[source.clone()]
-            .iter()
-            .zip(&all.values[source])
-            .filter_map(|(&row, &v)| dofs.equation(row as usize).map(|eq| (eq, v)))
-            .peekable();
-        let target = cp[column] as usize..cp[column + 1] as usize;
-        let out = &mut values[target.start - offset..target.end - offset];
-        for (&row, value) in ri[target].iter().zip(out) {
-            *value = match from.next_if(|&(eq, _)| eq == row as usize) {
-                Some((_, v)) => v,
-                None => 0.0,
-            };
-        }
-        debug_assert!(from.next().is_none(), "an entry outside the free pattern");
-    }
 }
 
 impl GlobalSystem {
@@ -590,6 +605,7 @@ impl GlobalSystem {
             force: Some(SharedMut(self.internal_force.as_mut_ptr())),
             dense: None,
             frozen: None,
+            prescribed: None,
         };
         scatter(
             &self.pattern,
@@ -602,33 +618,43 @@ impl GlobalSystem {
         );
     }
 
-    /// Makes this system (over the free dofs of `dofs`) the restriction of `all`, a system of
-    /// the same model over every dof (numbered by dof, none prescribed): its matrix entries
-    /// between free dofs (entries `all`'s pattern lacks are zero) and its internal force.
-    /// Entry by entry the same sums as assembling the elements into this system, so the
-    /// result is identical to that assembly, for the cost of a copy instead of an element
-    /// loop. Both patterns' rows must be sorted within each column.
-    pub fn restrict_from(&mut self, all: &GlobalSystem, dofs: &DofMap) {
-        self.internal_force.copy_from_slice(&all.internal_force);
-        let cp = self.pattern.symbolic.col_ptr();
-        // Blocks of free columns in parallel: the equations number the free dofs in order, so
-        // a block of columns is a run of dofs and its values one slice of `self.values`.
-        let free: Vec<usize> = (0..dofs.dof_count())
-            .filter(|&dof| dofs.equation(dof).is_some())
-            .collect();
-        let mut blocks = Vec::new();
-        let mut rest = self.values.as_mut_slice();
-        for (k, block) in free.chunks(RESTRICT_BLOCK).enumerate() {
-            let first = k * RESTRICT_BLOCK;
-            let len = (cp[first + block.len()] - cp[first]) as usize;
-            let (values, tail) = rest.split_at_mut(len);
-            rest = tail;
-            blocks.push((first, block, values));
-        }
-        let target = &self.pattern;
-        blocks.into_par_iter().for_each(|(first, block, values)| {
-            restrict_columns(all, target, dofs, first, block, values)
-        });
+    /// [`Self::assemble`] with the tangent, also adding each element's matrix into
+    /// `prescribed` if the element has a prescribed dof: the entries of the set's matrix in
+    /// prescribed rows and columns, over every dof, from the same element loop. Entry by entry
+    /// the same sums in the same (colour) order as an assembly over every dof, so both parts
+    /// have that assembly's bits.
+    pub fn assemble_with_prescribed<S: ElementSet>(
+        &mut self,
+        input: &AssemblyInput,
+        set: &S,
+        coloring: &Coloring,
+        committed: &[S::State],
+        trial: &mut [S::State],
+        prescribed: &mut PrescribedCouplings,
+    ) {
+        assert!(input.tangent, "the couplings are those of the tangent");
+        assert_eq!(prescribed.elements.len(), set.len());
+        let targets = Targets {
+            values: Some(SharedMut(self.values.as_mut_ptr())),
+            force: Some(SharedMut(self.internal_force.as_mut_ptr())),
+            dense: None,
+            frozen: None,
+            prescribed: Some(Side {
+                pattern: &prescribed.pattern,
+                dofs: &prescribed.all,
+                values: SharedMut(prescribed.values.as_mut_ptr()),
+                elements: &prescribed.elements,
+            }),
+        };
+        scatter(
+            &self.pattern,
+            input,
+            set,
+            coloring,
+            committed,
+            trial,
+            targets,
+        );
     }
 
     /// [`Self::assemble`] for a set whose elements' tangent is, most of the time, a constant
@@ -689,6 +715,7 @@ impl GlobalSystem {
             force: Some(SharedMut(self.internal_force.as_mut_ptr())),
             dense: None,
             frozen: Some(SharedMut(reference.frozen.as_mut_ptr())),
+            prescribed: None,
         };
         scatter(
             &self.pattern,
@@ -757,6 +784,7 @@ impl GlobalSystem {
                 map,
             }),
             frozen: None,
+            prescribed: None,
         };
         scatter(
             &self.pattern,
@@ -787,6 +815,7 @@ impl GlobalSystem {
             force: None,
             dense: None,
             frozen: None,
+            prescribed: None,
         };
         scatter(
             &self.pattern,
@@ -811,6 +840,20 @@ struct Targets<'m> {
     /// holds the sum of all reference matrices, and an element adds k_e − k_ref,e, nothing
     /// if its tangent is its reference one.
     frozen: Option<SharedMut<bool>>,
+    /// With the tangent alone (not with `frozen`): the flagged elements' matrices, added
+    /// again over every dof ([`GlobalSystem::assemble_with_prescribed`]).
+    prescribed: Option<Side<'m>>,
+}
+
+/// A second value array over every dof, for the matrices of some elements alone.
+#[derive(Clone, Copy)]
+struct Side<'m> {
+    pattern: &'m SparsityPattern,
+    /// Every dof free (numbered by dof).
+    dofs: &'m DofMap,
+    values: SharedMut<f64>,
+    /// Whether each element is added.
+    elements: &'m [bool],
 }
 
 /// A dense column-major block and the map of the elements' dofs into it.
@@ -973,6 +1016,7 @@ fn scatter<S: ElementSet>(
         force,
         dense,
         frozen,
+        prescribed,
     } = targets;
     let AssemblyInput {
         dofs, u, algorithm, ..
@@ -1000,7 +1044,7 @@ fn scatter<S: ElementSet>(
         };
         let (ke, fe): (&mut ElementMatrix, _) = (&mut scratch.ke, &mut scratch.fe);
         // A frozen element's matrix may still be wanted, if one of its points yields.
-        let matrix = values.is_some() || dense.is_some();
+        let matrix = values.is_some() || dense.is_some() || prescribed.is_some();
         if matrix {
             for column in ke
                 .as_mut_slice()
@@ -1046,6 +1090,19 @@ fn scatter<S: ElementSet>(
                     }
                 }
             }
+        }
+        if let Some(side) = prescribed.filter(|side| side.elements[e]) {
+            // SAFETY: as above, over the side's array.
+            unsafe {
+                add_element_matrix(
+                    side.pattern,
+                    side.dofs,
+                    (nodes, d),
+                    ke,
+                    1.0,
+                    side.values.get(),
+                )
+            };
         }
         let Some(values) = values else { return };
         if let Some(frozen) = frozen {
@@ -1205,7 +1262,7 @@ mod tests {
     }
 
     #[test]
-    fn the_restriction_of_the_all_dof_system_is_the_free_dof_assembly() {
+    fn assembling_with_the_prescribed_couplings_splits_the_all_dof_assembly_bit_for_bit() {
         let (set, node_count, fixed) = plastic_block(3, 2);
         let dofs = DofMap::new(&fixed);
         let all = DofMap::new(&vec![false; fixed.len()]);
@@ -1214,12 +1271,14 @@ mod tests {
         // entry the cells' all-dof pattern lacks.
         let far: [u32; 2] = [(2 * 3 + 1) as u32, node_count as u32 - 1];
         let free_pattern = SparsityPattern::new(node_count, &dofs, cells.clone().chain([&far[..]]));
-        let all_pattern = SparsityPattern::new(node_count, &all, cells);
         let coloring = Coloring::new(&set, node_count);
-        let mut direct = GlobalSystem::new(free_pattern.clone(), dofs.dof_count());
-        let mut restricted = GlobalSystem::new(free_pattern, dofs.dof_count());
-        let mut whole = GlobalSystem::new(all_pattern, dofs.dof_count());
-        restricted.values.fill(f64::NAN);
+        let mut plain = GlobalSystem::new(free_pattern.clone(), dofs.dof_count());
+        let mut split = GlobalSystem::new(free_pattern, dofs.dof_count());
+        let mut whole = GlobalSystem::new(
+            SparsityPattern::new(node_count, &all, cells.clone()),
+            dofs.dof_count(),
+        );
+        let mut couplings = PrescribedCouplings::new(node_count, &dofs, cells);
         let committed = vec![PointState::default(); set.len() * set.points_per_element()];
         let mut trial = committed.clone();
         let u: Vec<f64> = (0..dofs.dof_count())
@@ -1237,18 +1296,39 @@ mod tests {
             tangent: true,
             algorithm: ContactAlgorithm::default(),
         };
-        direct.assemble(&input(&dofs), &set, &coloring, &committed, &mut trial);
+        plain.assemble(&input(&dofs), &set, &coloring, &committed, &mut trial);
         whole.assemble(&input(&all), &set, &coloring, &committed, &mut trial);
-        restricted.restrict_from(&whole, &dofs);
+        split.assemble_with_prescribed(
+            &input(&dofs),
+            &set,
+            &coloring,
+            &committed,
+            &mut trial,
+            &mut couplings,
+        );
         // Bit for bit: the same sums in the same order.
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&restricted.values), bits(&direct.values));
-        assert_eq!(
-            bits(&restricted.internal_force),
-            bits(&direct.internal_force)
-        );
-        assert!(direct.values.contains(&0.0), "the far coupling is empty");
-        assert!(whole.values.len() > direct.values.len());
+        assert_eq!(bits(&split.values), bits(&plain.values));
+        assert_eq!(bits(&split.internal_force), bits(&plain.internal_force));
+        // The couplings hold the whole matrix's entries in every prescribed row and column
+        // (the block's bottom row of nodes), with its bits; only the cells on that row.
+        let entries = |m: SparseColMatRef<'_, u32, f64>| {
+            let mut held = Vec::new();
+            for j in 0..m.ncols() {
+                let column = m.col_ptr()[j] as usize..m.col_ptr()[j + 1] as usize;
+                for (&i, &v) in m.row_idx()[column.clone()].iter().zip(&m.val()[column]) {
+                    if fixed[i as usize] || fixed[j] {
+                        held.push((i, j, v.to_bits()));
+                    }
+                }
+            }
+            held
+        };
+        let held = entries(couplings.matrix());
+        assert!(!held.is_empty());
+        assert_eq!(held, entries(whole.matrix()));
+        assert!(couplings.values.len() < whole.values.len());
+        assert_eq!(couplings.elements.iter().filter(|&&h| h).count(), 3);
     }
 
     #[test]

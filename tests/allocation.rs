@@ -25,7 +25,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use asperity::assembly::{AssemblyInput, DenseScatter, DofMap, GlobalSystem, SparsityPattern};
+use asperity::assembly::{AssemblyInput, DenseScatter, DofMap, GlobalSystem, PrescribedCouplings};
 use asperity::model::Model;
 use asperity::solver::mechanics::Mechanics;
 use asperity::solver::newton::{
@@ -145,10 +145,6 @@ impl Problem for Marked<'_> {
         self.inner.bulk_is_linear()
     }
 
-    fn bulk_pattern(&self, dofs: &DofMap) -> SparsityPattern {
-        self.inner.bulk_pattern(dofs)
-    }
-
     fn interface_scatter(
         &self,
         dofs: &DofMap,
@@ -159,6 +155,14 @@ impl Problem for Marked<'_> {
 
     fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) {
         self.inner.assemble_bulk(system, input);
+    }
+
+    fn assemble_linear_bulk(
+        &mut self,
+        system: &mut GlobalSystem,
+        input: &AssemblyInput,
+    ) -> PrescribedCouplings {
+        self.inner.assemble_linear_bulk(system, input)
     }
 
     fn bulk_states(&mut self, input: &AssemblyInput) {

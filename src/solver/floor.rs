@@ -53,7 +53,8 @@ impl Tally {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SolverWork {
     /// Element loops that evaluate the tangent: over the continuum on the condensed path
-    /// (there, for a linear bulk, once over all dofs, for K·u and the factored free block),
+    /// (there, for a linear bulk, once, for the factored free block and, from the supports'
+    /// cells, the entries in prescribed rows and columns that K·u also needs),
     /// over the whole model otherwise (its interface elements included). Matrix zeroing
     /// included.
     pub tangent_assemblies: Tally,

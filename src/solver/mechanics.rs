@@ -5,8 +5,8 @@
 use faer::MatMut;
 
 use crate::assembly::{
-    AssemblyInput, DenseBlock, DenseScatter, DofMap, ElementNodes, GlobalSystem, SparsityPattern,
-    evaluate_states,
+    AssemblyInput, DenseBlock, DenseScatter, DofMap, ElementNodes, GlobalSystem,
+    PrescribedCouplings, evaluate_states,
 };
 use crate::contact::{ContactAlgorithm, InterfaceState};
 use crate::element::interface6::evaluate_interface;
@@ -180,15 +180,6 @@ impl Problem for Mechanics<'_> {
         !self.temperature.bodies.is_empty()
     }
 
-    fn bulk_pattern(&self, dofs: &DofMap) -> SparsityPattern {
-        let continuum = &self.model.continuum;
-        let connectivity = (0..continuum.len()).map(|e| ElementNodes {
-            nodes: continuum.nodes(e),
-            couples_twist: continuum.couples_twist(e),
-        });
-        SparsityPattern::new(self.model.mesh.nodes.len(), dofs, connectivity)
-    }
-
     fn interface_scatter(
         &self,
         dofs: &DofMap,
@@ -213,6 +204,32 @@ impl Problem for Mechanics<'_> {
         } else {
             system.assemble_reusing(input, &bodies, &m.continuum_coloring, cc, ct);
         }
+    }
+
+    /// The couplings are those of the cells with a node on a support.
+    fn assemble_linear_bulk(
+        &mut self,
+        system: &mut GlobalSystem,
+        input: &AssemblyInput,
+    ) -> PrescribedCouplings {
+        let m = self.model;
+        let continuum = &m.continuum;
+        let connectivity = (0..continuum.len()).map(|e| ElementNodes {
+            nodes: continuum.nodes(e),
+            couples_twist: continuum.couples_twist(e),
+        });
+        let mut couplings = PrescribedCouplings::new(m.mesh.nodes.len(), input.dofs, connectivity);
+        let (bodies, cc, ct) = self.bodies();
+        system.clear_values();
+        system.assemble_with_prescribed(
+            input,
+            &bodies,
+            &m.continuum_coloring,
+            cc,
+            ct,
+            &mut couplings,
+        );
+        couplings
     }
 
     fn bulk_states(&mut self, input: &AssemblyInput) {

@@ -57,7 +57,9 @@ use std::time::Instant;
 use faer::{Mat, MatMut};
 
 use crate::Result;
-use crate::assembly::{AssemblyInput, DenseScatter, DofMap, GlobalSystem, SparsityPattern};
+use crate::assembly::{
+    AssemblyInput, DenseScatter, DofMap, GlobalSystem, PrescribedCouplings, SparsityPattern,
+};
 use crate::contact::ContactAlgorithm;
 use crate::solver::condensed::CondensedSolver;
 use crate::solver::floor::SolverWork;
@@ -138,10 +140,6 @@ pub trait Problem: Send {
     /// Whether the bulk (continuum) is linear: constant tangent, internal force K_c · u.
     fn bulk_is_linear(&self) -> bool;
 
-    /// The pattern of the bulk's elements over the equations of `dofs` (for a linear bulk,
-    /// whose stiffness over all dofs then gives its internal force, reactions included).
-    fn bulk_pattern(&self, dofs: &DofMap) -> SparsityPattern;
-
     /// The scatter map of the interface elements into the dense interface block, `local`
     /// giving the block index of a free equation.
     fn interface_scatter(
@@ -167,6 +165,16 @@ pub trait Problem: Send {
     /// Adds the bulk's internal force into `system` and, if `input.tangent`, sets its matrix
     /// values to the bulk's tangent (whatever they held: no need to clear them first).
     fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput);
+
+    /// A linear bulk's tangent assembly (`input.tangent`): as [`Self::assemble_bulk`], and
+    /// returns the stiffness's entries in the prescribed rows and columns of `input.dofs`
+    /// (which, with the free block it set, make the stiffness over all dofs: its internal
+    /// force K_c u, reactions included).
+    fn assemble_linear_bulk(
+        &mut self,
+        system: &mut GlobalSystem,
+        input: &AssemblyInput,
+    ) -> PrescribedCouplings;
 
     /// Evaluates the bulk's trial states at `input.u` alone (no force, no tangent): those of
     /// a converged state of a linear bulk whose force is K·u.
@@ -430,23 +438,24 @@ impl<'a> Newton<'a> {
         // core, the element loop takes the other (and both once the analysis is done).
         let stiffness_at = start.filter(|_| by_product);
         let (pattern, dofs, algorithm) = (
-            &self.system.pattern,
+            self.system.pattern.clone(),
             self.dofs,
             self.settings.contact_algorithm,
         );
-        let ((solver, solver_seconds), whole) = rayon::join(
+        let system = &mut self.system;
+        let ((solver, solver_seconds), couplings) = rayon::join(
             || {
                 let t = Instant::now();
                 (
-                    CondensedSolver::new(pattern, &interface),
+                    CondensedSolver::new(&pattern, &interface),
                     t.elapsed().as_secs_f64(),
                 )
             },
             || {
                 stiffness_at.map(|u| {
                     let t = Instant::now();
-                    let whole = assemble_all_dofs(problem, dofs, u, algorithm);
-                    (whole, t.elapsed().as_secs_f64())
+                    let couplings = assemble_linear_bulk(problem, system, dofs, u, algorithm);
+                    (couplings, t.elapsed().as_secs_f64())
                 })
             },
         );
@@ -478,12 +487,12 @@ impl<'a> Newton<'a> {
             by_product,
             states_stale: false,
         });
-        let Some((whole, assembly_seconds)) = whole else {
+        let Some((couplings, assembly_seconds)) = couplings else {
             return Ok((t.elapsed().as_secs_f64(), 0.0));
         };
         let t_keep = Instant::now();
         let c = self.condensed.as_mut().expect("made above");
-        keep_linear_bulk(&mut self.system, c, self.dofs, &whole);
+        keep_linear_bulk(c, self.dofs, &couplings);
         self.work
             .tangent_assemblies
             .add(assembly_seconds + t_keep.elapsed().as_secs_f64());
@@ -552,11 +561,12 @@ impl<'a> Newton<'a> {
             };
             let first = !c.bulk_ready;
             if first {
-                // The continuum's elements over all dofs, once: K_c (the system keeps its
-                // free block, and the entries of prescribed rows and columns are kept for
-                // K·u), with the force and states at u.
-                let whole = assemble_all_dofs(problem, self.dofs, u, input.algorithm);
-                keep_linear_bulk(system, c, self.dofs, &whole);
+                // The continuum's elements, once: K_c (the system's free block, and the
+                // entries of prescribed rows and columns kept for K·u), with the force and
+                // states at u.
+                let couplings =
+                    assemble_linear_bulk(problem, system, self.dofs, u, input.algorithm);
+                keep_linear_bulk(c, self.dofs, &couplings);
                 work.tangent_assemblies.since(t);
             } else if fresh && c.by_product {
                 problem.bulk_states(&force_input);
@@ -938,40 +948,30 @@ impl<'a> Newton<'a> {
     }
 }
 
-/// A linear bulk's stiffness K_c over all dofs, with the force and the states at `u`: the
-/// continuum's elements over every dof, once per model.
-fn assemble_all_dofs(
+/// A linear bulk's stiffness K_c, with the force and the states at `u`, once per model: its
+/// free block and force into `system`, its entries in prescribed rows and columns returned.
+fn assemble_linear_bulk(
     problem: &mut impl Problem,
+    system: &mut GlobalSystem,
     dofs: &DofMap,
     u: &[f64],
     algorithm: ContactAlgorithm,
-) -> GlobalSystem {
-    let n = dofs.dof_count();
-    let all = DofMap::new(&vec![false; n]);
-    let mut whole = GlobalSystem::new(problem.bulk_pattern(&all), n);
+) -> PrescribedCouplings {
     let input = AssemblyInput {
-        dofs: &all,
+        dofs,
         u,
         tangent: true,
         algorithm,
     };
-    problem.assemble_bulk(&mut whole, &input);
-    whole
+    system.clear(false);
+    problem.assemble_linear_bulk(system, &input)
 }
 
-/// Keeps a linear bulk's stiffness `whole` (assembled over all dofs, [`assemble_all_dofs`]):
-/// its free block and its force in `system` (the block is factored next), its entries in a
-/// prescribed row or column for K·u.
-fn keep_linear_bulk(
-    system: &mut GlobalSystem,
-    c: &mut Condensed,
-    dofs: &DofMap,
-    whole: &GlobalSystem,
-) {
-    system.restrict_from(whole, dofs);
-    let stiffness = BulkStiffness::new(whole, dofs);
+/// Keeps a linear bulk's entries in prescribed rows and columns ([`assemble_linear_bulk`])
+/// for K·u; its free block, in the Newton system, is factored next.
+fn keep_linear_bulk(c: &mut Condensed, dofs: &DofMap, couplings: &PrescribedCouplings) {
+    let stiffness = BulkStiffness::new(couplings.matrix(), dofs);
     tracing::debug!(
-        all_dof_entries = whole.pattern.nnz(),
         prescribed_entries = stiffness.len(),
         "linear bulk stiffness"
     );

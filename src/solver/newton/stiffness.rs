@@ -2,7 +2,10 @@
 //! dofs' block is the Newton system's own matrix (the one the bulk factorisation was made
 //! from, which a linear bulk never changes), and only the entries in a prescribed dof's row
 //! or column are stored here. At a million unknowns a second all-dof matrix cost 360 MB
-//! (values and pattern); these entries are those of the supports' nodes.
+//! (values and pattern); these entries are those of the supports' nodes, assembled with the
+//! free block in its one element loop from the cells at the supports alone
+//! ([`crate::assembly::PrescribedCouplings`]; at 3.8 M unknowns an all-dof pattern and
+//! matrix assembled only to be copied from cost 3 s and 1.4 GB of fresh pages).
 //!
 //! K_c is symmetric (a linear bulk is elastic), so a column of the free block is also its row:
 //! each y_j is one column's dot product with x, the columns split between the cores with
@@ -12,7 +15,9 @@
 
 use rayon::prelude::*;
 
-use crate::assembly::{DofMap, GlobalSystem, SparsityPattern};
+use faer::sparse::SparseColMatRef;
+
+use crate::assembly::{DofMap, SparsityPattern};
 
 /// The entries of the bulk stiffness K_c (over all dofs) in a prescribed row or column, by
 /// column, and the dof of each equation.
@@ -30,11 +35,11 @@ pub(super) struct BulkStiffness {
 }
 
 impl BulkStiffness {
-    /// Keeps the entries of `all` (assembled over every dof, numbered by dof) that lie in a
-    /// row or column prescribed in `dofs`.
-    pub(super) fn new(all: &GlobalSystem, dofs: &DofMap) -> Self {
-        let symbolic = all.pattern.symbolic();
-        let (cp, ri) = (symbolic.col_ptr(), symbolic.row_idx());
+    /// Keeps the entries of `all` (a matrix over every dof, numbered by dof, holding at least
+    /// K_c's entries in prescribed rows and columns) that lie in a row or column prescribed
+    /// in `dofs`.
+    pub(super) fn new(all: SparseColMatRef<'_, u32, f64>, dofs: &DofMap) -> Self {
+        let (cp, ri, all_values) = (all.col_ptr(), all.row_idx(), all.val());
         let n = dofs.dof_count();
         let mut start = Vec::with_capacity(n + 1);
         start.push(0u32);
@@ -43,7 +48,7 @@ impl BulkStiffness {
         for j in 0..n {
             let column = cp[j] as usize..cp[j + 1] as usize;
             let free_column = dofs.equation(j);
-            for (&i, &v) in ri[column.clone()].iter().zip(&all.values[column]) {
+            for (&i, &v) in ri[column.clone()].iter().zip(&all_values[column]) {
                 if free_column.is_none() || dofs.equation(i as usize).is_none() {
                     rows.push(i);
                     values.push(v);
@@ -136,6 +141,7 @@ fn dot(rows: &[u32], values: &[f64], x: &[f64]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::assembly::GlobalSystem;
 
     /// A chain of 3-node "elements" over 7 nodes (2 dofs each) with arbitrary symmetric
     /// values, nodes 0 and 4 partly held: the split product (the free block's columns as
@@ -164,9 +170,24 @@ mod tests {
         // The free pattern couples nodes 1 and 6 too (an interface would), which K_c lacks.
         let far: [u32; 2] = [1, 6];
         let pattern = SparsityPattern::new(node_count, &dofs, cells.chain([&far[..]]));
+        // The free block: K_c's values between free dofs, zero at the far coupling.
         let mut free = GlobalSystem::new(pattern, 14);
-        free.restrict_from(&whole, &dofs);
-        let mut stiffness = BulkStiffness::new(&whole, &dofs);
+        let dof_of: Vec<usize> = (0..14).filter(|&k| !fixed[k]).collect();
+        let free_symbolic = free.pattern.symbolic().clone();
+        for eq in 0..dof_of.len() {
+            let column =
+                free_symbolic.col_ptr()[eq] as usize..free_symbolic.col_ptr()[eq + 1] as usize;
+            for k in column {
+                let (i, j) = (dof_of[free_symbolic.row_idx()[k] as usize], dof_of[eq]);
+                let in_whole = symbolic.row_idx()
+                    [symbolic.col_ptr()[j] as usize..symbolic.col_ptr()[j + 1] as usize]
+                    .iter()
+                    .position(|&r| r as usize == i);
+                free.values[k] =
+                    in_whole.map_or(0.0, |p| whole.values[symbolic.col_ptr()[j] as usize + p]);
+            }
+        }
+        let mut stiffness = BulkStiffness::new(whole.matrix(), &dofs);
         // Prescribed columns: node 0's two (nodes 0–2: 6 rows each), node 4's y (nodes 2–6:
         // 10 rows); prescribed rows in free columns: node 0's two rows in the 4 free columns
         // of nodes 1 and 2, node 4's y row in the 9 other columns of nodes 2–6.
