@@ -80,7 +80,9 @@ const MAX_APPENDED: usize = 16 << 20;
 /// commit waits for it: a step's files at tens of thousands of unknowns (~10 MB) wait, a
 /// million-unknown step's (~150 MB of grids) does not. Once the thread is slower than the
 /// solver, a second such step waiting would add its size to the run's peak memory and save
-/// nothing: the run goes at the thread's pace either way.
+/// nothing: the run goes at the thread's pace either way. (The next step's grids are made
+/// while such a commit is written, before [`RecordWriter::make_room`] waits for it: the
+/// thread would idle while they were made after it.)
 const MAX_WAITING_BYTES: usize = 64 << 20;
 
 /// Writes a run's committed files in the background: the files of a converged step (VTU,
@@ -291,10 +293,10 @@ impl RecordWriter {
         }
     }
 
-    /// To be called before making a step's files: waits for the commit in flight if it holds
-    /// more than `MAX_WAITING_BYTES` (64 MiB: a million-unknown step's grids), so that no
-    /// more than one such step is in memory at a time, then hands the thread the files
-    /// waiting behind it. Smaller commits are left to overlap the next ones.
+    /// To be called before queueing a step's files: waits for the commit in flight if it
+    /// holds more than `MAX_WAITING_BYTES` (64 MiB: a million-unknown step's grids), so that
+    /// no more than one such step is in memory besides the one being queued, then hands the
+    /// thread the files waiting behind it. Smaller commits are left to overlap the next ones.
     pub fn make_room(&mut self) -> Result<()> {
         if self.in_flight && self.in_flight_bytes > MAX_WAITING_BYTES && !self.poll()? {
             self.wait()?;

@@ -30,7 +30,6 @@ impl<F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'_, '_, F> {
         let start = Instant::now();
         let mut entries = Vec::new();
         if self.vtu && fields {
-            self.out.records.make_room()?;
             let info = StepInfo {
                 step: step.step,
                 time,
@@ -41,6 +40,9 @@ impl<F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'_, '_, F> {
                 step_grids(self.model, &self.points, &self.interface, step, info);
             post += t.elapsed().as_secs_f64();
             let t = Instant::now();
+            // The grids are made while the thread writes the last frame's (it would idle
+            // while they are made after it): at most two frames' grids are in memory.
+            self.out.records.make_room()?;
             self.queue_frame(step.step, bodies, interface)?;
             entries.push(frame_entry(step.step, time));
             vtu += t.elapsed().as_secs_f64();
