@@ -261,10 +261,18 @@ pub(super) fn encode_record(
     };
     // Encoded into memory first (a record is mostly integration-point states: ~10 MB for a
     // 60k-unknown model), then written with one call; the buffer is reused from record to
-    // record, sparing the page faults of fresh memory.
+    // record, sparing the page faults of fresh memory. The first buffer is made the record's
+    // size (a counting pass): grown by doubling, it cost twice its size in fresh pages and
+    // copies (14 MB: 35 ms of the elasto-plastic punch's main thread, 20 ms now).
     buffer.clear();
+    let record = (header, body);
+    if buffer.capacity() == 0 {
+        let size = postcard::experimental::serialized_size(&record)
+            .map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e))?;
+        buffer.reserve(MAGIC.len() + size);
+    }
     buffer.extend_from_slice(MAGIC);
-    let encoded = postcard::to_extend(&(header, body), std::mem::take(buffer));
+    let encoded = postcard::to_extend(&record, std::mem::take(buffer));
     *buffer = encoded.map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e))?;
     Ok(())
 }
