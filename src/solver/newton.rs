@@ -433,9 +433,10 @@ impl<'a> Newton<'a> {
         let n = self.dofs.dof_count();
         let linear_bulk = problem.bulk_is_linear();
         let by_product = linear_bulk && !problem.bulk_loads_vary();
-        // A linear bulk's stiffness over all dofs is assembled while the solver orders and
-        // analyses the free pattern: the ordering and the symbolic factorisation run on one
-        // core, the element loop takes the other (and both once the analysis is done).
+        // A linear bulk's stiffness (its free block, and the couplings of its prescribed
+        // dofs) is assembled while the solver orders and analyses the free pattern: the
+        // ordering and the symbolic factorisation run on one core, the element loop takes the
+        // other (and both once the analysis is done).
         let stiffness_at = start.filter(|_| by_product);
         let (pattern, dofs, algorithm) = (
             self.system.pattern.clone(),
