@@ -251,14 +251,10 @@ pub struct PrescribedCouplings {
 }
 
 impl PrescribedCouplings {
-    /// Zeroed couplings of the elements `connectivity` (as in [`SparsityPattern::new`]) of a
-    /// mesh of `node_count` nodes whose dofs are numbered by `dofs`.
-    pub fn new<'a, E: Into<ElementNodes<'a>>>(
-        node_count: usize,
-        dofs: &DofMap,
-        connectivity: impl Iterator<Item = E>,
-    ) -> Self {
-        let connectivity: Vec<ElementNodes> = connectivity.map(Into::into).collect();
+    /// Zeroed couplings of the elements `connectivity` (each element's nodes, as in
+    /// [`SparsityPattern::new`]) of a mesh of `node_count` nodes whose dofs are numbered by
+    /// `dofs`.
+    pub fn new(node_count: usize, dofs: &DofMap, connectivity: &[ElementNodes]) -> Self {
         let d = dofs.dof_count() / node_count.max(1);
         let held = |element: &ElementNodes| {
             let node_held = |&n: &u32| (0..d).any(|c| dofs.equation(d * n as usize + c).is_none());
@@ -600,29 +596,14 @@ impl GlobalSystem {
         committed: &[S::State],
         trial: &mut [S::State],
     ) {
-        let targets = Targets {
-            values: input.tangent.then_some(SharedMut(self.values.as_mut_ptr())),
-            force: Some(SharedMut(self.internal_force.as_mut_ptr())),
-            dense: None,
-            frozen: None,
-            prescribed: None,
-        };
-        scatter(
-            &self.pattern,
-            input,
-            set,
-            coloring,
-            committed,
-            trial,
-            targets,
-        );
+        self.assemble_with_prescribed(input, set, coloring, committed, trial, None);
     }
 
-    /// [`Self::assemble`] with the tangent, also adding each element's matrix into
-    /// `prescribed` if the element has a prescribed dof: the entries of the set's matrix in
-    /// prescribed rows and columns, over every dof, from the same element loop. Entry by entry
-    /// the same sums in the same (colour) order as an assembly over every dof, so both parts
-    /// have that assembly's bits.
+    /// [`Self::assemble`], with `prescribed` (and the tangent) also adding each element's
+    /// matrix into the couplings if the element has a prescribed dof: the entries of the
+    /// set's matrix in prescribed rows and columns, over every dof, from the same element
+    /// loop. Entry by entry the same sums in the same (colour) order as an assembly over every
+    /// dof, so both parts have that assembly's bits.
     pub fn assemble_with_prescribed<S: ElementSet>(
         &mut self,
         input: &AssemblyInput,
@@ -630,21 +611,24 @@ impl GlobalSystem {
         coloring: &Coloring,
         committed: &[S::State],
         trial: &mut [S::State],
-        prescribed: &mut PrescribedCouplings,
+        prescribed: Option<&mut PrescribedCouplings>,
     ) {
-        assert!(input.tangent, "the couplings are those of the tangent");
-        assert_eq!(prescribed.elements.len(), set.len());
-        let targets = Targets {
-            values: Some(SharedMut(self.values.as_mut_ptr())),
-            force: Some(SharedMut(self.internal_force.as_mut_ptr())),
-            dense: None,
-            frozen: None,
-            prescribed: Some(Side {
+        let side = prescribed.map(|prescribed| {
+            assert!(input.tangent, "the couplings are those of the tangent");
+            assert_eq!(prescribed.elements.len(), set.len());
+            Side {
                 pattern: &prescribed.pattern,
                 dofs: &prescribed.all,
                 values: SharedMut(prescribed.values.as_mut_ptr()),
                 elements: &prescribed.elements,
-            }),
+            }
+        });
+        let targets = Targets {
+            values: input.tangent.then_some(SharedMut(self.values.as_mut_ptr())),
+            force: Some(SharedMut(self.internal_force.as_mut_ptr())),
+            dense: None,
+            frozen: None,
+            prescribed: side,
         };
         scatter(
             &self.pattern,
@@ -1278,7 +1262,8 @@ mod tests {
             SparsityPattern::new(node_count, &all, cells.clone()),
             dofs.dof_count(),
         );
-        let mut couplings = PrescribedCouplings::new(node_count, &dofs, cells);
+        let connectivity: Vec<ElementNodes> = cells.map(ElementNodes::from).collect();
+        let mut couplings = PrescribedCouplings::new(node_count, &dofs, &connectivity);
         let committed = vec![PointState::default(); set.len() * set.points_per_element()];
         let mut trial = committed.clone();
         let u: Vec<f64> = (0..dofs.dof_count())
@@ -1304,7 +1289,7 @@ mod tests {
             &coloring,
             &committed,
             &mut trial,
-            &mut couplings,
+            Some(&mut couplings),
         );
         // Bit for bit: the same sums in the same order.
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();

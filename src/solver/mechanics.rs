@@ -214,11 +214,13 @@ impl Problem for Mechanics<'_> {
     ) -> PrescribedCouplings {
         let m = self.model;
         let continuum = &m.continuum;
-        let connectivity = (0..continuum.len()).map(|e| ElementNodes {
-            nodes: continuum.nodes(e),
-            couples_twist: continuum.couples_twist(e),
-        });
-        let mut couplings = PrescribedCouplings::new(m.mesh.nodes.len(), input.dofs, connectivity);
+        let connectivity: Vec<ElementNodes> = (0..continuum.len())
+            .map(|e| ElementNodes {
+                nodes: continuum.nodes(e),
+                couples_twist: continuum.couples_twist(e),
+            })
+            .collect();
+        let mut couplings = PrescribedCouplings::new(m.mesh.nodes.len(), input.dofs, &connectivity);
         let (bodies, cc, ct) = self.bodies();
         system.clear_values();
         system.assemble_with_prescribed(
@@ -227,7 +229,7 @@ impl Problem for Mechanics<'_> {
             &m.continuum_coloring,
             cc,
             ct,
-            &mut couplings,
+            Some(&mut couplings),
         );
         couplings
     }
