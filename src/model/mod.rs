@@ -270,11 +270,7 @@ fn numbering(
     if dofs.free_count() == 0 {
         return Err(Error::NothingToSolve);
     }
-    let connectivity = (0..continuum.len())
-        .map(|e| ElementNodes {
-            nodes: continuum.nodes(e),
-            couples_twist: continuum.couples_twist(e),
-        })
+    let connectivity = continuum_connectivity(continuum)
         .chain((0..interface.len()).map(|e| interface.nodes(e).into()));
     let pattern = SparsityPattern::new(node_count, &dofs, connectivity);
     Ok(Numbering {
@@ -282,6 +278,17 @@ fn numbering(
         continuum_coloring: Coloring::new(continuum, node_count),
         interface_coloring: Coloring::new(interface, node_count),
         dofs,
+    })
+}
+
+/// Each continuum cell's nodes, with whether its matrix may couple twist, for a sparsity
+/// pattern ([`SparsityPattern::new`]).
+pub fn continuum_connectivity(
+    continuum: &ContinuumSet,
+) -> impl Iterator<Item = ElementNodes<'_>> + '_ {
+    (0..continuum.len()).map(|e| ElementNodes {
+        nodes: continuum.nodes(e),
+        couples_twist: continuum.couples_twist(e),
     })
 }
 

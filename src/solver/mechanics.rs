@@ -16,7 +16,7 @@ use crate::element::set::{
 };
 use crate::element::{ElementInput, ElementMatrix, ElementOutput};
 use crate::material::PointState;
-use crate::model::Model;
+use crate::model::{Model, continuum_connectivity};
 use crate::solver::newton::Problem;
 
 /// The interface elements seen as the difference between their elastic-tangent matrix and
@@ -214,12 +214,7 @@ impl Problem for Mechanics<'_> {
     ) -> PrescribedCouplings {
         let m = self.model;
         let continuum = &m.continuum;
-        let connectivity: Vec<ElementNodes> = (0..continuum.len())
-            .map(|e| ElementNodes {
-                nodes: continuum.nodes(e),
-                couples_twist: continuum.couples_twist(e),
-            })
-            .collect();
+        let connectivity: Vec<ElementNodes> = continuum_connectivity(continuum).collect();
         let mut couplings = PrescribedCouplings::new(m.mesh.nodes.len(), input.dofs, &connectivity);
         let (bodies, cc, ct) = self.bodies();
         system.clear_values();
