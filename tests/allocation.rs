@@ -137,8 +137,8 @@ impl Problem for Marked<'_> {
         symmetric
     }
 
-    fn interface_equations(&self, dofs: &DofMap) -> Vec<usize> {
-        self.inner.interface_equations(dofs)
+    fn interface_dofs(&self) -> Vec<usize> {
+        self.inner.interface_dofs()
     }
 
     fn bulk_is_linear(&self) -> bool {

@@ -84,6 +84,34 @@ fn frictional_sliding_with_stick_and_slip_agrees_with_a_tight_run() {
     );
 }
 
+/// Interface iterations (`[solver] interface_iterations`, 12 by default) settle the
+/// stick–slip statuses within a Newton iteration: the frictional block reaches the tight
+/// run's answer as plain Newton iterations do (1e-4), in fewer Newton iterations; without
+/// them (0) the iterations are plain Newton's.
+#[test]
+fn interface_iterations_reach_the_tight_answer_in_fewer_newton_iterations() {
+    let case = block_on_base(70000.0, 0.33, &[], linear_coulomb(1e4, 1e3, 0.25))
+        .pressed_and_pushed(8.0, 0.01, &[0.5, 1.0, 0.9, 1.5, 2.0, 1.9, 2.5])
+        .case();
+    let (default, tight) = default_and_tight(&case);
+    assert_eq!(default.interface_iterations, 12);
+    let plain = NewtonSettings {
+        interface_iterations: 0,
+        ..default
+    };
+    let (reference, _, _) = history(sliding_block_mesh(), &case, &tight);
+    let mut iterations = Vec::new();
+    for s in [&default, &plain] {
+        let (u, stats, _) = history(sliding_block_mesh(), &case, s);
+        let d = relative_difference(&u, &reference);
+        assert!(d <= 1e-4, "relative difference {d:.3e}");
+        assert_eq!(stats.cutbacks, 0);
+        iterations.push(stats.iterations);
+    }
+    println!("Newton iterations with and without interface iterations: {iterations:?}");
+    assert!(iterations[0] < iterations[1], "{iterations:?}");
+}
+
 /// A plane-strain strip [0, 4] × [0, 1] (slightly distorted elements) held on its bottom
 /// (t0) and left (s0) edges, its top edge (t1) pulled and pushed: `material` decides whether it yields.
 fn strip(material: toml::Table, top: &[f64]) -> (impl Fn() -> asperity::mesh::Mesh, Case) {
@@ -212,6 +240,8 @@ fn bad_thresholds_are_named() {
     }
     let e = solver_table(&[("linear_residual_tolerance", 1e-2.into())]).expect_err("invalid");
     assert_eq!(invalid_key(e), "solver.linear_residual_tolerance");
+    let e = solver_table(&[("interface_iterations", 101.into())]).expect_err("invalid");
+    assert_eq!(invalid_key(e), "solver.interface_iterations");
     // An unknown key is a case error whose message names it.
     let e = solver_table(&[("residual_tolerence", 1e-3.into())]).expect_err("unknown key");
     assert!(

@@ -155,3 +155,35 @@ fn near_rigid_punch_answer_does_not_depend_on_the_tolerance() {
         "displacements differ by {difference:.3e} of {scale:.3e}"
     );
 }
+
+/// With elastic bodies the interface iterations solve an increment's contact problem within
+/// one Newton iteration: the punch's ten increments take at most one Newton iteration each
+/// (plain Newton iterations: more, the stick–slip front moving a few points per iteration),
+/// and the answers agree within the convergence criteria.
+#[test]
+fn near_rigid_punch_takes_one_newton_iteration_per_increment_with_interface_iterations() {
+    let (model, case) = punch();
+    let default = settings(&case);
+    let plain = NewtonSettings {
+        interface_iterations: 0,
+        ..default
+    };
+    let (with, with_stats) = solve(&model, &default);
+    let (without, without_stats) = solve(&model, &plain);
+    println!(
+        "Newton iterations: {} with interface iterations, {} without",
+        with_stats.iterations, without_stats.iterations
+    );
+    assert!(with_stats.iterations <= with_stats.increments);
+    assert!(with_stats.iterations < without_stats.iterations);
+    let scale = without.u.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    let difference = with
+        .u
+        .iter()
+        .zip(&without.u)
+        .fold(0.0_f64, |m, (a, b)| m.max((a - b).abs()));
+    assert!(
+        difference <= 1e-4 * scale,
+        "displacements differ by {difference:.3e} of {scale:.3e}"
+    );
+}

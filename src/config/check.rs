@@ -21,6 +21,10 @@ pub const MAX_STEPS: usize = 100_000;
 pub const MAX_ITERATIONS: usize = 10_000;
 /// Most cut-backs of a step: 2⁻²⁰ ≈ 10⁻⁶ of a step is already far below any useful increment.
 pub const MAX_CUTBACKS: usize = 20;
+/// Most interface iterations within a Newton iteration: each costs a dense LU of the
+/// interface system, and a law whose statuses have not settled in 100 is left to the Newton
+/// iterations.
+pub const MAX_INTERFACE_ITERATIONS: usize = 100;
 /// Loosest convergence tolerance: a relative out-of-balance force or correction of more
 /// than 1 % is not equilibrium. A tolerance ≥ 1 would accept the unloaded start of an
 /// increment (relative residual 1) after zero iterations.
@@ -601,6 +605,13 @@ impl Case {
                     "at most {MAX_CUTBACKS} (a step cut back {MAX_CUTBACKS} times is 2^-{MAX_CUTBACKS} \
                      of its size)"
                 ),
+            ));
+        }
+        if s.interface_iterations > MAX_INTERFACE_ITERATIONS {
+            return Err(self.invalid(
+                "solver.interface_iterations",
+                s.interface_iterations,
+                format!("at most {MAX_INTERFACE_ITERATIONS} (0 turns them off)"),
             ));
         }
         if s.max_solves == 0 {

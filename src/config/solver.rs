@@ -52,6 +52,8 @@ pub struct SolverSpec {
     /// Start an increment proportional to the last converged one from the displacements
     /// extrapolated from it (default true).
     pub extrapolate: bool,
+    /// Condensed path: interface iterations per Newton iteration (0: none).
+    pub interface_iterations: usize,
     // --- plausibility of a converged increment and collapse detection ----------
     /// Largest nodal displacement increment of a converged increment, as a fraction of the
     /// model size (bounding-box diagonal); a larger one is a failed increment (cut back).
@@ -123,6 +125,14 @@ struct RawSolverSpec {
     /// accepted without a solve (default true; false starts every increment from the
     /// converged state).
     extrapolate: bool,
+    /// With the condensed linear solver: how many times, within one Newton iteration, the
+    /// interface elements are re-evaluated and the interface system (the bodies condensed
+    /// onto it, linearised) solved again, so that the stick, slip and open statuses settle
+    /// without a new assembly of the bodies (0 to 100; default 12; 0 gives plain Newton
+    /// iterations, one interface evaluation each). A further interface iteration is made
+    /// only while the interface's out-of-balance force keeps falling and is above R_l q̃.
+    /// Load-controlled increments only: arc-length increments keep plain Newton iterations.
+    interface_iterations: usize,
     /// Plausibility bound: a converged increment in which a node moves by more than this
     /// fraction of the model size (bounding-box diagonal) is a failed increment and is cut back
     /// (default 0.1). With twist a node's circumferential displacement u_θ counts too.
@@ -160,6 +170,7 @@ impl Default for RawSolverSpec {
             contact_algorithm: ContactAlgorithmKind::default(),
             linear_solver: LinearSolverKind::default(),
             extrapolate: true,
+            interface_iterations: 12,
             max_displacement_increment: 0.1,
             max_strain_increment: 0.05,
             collapse_stiffness_ratio: 1e-2,
@@ -195,6 +206,7 @@ impl From<RawSolverSpec> for SolverSpec {
             contact_algorithm: r.contact_algorithm,
             linear_solver: r.linear_solver,
             extrapolate: r.extrapolate,
+            interface_iterations: r.interface_iterations,
             max_displacement_increment: r.max_displacement_increment,
             max_strain_increment: r.max_strain_increment,
             collapse_stiffness_ratio: r.collapse_stiffness_ratio,

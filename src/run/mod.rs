@@ -482,5 +482,6 @@ pub fn newton_settings(spec: &SolverSpec) -> NewtonSettings {
             LinearSolverKind::Krylov => LinearSolver::Krylov,
         },
         extrapolate: spec.extrapolate,
+        interface_iterations: spec.interface_iterations,
     }
 }

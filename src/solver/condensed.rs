@@ -247,6 +247,8 @@ pub struct CondensedSolver {
     /// Whether [`Self::release_refactorisation_storage`] was called.
     released: bool,
     interface_factored: bool,
+    /// Whether the bulk part of the right-hand side of the last [`Self::condense`] was zero.
+    balanced_bulk: bool,
     /// The LU path of an unsymmetric bulk, made by the first
     /// [`Self::factor_bulk_unsymmetric`], and whether the bulk factor is its LU.
     unsymmetric: Option<Box<UnsymmetricBulk>>,
@@ -530,6 +532,7 @@ impl CondensedSolver {
             factored: false,
             released: false,
             interface_factored: false,
+            balanced_bulk: false,
             unsymmetric: None,
             lu_bulk: false,
         })
@@ -1082,80 +1085,115 @@ impl CondensedSolver {
 
     /// Solves (K_c + K_if) x = `rhs` in place with the factors of the last
     /// [`Self::factor_bulk`] and [`Self::factor_interface`] (e.g. several right-hand sides
-    /// for one tangent).
+    /// for one tangent): [`Self::condense`], the interface solve, [`Self::expand`].
     pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
         assert!(
             self.interface_factored,
             "solve_in_place before factor_interface"
         );
+        self.condense(rhs);
+        let n_bulk = self.n_bulk;
+        self.dense.solve_in_place(&mut self.x[n_bulk..]);
+        self.back_substitute(rhs);
+    }
+
+    /// The first half of a solve: takes the right-hand side `rhs` (free equations) into
+    /// elimination order and eliminates the bulk from it, leaving the condensed right-hand
+    /// side g = r_I − K_IB K_BB⁻¹ r_B ([`Self::condensed_rhs`]). The bulk part is kept for
+    /// [`Self::expand`], which finishes the solve for any interface solution.
+    pub fn condense(&mut self, rhs: &[f64]) {
+        assert!(self.factored, "condense before factor_bulk");
         assert_eq!(rhs.len(), self.n);
         for (x, &old) in self.x.iter_mut().zip(&self.order) {
             *x = rhs[old as usize];
         }
-        let balanced = drop_negligible_bulk_entries(&mut self.x, self.n_bulk);
+        self.balanced_bulk = drop_negligible_bulk_entries(&mut self.x, self.n_bulk);
+        if self.balanced_bulk {
+            return;
+        }
+        let n_bulk = self.n_bulk;
         if self.lu_bulk {
-            self.solve_lu_in_place(balanced);
-        } else {
-            self.solve_cholesky_in_place(balanced);
-        }
-        for (r, &new) in rhs.iter_mut().zip(&self.position) {
-            *r = self.x[new as usize];
-        }
-    }
-
-    /// The solve of [`Self::solve_in_place`] in elimination order (in `self.x`) with the
-    /// bulk's Cholesky factor (`balanced`: the bulk right-hand side is zero).
-    fn solve_cholesky_in_place(&mut self, balanced: bool) {
-        let n_bulk = self.n_bulk;
-        let SymbolicCholeskyRaw::Supernodal(symbolic) = self.symbolic.raw() else {
-            unreachable!("forced supernodal in `new`");
-        };
-        let llt = SupernodalLltRef::new(symbolic, &self.factor);
-        if !balanced {
-            forward_bulk(llt, n_bulk, &mut self.x, &mut self.gather);
-        }
-        // Now x_I = r_I − K_IB K_BB⁻¹ r_B, the condensed right-hand side.
-        self.dense.solve_in_place(&mut self.x[n_bulk..]);
-        let gathers = &self.backward_gathers;
-        backward_bulk(
-            llt,
-            &self.tree,
-            n_bulk,
-            &mut self.x,
-            gathers,
-            self.gather.len(),
-        );
-    }
-
-    /// The solve of [`Self::solve_in_place`] in elimination order (in `self.x`) with the
-    /// bulk's LU (`balanced`: the bulk right-hand side is zero): x_I ← (S_c + K_if)⁻¹ (r_I − K_IB K_BB⁻¹ r_B), then
-    /// x_B ← K_BB⁻¹ (r_B − K_BI x_I).
-    fn solve_lu_in_place(&mut self, balanced: bool) {
-        let n_bulk = self.n_bulk;
-        let u = self.unsymmetric.as_deref_mut().expect("LU made");
-        let (x_b, x_i) = self.x.split_at_mut(n_bulk);
-        let values = &u.factored_values;
-        if !balanced {
+            let u = self.unsymmetric.as_deref_mut().expect("LU made");
+            let (x_b, x_i) = self.x.split_at_mut(n_bulk);
             let mut z = u.block.as_mut().subcols_mut(0, 1);
             z.rb_mut()
                 .col_mut(0)
                 .copy_from(faer::ColRef::from_slice(x_b));
             u.lu.solve_in_place(z.rb_mut(), Par::Seq);
             for &(i, b, p) in &u.ib {
-                x_i[i as usize] -= values[p as usize] * z[(b as usize, 0)];
+                x_i[i as usize] -= u.factored_values[p as usize] * z[(b as usize, 0)];
             }
+        } else {
+            let SymbolicCholeskyRaw::Supernodal(symbolic) = self.symbolic.raw() else {
+                unreachable!("forced supernodal in `new`");
+            };
+            let llt = SupernodalLltRef::new(symbolic, &self.factor);
+            forward_bulk(llt, n_bulk, &mut self.x, &mut self.gather);
         }
-        self.dense.solve_in_place(x_i);
-        for (k, &xk) in x_i.iter().enumerate() {
-            let range = u.bi_ptr[k]..u.bi_ptr[k + 1];
-            for (&row, &p) in u.bi_rows[range.clone()].iter().zip(&u.bi_source[range]) {
-                x_b[row as usize] -= values[p as usize] * xk;
-            }
-        }
-        u.lu.solve_in_place(
-            MatMut::from_column_major_slice_mut(x_b, n_bulk, 1),
-            Par::Seq,
+    }
+
+    /// The condensed right-hand side g of the last [`Self::condense`], in the order of
+    /// [`Self::interface_equations`].
+    pub fn condensed_rhs(&self) -> &[f64] {
+        &self.x[self.n_bulk..]
+    }
+
+    /// Solves (S_c + K_if) v = `v` in place (interface order) with the LU of the last
+    /// [`Self::factor_interface`].
+    pub fn solve_interface(&mut self, v: &mut [f64]) {
+        assert!(
+            self.interface_factored,
+            "solve_interface before factor_interface"
         );
+        self.dense.solve_in_place(v);
+    }
+
+    /// The second half of a solve begun by [`Self::condense`]: with the interface unknowns
+    /// `x_interface` (interface order), x_B = K_BB⁻¹ (r_B − K_BI x_I); writes x (free
+    /// equations) into `out`.
+    pub fn expand(&mut self, x_interface: &[f64], out: &mut [f64]) {
+        assert_eq!(out.len(), self.n);
+        let n_bulk = self.n_bulk;
+        self.x[n_bulk..].copy_from_slice(x_interface);
+        self.back_substitute(out);
+    }
+
+    /// Back substitution of the bulk from the interface unknowns in `self.x` (after
+    /// [`Self::condense`]), the solution written into `out` (free equations).
+    fn back_substitute(&mut self, out: &mut [f64]) {
+        let n_bulk = self.n_bulk;
+        if self.lu_bulk {
+            let u = self.unsymmetric.as_deref_mut().expect("LU made");
+            let (x_b, x_i) = self.x.split_at_mut(n_bulk);
+            let values = &u.factored_values;
+            for (k, &xk) in x_i.iter().enumerate() {
+                let range = u.bi_ptr[k]..u.bi_ptr[k + 1];
+                for (&row, &p) in u.bi_rows[range.clone()].iter().zip(&u.bi_source[range]) {
+                    x_b[row as usize] -= values[p as usize] * xk;
+                }
+            }
+            u.lu.solve_in_place(
+                MatMut::from_column_major_slice_mut(x_b, n_bulk, 1),
+                Par::Seq,
+            );
+        } else {
+            let SymbolicCholeskyRaw::Supernodal(symbolic) = self.symbolic.raw() else {
+                unreachable!("forced supernodal in `new`");
+            };
+            let llt = SupernodalLltRef::new(symbolic, &self.factor);
+            let gathers = &self.backward_gathers;
+            backward_bulk(
+                llt,
+                &self.tree,
+                n_bulk,
+                &mut self.x,
+                gathers,
+                self.gather.len(),
+            );
+        }
+        for (r, &new) in out.iter_mut().zip(&self.position) {
+            *r = self.x[new as usize];
+        }
     }
 
     /// Gathers the interface block of `matrix` (over the pattern given to [`Self::new`], e.g.
@@ -2051,6 +2089,63 @@ pub(crate) mod tests {
         let zero = Mat::<f64>::zeros(n_i, n_i);
         let err = solver.factor_interface(zero.as_ref()).unwrap_err();
         assert!(err.to_string().contains("singular"), "{err}");
+    }
+
+    /// The two halves of a solve, [`CondensedSolver::condense`] and
+    /// [`CondensedSolver::expand`], with the interface solve between them, are
+    /// [`CondensedSolver::solve_in_place`] bit for bit; and for any interface unknowns the
+    /// expanded solution balances the bulk rows, K_BB x_B + K_BI x_I = r_B (Cholesky and LU
+    /// bulk).
+    #[test]
+    fn condense_and_expand_split_a_solve_and_balance_the_bulk_for_any_interface_unknowns() {
+        for unsymmetric in [false, true] {
+            let mut t = test_system(5, 3, 1.0, &[]);
+            if unsymmetric {
+                make_bulk_unsymmetric(&mut t, 0.05);
+            }
+            let sym = t.pattern.symbolic().as_ref();
+            let mut solver = CondensedSolver::new(&t.pattern, &t.interface_eqs).unwrap();
+            let continuum = SparseColMatRef::new(sym, &t.continuum);
+            if unsymmetric {
+                solver.factor_bulk_unsymmetric(continuum).unwrap();
+            } else {
+                solver.factor_bulk(continuum).unwrap();
+            }
+            let n_i = solver.interface_equations().len();
+            let mut block = Mat::<f64>::zeros(n_i, n_i);
+            solver
+                .gather_interface_block(SparseColMatRef::new(sym, &t.interface), block.as_mut())
+                .unwrap();
+            solver.factor_interface(block.as_ref()).unwrap();
+            let n = t.dofs.free_count();
+            let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).sin()).collect();
+            let mut whole = b.clone();
+            solver.solve_in_place(&mut whole);
+            solver.condense(&b);
+            let mut x_i = solver.condensed_rhs().to_vec();
+            solver.solve_interface(&mut x_i);
+            let mut split = vec![0.0; n];
+            solver.expand(&x_i, &mut split);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&split), bits(&whole), "unsymmetric {unsymmetric}");
+            // Any interface unknowns: the bulk rows of K_c x − b vanish.
+            let v: Vec<f64> = (0..n_i).map(|k| (k as f64).cos()).collect();
+            solver.condense(&b);
+            solver.expand(&v, &mut split);
+            let mut r = b.clone();
+            for (j, &xj) in split.iter().enumerate() {
+                for p in sym.col_range(j) {
+                    r[sym.row_idx()[p] as usize] -= t.continuum[p] * xj;
+                }
+            }
+            let bulk_residual = (0..n)
+                .filter(|&eq| solver.local_index(eq).is_none())
+                .fold(0.0f64, |m, eq| m.max(r[eq].abs()));
+            assert!(
+                bulk_residual < 1e-12,
+                "unsymmetric {unsymmetric}: {bulk_residual:e}"
+            );
+        }
     }
 
     #[test]

@@ -85,6 +85,9 @@ pub struct SolverWork {
     /// time the check took.
     pub interface_factorisations: Tally,
     pub kept_interface_factorisations: Tally,
+    /// Condensed path: interface iterations, the steps beyond a Newton iteration's first
+    /// (each after an interface LU, counted above).
+    pub interface_iterations: usize,
     /// Linear solves with a factored tangent, and BiCGSTAB solves.
     pub solves: Tally,
 }
@@ -147,6 +150,7 @@ pub struct FloorCounts {
     pub kept_factorisations: usize,
     pub interface_factorisations: usize,
     pub kept_interface_factorisations: usize,
+    pub interface_iterations: usize,
     pub solves: usize,
 }
 
@@ -187,6 +191,7 @@ impl Floor {
                 kept_factorisations: s.kept_factorisations.calls,
                 interface_factorisations: s.interface_factorisations.calls,
                 kept_interface_factorisations: s.kept_interface_factorisations.calls,
+                interface_iterations: s.interface_iterations,
                 solves: s.solves.calls,
             },
         }

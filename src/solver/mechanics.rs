@@ -142,15 +142,15 @@ impl Problem for Mechanics<'_> {
         symmetric
     }
 
-    fn interface_equations(&self, dofs: &DofMap) -> Vec<usize> {
+    fn interface_dofs(&self) -> Vec<usize> {
         let d = self.model.interface.dofs_per_node();
-        let mut eqs: Vec<usize> = (0..self.model.interface.len())
+        let mut dofs: Vec<usize> = (0..self.model.interface.len())
             .flat_map(|e| self.model.interface.nodes(e))
-            .flat_map(|&n| (0..d).filter_map(move |c| dofs.equation(d * n as usize + c)))
+            .flat_map(|&n| (0..d).map(move |c| d * n as usize + c))
             .collect();
-        eqs.sort_unstable();
-        eqs.dedup();
-        eqs
+        dofs.sort_unstable();
+        dofs.dedup();
+        dofs
     }
 
     fn bulk_is_linear(&self) -> bool {

@@ -34,7 +34,10 @@
 //! into the global pattern and factored (with the interface ordered last) only when its
 //! tangent changed — once per model for linear-elastic bodies, every iteration otherwise —
 //! and the interface elements into a dense block over the interface unknowns, whose dense LU
-//! is formed at every iteration. The consistent (unsymmetric) tangent is used as is. With
+//! is formed at every iteration. The consistent (unsymmetric) tangent is used as is. Within
+//! an iteration the interface law is iterated to convergence against the bodies'
+//! linearisation before they are back-substituted ([`interface_iterations`]): the contact
+//! statuses settle without new assemblies of the bodies. With
 //! linear-elastic bodies and no temperature field the continuum's force is K_c u from the
 //! stored stiffness throughout (reactions included), iterations re-evaluate the interface
 //! elements alone, and a converged increment's point states come from one loop that
@@ -67,12 +70,14 @@ use crate::solver::linear::CholeskySolver;
 
 pub mod arc;
 mod criteria;
+mod interface_iterations;
 mod predictor;
 mod stiffness;
 
 pub use arc::{ArcConverged, ArcIncrement};
 pub use criteria::{Criteria, ForceAverage};
 use criteria::{Flux, FluxHistory, Measures};
+use interface_iterations::InterfaceIterations;
 pub use predictor::LastIncrement;
 use predictor::Predictor;
 use stiffness::BulkStiffness;
@@ -109,6 +114,9 @@ pub struct NewtonSettings {
     /// Whether an increment proportional to the last converged one starts from the
     /// extrapolated displacements (`Predictor`).
     pub extrapolate: bool,
+    /// Condensed path: the most interface iterations within one Newton iteration
+    /// ([`interface_iterations`]; 0: plain Newton iterations).
+    pub interface_iterations: usize,
 }
 
 impl NewtonSettings {
@@ -132,10 +140,10 @@ pub trait Problem: Send {
     /// the tangent is symmetric.
     fn assemble(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) -> bool;
 
-    /// The free equations of the interface elements' nodes, sorted: empty if the problem has
-    /// no interface, which keeps it off the condensed path. The methods below are called only
-    /// when it is not empty.
-    fn interface_equations(&self, dofs: &DofMap) -> Vec<usize>;
+    /// The dofs of the interface elements' nodes (free and prescribed), sorted: empty if the
+    /// problem has no interface, which keeps it off the condensed path. The methods below are
+    /// called only when it is not empty.
+    fn interface_dofs(&self) -> Vec<usize>;
 
     /// Whether the bulk (continuum) is linear: constant tangent, internal force K_c · u.
     fn bulk_is_linear(&self) -> bool;
@@ -236,6 +244,8 @@ struct Condensed {
     /// Whether the bulk's trial states are not those of the last evaluation's displacements
     /// (it took its force from a product with K_c and evaluated no element).
     states_stale: bool,
+    /// The workspaces of the interface iterations.
+    iterations: InterfaceIterations,
 }
 
 impl Condensed {
@@ -279,6 +289,8 @@ pub struct NewtonLog {
     /// Linear solves with an unsymmetric tangent, and their BiCGSTAB iterations.
     pub unsymmetric_solves: usize,
     pub krylov_iterations: usize,
+    /// Condensed path: interface iterations beyond each Newton iteration's first step.
+    pub interface_iterations: usize,
     pub converged: bool,
     /// The factor s of the predictor u + s Δu_last (0: the increment started from u).
     pub predictor: f64,
@@ -425,7 +437,10 @@ impl<'a> Newton<'a> {
             return Ok((0.0, 0.0));
         }
         let t = std::time::Instant::now();
-        let interface = problem.interface_equations(self.dofs);
+        let interface_dofs = problem.interface_dofs();
+        let interface: Vec<usize> = (interface_dofs.iter())
+            .filter_map(|&dof| self.dofs.equation(dof))
+            .collect();
         if interface.is_empty() {
             self.no_interface = true;
             return Ok((0.0, 0.0));
@@ -463,6 +478,17 @@ impl<'a> Newton<'a> {
         let solver = solver?;
         let map = problem.interface_scatter(self.dofs, &|eq| solver.local_index(eq));
         let n_i = solver.interface_equations().len();
+        let mut unknown_dofs = vec![0; n_i];
+        for &dof in &interface_dofs {
+            if let Some(k) = self
+                .dofs
+                .equation(dof)
+                .and_then(|eq| solver.local_index(eq))
+            {
+                unknown_dofs[k] = dof;
+            }
+        }
+        let iterations = InterfaceIterations::new(unknown_dofs, interface_dofs, n);
         // Only a linear bulk under a temperature field continues from a reference state.
         let reference_len = if linear_bulk && !by_product { n } else { 0 };
         tracing::debug!(
@@ -487,6 +513,7 @@ impl<'a> Newton<'a> {
             extrapolated: false,
             by_product,
             states_stale: false,
+            iterations,
         });
         let Some((couplings, assembly_seconds)) = couplings else {
             return Ok((t.elapsed().as_secs_f64(), 0.0));
@@ -756,7 +783,25 @@ impl<'a> Newton<'a> {
                 return Ok(log);
             }
             // An unsymmetric bulk is factored by LU, exactly, whatever the interface.
-            if self.condensed.is_some() || symmetric || !self.bulk_symmetric {
+            if self.condensed.is_some() && settings.interface_iterations > 0 {
+                self.factor(&mut log)?;
+                let t = std::time::Instant::now();
+                let tolerance = criteria.linear_residual;
+                let inner = self.solve_with_interface_iterations(problem, u, tolerance, average);
+                let inner_seconds = inner.evaluation_seconds + inner.factorisation_seconds;
+                // The tally first: as with `solve_factored`, the phase's time (read after it)
+                // is never below the floor's.
+                self.work
+                    .solves
+                    .add(t.elapsed().as_secs_f64() - inner_seconds);
+                log.assembly_seconds += inner.evaluation_seconds;
+                log.factorization_seconds += inner.factorisation_seconds;
+                log.solve_seconds += t.elapsed().as_secs_f64() - inner_seconds;
+                log.interface_iterations += inner.steps;
+                self.work.interface_iterations += inner.steps;
+                tracing::debug!(steps = inner.steps, "interface iterations");
+                log.unsymmetric_solves += usize::from(!symmetric) + inner.unsymmetric_solves;
+            } else if self.condensed.is_some() || symmetric || !self.bulk_symmetric {
                 self.factor(&mut log)?;
                 let t = std::time::Instant::now();
                 solve_factored(
