@@ -36,7 +36,7 @@
 //! and the interface elements into a dense block over the interface unknowns, whose dense LU
 //! is formed at every iteration. The consistent (unsymmetric) tangent is used as is. Within
 //! an iteration the interface law is iterated to convergence against the bodies'
-//! linearisation before they are back-substituted ([`interface_iterations`]): the contact
+//! linearisation before they are back-substituted (`newton/interface_iterations.rs`): the contact
 //! statuses settle without new assemblies of the bodies. With
 //! linear-elastic bodies and no temperature field the continuum's force is K_c u from the
 //! stored stiffness throughout (reactions included), iterations re-evaluate the interface
@@ -115,7 +115,7 @@ pub struct NewtonSettings {
     /// extrapolated displacements (`Predictor`).
     pub extrapolate: bool,
     /// Condensed path: the most interface iterations within one Newton iteration
-    /// ([`interface_iterations`]; 0: plain Newton iterations).
+    /// (`newton/interface_iterations.rs`; 0: plain Newton iterations).
     pub interface_iterations: usize,
 }
 
