@@ -1608,6 +1608,22 @@ pub(crate) mod tests {
         compare_scaled(solver, t, lu, 1.0)
     }
 
+    /// Factors the bulk of `t` (by LU if `lu`) and returns its interface block.
+    fn factor_bulk_of(solver: &mut CondensedSolver, t: &TestSystem, lu: bool) -> Mat<f64> {
+        let sym = t.pattern.symbolic().as_ref();
+        let kc = SparseColMatRef::new(sym, &t.continuum);
+        if lu {
+            solver.factor_bulk_unsymmetric(kc).unwrap();
+        } else {
+            solver.factor_bulk(kc).unwrap();
+        }
+        let n_i = solver.interface_equations().len();
+        let mut block = Mat::<f64>::zeros(n_i, n_i);
+        let ki = SparseColMatRef::new(sym, &t.interface);
+        solver.gather_interface_block(ki, block.as_mut()).unwrap();
+        block
+    }
+
     /// [`compare_with`] for a right-hand side whose bulk entries are scaled by `bulk_rhs`.
     fn compare_scaled(
         solver: &mut CondensedSolver,
@@ -1616,17 +1632,7 @@ pub(crate) mod tests {
         bulk_rhs: f64,
     ) -> (f64, f64) {
         let n = t.dofs.free_count();
-        let sym = t.pattern.symbolic().as_ref();
-        let kc = SparseColMatRef::new(sym, &t.continuum);
-        let ki = SparseColMatRef::new(sym, &t.interface);
-        if lu {
-            solver.factor_bulk_unsymmetric(kc).unwrap();
-        } else {
-            solver.factor_bulk(kc).unwrap();
-        }
-        let n_i = solver.interface_equations().len();
-        let mut block = Mat::<f64>::zeros(n_i, n_i);
-        solver.gather_interface_block(ki, block.as_mut()).unwrap();
+        let block = factor_bulk_of(solver, t, lu);
         let mut rng = Rng(777);
         let b: Vec<f64> = (0..n)
             .map(|eq| match solver.local_index(eq) {
@@ -2105,17 +2111,8 @@ pub(crate) mod tests {
             }
             let sym = t.pattern.symbolic().as_ref();
             let mut solver = CondensedSolver::new(&t.pattern, &t.interface_eqs).unwrap();
-            let continuum = SparseColMatRef::new(sym, &t.continuum);
-            if unsymmetric {
-                solver.factor_bulk_unsymmetric(continuum).unwrap();
-            } else {
-                solver.factor_bulk(continuum).unwrap();
-            }
-            let n_i = solver.interface_equations().len();
-            let mut block = Mat::<f64>::zeros(n_i, n_i);
-            solver
-                .gather_interface_block(SparseColMatRef::new(sym, &t.interface), block.as_mut())
-                .unwrap();
+            let block = factor_bulk_of(&mut solver, &t, unsymmetric);
+            let n_i = block.nrows();
             solver.factor_interface(block.as_ref()).unwrap();
             let n = t.dofs.free_count();
             let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).sin()).collect();

@@ -785,22 +785,8 @@ impl<'a> Newton<'a> {
             // An unsymmetric bulk is factored by LU, exactly, whatever the interface.
             if self.condensed.is_some() && settings.interface_iterations > 0 {
                 self.factor(&mut log)?;
-                let t = std::time::Instant::now();
-                let tolerance = criteria.linear_residual;
-                let inner = self.solve_with_interface_iterations(problem, u, tolerance, average);
-                let inner_seconds = inner.evaluation_seconds + inner.factorisation_seconds;
-                // The tally first: as with `solve_factored`, the phase's time (read after it)
-                // is never below the floor's.
-                self.work
-                    .solves
-                    .add(t.elapsed().as_secs_f64() - inner_seconds);
-                log.assembly_seconds += inner.evaluation_seconds;
-                log.factorization_seconds += inner.factorisation_seconds;
-                log.solve_seconds += t.elapsed().as_secs_f64() - inner_seconds;
-                log.interface_iterations += inner.steps;
-                self.work.interface_iterations += inner.steps;
-                tracing::debug!(steps = inner.steps, "interface iterations");
-                log.unsymmetric_solves += usize::from(!symmetric) + inner.unsymmetric_solves;
+                self.solve_iterating_interface(problem, u, average, &mut log);
+                log.unsymmetric_solves += usize::from(!symmetric);
             } else if self.condensed.is_some() || symmetric || !self.bulk_symmetric {
                 self.factor(&mut log)?;
                 let t = std::time::Instant::now();

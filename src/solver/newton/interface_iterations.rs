@@ -32,7 +32,7 @@
 
 use std::time::Instant;
 
-use super::{Condensed, Newton, Problem, max_abs, norm};
+use super::{Condensed, Newton, NewtonLog, Problem, max_abs, norm};
 use crate::assembly::{AssemblyInput, DofMap, GlobalSystem};
 use crate::contact::ContactAlgorithm;
 use crate::solver::floor::SolverWork;
@@ -105,6 +105,35 @@ pub(super) struct InterfaceIterationLog {
 }
 
 impl Newton<'_> {
+    /// The correction of a Newton iteration on the condensed path, with interface
+    /// iterations ([`Self::solve_with_interface_iterations`] to R_l q̃, q̃ = `average`), its
+    /// work and time entered in `log` and the run's tallies (the evaluations as assembly, the
+    /// interface LUs as factorisation, the rest as the solve).
+    pub(super) fn solve_iterating_interface(
+        &mut self,
+        problem: &mut impl Problem,
+        u: &[f64],
+        average: f64,
+        log: &mut NewtonLog,
+    ) {
+        let t = Instant::now();
+        let tolerance = self.settings.criteria.linear_residual;
+        let inner = self.solve_with_interface_iterations(problem, u, tolerance, average);
+        let inner_seconds = inner.evaluation_seconds + inner.factorisation_seconds;
+        // The tally first: as with `solve_factored`, the phase's time (read after it) is
+        // never below the floor's.
+        self.work
+            .solves
+            .add(t.elapsed().as_secs_f64() - inner_seconds);
+        log.assembly_seconds += inner.evaluation_seconds;
+        log.factorization_seconds += inner.factorisation_seconds;
+        log.solve_seconds += t.elapsed().as_secs_f64() - inner_seconds;
+        log.interface_iterations += inner.steps;
+        log.unsymmetric_solves += inner.unsymmetric_solves;
+        self.work.interface_iterations += inner.steps;
+        tracing::debug!(steps = inner.steps, "interface iterations");
+    }
+
     /// Solves the tangent factored by [`Newton::factor`] for the correction (in
     /// `self.residual`, free dofs, in place) with the interface law iterated to
     /// convergence against the bulk's linearisation (module docs), until ‖R‖∞ is below
@@ -112,7 +141,7 @@ impl Newton<'_> {
     /// an unloaded start), while a step lowers ‖R‖ well, for at most
     /// [`NewtonSettings::interface_iterations`](super::NewtonSettings) steps; from the
     /// displacements `u` (all dofs), whose out-of-balance force the residual is.
-    pub(super) fn solve_with_interface_iterations(
+    fn solve_with_interface_iterations(
         &mut self,
         problem: &mut impl Problem,
         u: &[f64],
