@@ -26,9 +26,10 @@
 //! iterations are left with the bulk's nonlinearity. Each step is taken with the Newton
 //! loop's backtracking search, here on ‖R‖ (the first α ∈ {1, ½, … 1/16} that lowers it), so
 //! that with a linear bulk the iterates are those of plain Newton with its line search; the
-//! iterations stop when ‖R‖∞ is below the tolerance given, when no step lowers ‖R‖ (the
-//! first step then stays the full Newton step, which the Newton loop's line search judges
-//! against the whole model), or after the limit.
+//! iterations stop when ‖R‖∞ is below the tolerance given, when a step leaves more than
+//! [`SLOW_PROGRESS`] of ‖R‖, when no step lowers ‖R‖ (the first step then stays the full
+//! Newton step, which the Newton loop's line search judges against the whole model), or after
+//! the limit.
 
 use std::time::Instant;
 
