@@ -27,7 +27,8 @@
 //! loop's backtracking search, here on ‖R‖ (the first α ∈ {1, ½, … 1/16} that lowers it), so
 //! that with a linear bulk the iterates are those of plain Newton with its line search; the
 //! iterations stop when ‖R‖∞ is below the tolerance given, when a step leaves more than
-//! [`SLOW_PROGRESS`] of ‖R‖, when no step lowers ‖R‖ (the first step then stays the full
+//! [`SLOW_PROGRESS`] of ‖R‖ and the next would need a new LU (a block with the factored one's
+//! bits keeps it: with the elastic contact matrix every step does), when no step lowers ‖R‖ (the first step then stays the full
 //! Newton step, which the Newton loop's line search judges against the whole model), or after
 //! the limit.
 
@@ -215,18 +216,26 @@ impl Newton<'_> {
                 }
                 break;
             }
-            if slow || max_abs(&it.residual) <= tolerance || log.steps == limit {
+            // A block with the bits of the factored one (statuses and tangents unchanged, as
+            // with the elastic contact matrix) keeps the LU: the next step costs an evaluation
+            // and a solve, worth taking however slowly ‖R‖ falls.
+            let t = Instant::now();
+            let converged = max_abs(&it.residual) <= tolerance;
+            let lu_holds = c.interface_lu_holds();
+            if (slow && !lu_holds) || converged || log.steps == limit {
                 break;
             }
-            let t = Instant::now();
-            if c.solver.factor_interface(c.block.as_ref()).is_err() {
+            if lu_holds {
+                at.work.kept_interface_factorisations.since(t);
+            } else if c.solver.factor_interface(c.block.as_ref()).is_err() {
                 // Singular at δ (e.g. a body held by the interface alone, which the step
                 // opened): δ is the iterations' last word, the Newton loop judges it.
                 c.interface_lu_current = false;
                 break;
+            } else {
+                c.record_factored_block();
+                at.work.interface_factorisations.since(t);
             }
-            c.record_factored_block();
-            at.work.interface_factorisations.since(t);
             log.factorisation_seconds += t.elapsed().as_secs_f64();
             let it = &mut c.iterations;
             it.step.copy_from_slice(&it.residual);
