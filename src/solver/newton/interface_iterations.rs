@@ -57,7 +57,8 @@ pub(super) struct InterfaceIterations {
     /// The interface elements' forces over all dofs (zero outside `written`), swapped in for
     /// the system's while they are evaluated.
     force: Vec<f64>,
-    /// The displacements the interface is evaluated at: u, with u + δ at interface unknowns.
+    /// The displacements the interface is evaluated at: u at the interface nodes' dofs (the
+    /// only ones its elements read), with u + δ at the interface unknowns.
     u: Vec<f64>,
     /// Over the interface unknowns: u, δ, a trial δ + α Δ, the step Δ, K_if Δ, R(δ), a
     /// trial's R, and the interface force at u + δ and at a trial.
@@ -173,7 +174,10 @@ impl Newton<'_> {
         let tolerance = tolerance * scale;
         it.step.copy_from_slice(&it.residual);
         c.solver.solve_interface(&mut it.step);
-        it.u.copy_from_slice(u);
+        // The interface elements read their nodes' dofs alone: only those of u are copied.
+        for &dof in &it.written {
+            it.u[dof] = u[dof];
+        }
         for (s, &dof) in it.u_start.iter_mut().zip(&it.dofs) {
             *s = u[dof];
         }
