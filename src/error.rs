@@ -486,6 +486,16 @@ impl Error {
         self
     }
 
+    /// The [`Error::Case`] of a TOML file at `path` that does not parse into what it should:
+    /// the parser's message (the line, a caret under the value, what was expected), with a
+    /// float it quotes in full (`1e300` as its 301 digits) written in exponent form.
+    pub fn toml(path: impl Into<PathBuf>, error: &toml::de::Error) -> Self {
+        Error::Case {
+            path: path.into(),
+            message: shorten_floats(error.to_string().trim_end()),
+        }
+    }
+
     /// Shorthand for an [`Error::Io`].
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {
@@ -494,6 +504,31 @@ impl Error {
         }
     }
 }
+
+/// `message` with every float quoted as ``floating point `…` `` that is longer than
+/// [`LONG_FLOAT`] characters written as `{:e}` (serde quotes a float's full decimal
+/// expansion).
+pub(crate) fn shorten_floats(message: &str) -> String {
+    const QUOTE: &str = "floating point `";
+    let mut out = String::with_capacity(message.len());
+    let mut rest = message;
+    while let Some(start) = rest.find(QUOTE) {
+        let (head, tail) = rest.split_at(start + QUOTE.len());
+        out.push_str(head);
+        let end = tail.find('`').unwrap_or(tail.len());
+        let number = &tail[..end];
+        match number.parse::<f64>() {
+            Ok(value) if number.len() > LONG_FLOAT => out.push_str(&format!("{value:e}")),
+            _ => out.push_str(number),
+        }
+        rest = &tail[end..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// Longest float [`shorten_floats`] leaves as it is.
+const LONG_FLOAT: usize = 24;
 
 /// What is wrong with a mesh file ([`Error::Mesh`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

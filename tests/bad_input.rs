@@ -394,6 +394,31 @@ fn binary_meshes_with_lying_headers_are_mesh_errors() {
     );
 }
 
+/// serde quotes a float given where an integer belongs in full: `1e300` as 301 digits. The
+/// message names it in exponent form.
+#[test]
+fn huge_floats_are_quoted_in_exponent_form() {
+    for (key, value) in [
+        ("[solver]\nmax_iterations", "1e300"),
+        ("[solver]\ninterface_iterations", "-1.5e200"),
+        ("[steps]\ncount", "1e308"),
+    ] {
+        let case = case_plus(&format!("{key} = {value}"));
+        let (result, _dir) = run(&case, Some(PLATE_MSH.as_bytes()));
+        let message = result.unwrap_err().to_string();
+        let exponent = value.parse::<f64>().unwrap();
+        assert!(
+            message.contains(&format!("floating point `{exponent:e}`")),
+            "{key}: {message}"
+        );
+        let longest_digits = message
+            .split(|c: char| !c.is_ascii_digit())
+            .map(str::len)
+            .max();
+        assert!(longest_digits < Some(20), "{key}: {message}");
+    }
+}
+
 #[test]
 fn case_values_out_of_range_are_named() {
     use Expected::*;

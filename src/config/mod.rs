@@ -608,10 +608,7 @@ impl Case {
     /// Parses case text; `path` is used for messages and to resolve relative paths.
     pub fn from_toml(text: &str, path: &Path) -> Result<Self> {
         check::check_analysis_table(text, path)?;
-        let mut case: Case = toml::from_str(text).map_err(|e| Error::Case {
-            path: path.to_path_buf(),
-            message: e.to_string().trim_end().to_string(),
-        })?;
+        let mut case: Case = toml::from_str(text).map_err(|e| Error::toml(path, &e))?;
         case.path = path.to_path_buf();
         case.base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         case.validate()?;

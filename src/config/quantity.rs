@@ -270,6 +270,7 @@ pub fn parse_quantity(text: &str) -> std::result::Result<QuantitySpec, String> {
             return Err(bad(format!("`{key}` is given twice")));
         }
     }
-    serde::Deserialize::deserialize(toml::Value::Table(table))
-        .map_err(|e: toml::de::Error| bad(e.to_string().trim().replace('\n', " ")))
+    serde::Deserialize::deserialize(toml::Value::Table(table)).map_err(|e: toml::de::Error| {
+        bad(crate::error::shorten_floats(e.to_string().trim()).replace('\n', " "))
+    })
 }

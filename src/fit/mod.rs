@@ -243,10 +243,7 @@ impl Fit {
     /// Reads and checks fit file `path` and its data.
     pub fn from_file(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let file: FitFile = toml::from_str(&text).map_err(|e| Error::Case {
-            path: path.to_path_buf(),
-            message: e.to_string().trim_end().to_string(),
-        })?;
+        let file: FitFile = toml::from_str(&text).map_err(|e| Error::toml(path, &e))?;
         if file.tests.is_empty() {
             return Err(Error::Case {
                 path: path.to_path_buf(),

@@ -81,10 +81,7 @@ impl Specimen {
         case.output.vtu = false;
         let tmp = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
         let mesh = run::load_mesh(&case, &OutputFolder::scratch(tmp.path())?)?.0;
-        let tree = toml::from_str(&text).map_err(|e| Error::Case {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })?;
+        let tree = toml::from_str(&text).map_err(|e| Error::toml(path, &e))?;
         Ok(Self {
             tree,
             case,

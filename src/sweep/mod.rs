@@ -166,10 +166,7 @@ fn invalid(path: &Path, key: String, value: impl ToString, reason: impl Into<Str
 /// files call.
 pub fn plan(path: &Path, study: &Path, exe: &Path) -> Result<Manifest> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let sweep: SweepFile = toml::from_str(&text).map_err(|e| Error::Case {
-        path: path.to_path_buf(),
-        message: e.to_string().trim_end().to_string(),
-    })?;
+    let sweep: SweepFile = toml::from_str(&text).map_err(|e| Error::toml(path, &e))?;
     if sweep.keys.is_empty() {
         return Err(invalid(path, "vary".into(), "[]", "no [[vary]] key"));
     }
@@ -196,10 +193,7 @@ pub fn plan(path: &Path, study: &Path, exe: &Path) -> Result<Manifest> {
     let base = path.parent().unwrap_or(Path::new("")).join(&sweep.base);
     let base = base.canonicalize().map_err(|e| Error::io(&base, e))?;
     let base_text = std::fs::read_to_string(&base).map_err(|e| Error::io(&base, e))?;
-    let mut tree: Value = toml::from_str(&base_text).map_err(|e| Error::Case {
-        path: base.clone(),
-        message: e.to_string(),
-    })?;
+    let mut tree: Value = toml::from_str(&base_text).map_err(|e| Error::toml(&base, &e))?;
     absolute_mesh_paths(&mut tree, base.parent().unwrap_or(Path::new("/")));
     let points = points(&sweep, path)?;
     std::fs::create_dir_all(study).map_err(|e| Error::io(study, e))?;
