@@ -68,7 +68,7 @@ fn summary(dir: &Path) -> serde_json::Value {
     object.remove("seconds").unwrap();
     object.remove("case").unwrap();
     let floor = object["floor"].as_object_mut().unwrap();
-    for timing in ["seconds", "ratio", "parts"] {
+    for timing in ["seconds", "ratio", "parts", "work_seconds"] {
         floor.remove(timing).unwrap();
     }
     value

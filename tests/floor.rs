@@ -69,6 +69,23 @@ fn check_floor(summary: &Value) {
     }
     // A fresh run's output is all its output.
     assert_eq!(parts["output"], time["output"], "{floor} {time}");
+    // The seconds of each kind of call counted (the floor's mean solves a part of the
+    // solves').
+    let work = floor["work_seconds"].as_object().unwrap();
+    for (kind, value) in work {
+        assert!(seconds(value) >= 0.0, "{kind}: {floor}");
+        let calls = if kind == "frames" {
+            1
+        } else {
+            count(summary, kind)
+        };
+        assert!(calls > 0 || seconds(value) == 0.0, "{kind}: {floor}");
+    }
+    assert_eq!(work["frames"], time["output"], "{floor} {time}");
+    assert!(
+        seconds(&parts["solves"]) <= seconds(&work["solves"]),
+        "{floor}"
+    );
     let run = seconds(&time["total"]) - gmsh;
     assert!(total > 0.0 && total <= run, "{floor} {time}");
     let ratio = seconds(&floor["ratio"]);

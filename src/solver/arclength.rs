@@ -182,7 +182,7 @@ pub fn run_arc_length(
     // Leave the converged state (not a failed attempt's) in the solution.
     solution.u.copy_from_slice(&converged_u);
     solution.reset_trial();
-    stats.symbolic_seconds = newton.linear().symbolic_seconds();
+    stats.symbolic_seconds = newton.symbolic_seconds();
     stats.factor_nnz = newton.linear().factor_nnz();
     stats.work.solver = *newton.work();
     Ok((solution, stats))

@@ -115,6 +115,8 @@ pub struct Floor {
     pub ratio: Option<f64>,
     pub parts: FloorParts,
     pub counts: FloorCounts,
+    /// The seconds of the calls `counts` counts: where a run's time beyond its floor went.
+    pub work_seconds: WorkSeconds,
 }
 
 /// The terms of the floor (seconds).
@@ -194,6 +196,45 @@ impl Floor {
                 interface_iterations: s.interface_iterations,
                 solves: s.solves.calls,
             },
+            work_seconds: WorkSeconds::of(work),
+        }
+    }
+}
+
+/// Wall-clock seconds of each kind of call [`FloorCounts`] counts (all of them, the floor's
+/// own included), under the same names.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct WorkSeconds {
+    pub frames: f64,
+    pub assemblies: f64,
+    pub force_assemblies: f64,
+    pub state_evaluations: f64,
+    pub interface_assemblies: f64,
+    pub interface_force_assemblies: f64,
+    pub products: f64,
+    pub factorisations: f64,
+    pub kept_factorisations: f64,
+    pub interface_factorisations: f64,
+    pub kept_interface_factorisations: f64,
+    pub solves: f64,
+}
+
+impl WorkSeconds {
+    fn of(work: &Work) -> Self {
+        let s = &work.solver;
+        Self {
+            frames: work.frames.seconds,
+            assemblies: s.tangent_assemblies.seconds,
+            force_assemblies: s.force_assemblies.seconds,
+            state_evaluations: s.state_evaluations.seconds,
+            interface_assemblies: s.interface_tangent_assemblies.seconds,
+            interface_force_assemblies: s.interface_force_assemblies.seconds,
+            products: s.products.seconds,
+            factorisations: s.factorisations.seconds,
+            kept_factorisations: s.kept_factorisations.seconds,
+            interface_factorisations: s.interface_factorisations.seconds,
+            kept_interface_factorisations: s.kept_interface_factorisations.seconds,
+            solves: s.solves.seconds,
         }
     }
 }
@@ -230,6 +271,12 @@ mod tests {
         assert_eq!(floor.seconds, 5.875);
         assert_eq!(floor.ratio, Some(16.0 / 5.875));
         assert_eq!((floor.counts.assemblies, floor.counts.solves), (3, 3));
+        assert_eq!(floor.work_seconds.assemblies, 1.0);
+        assert_eq!(floor.work_seconds.interface_factorisations, 1.5);
+        assert_eq!(
+            (floor.work_seconds.solves, floor.work_seconds.frames),
+            (1.5, 0.75)
+        );
     }
 
     #[test]

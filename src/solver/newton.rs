@@ -361,6 +361,8 @@ pub struct Newton<'a> {
     arc: Option<arc::ArcWork>,
     /// The work done so far, by kind (for the run's floor).
     work: SolverWork,
+    /// Seconds of the condensed solver's ordering and symbolic analysis.
+    condensed_analysis_seconds: f64,
 }
 
 impl<'a> Newton<'a> {
@@ -391,6 +393,7 @@ impl<'a> Newton<'a> {
             bulk_symmetric: true,
             arc: None,
             work: SolverWork::default(),
+            condensed_analysis_seconds: 0.0,
         })
     }
 
@@ -407,6 +410,12 @@ impl<'a> Newton<'a> {
     /// The work done since the solver was made, by kind.
     pub fn work(&self) -> &SolverWork {
         &self.work
+    }
+
+    /// Seconds of the fill-reducing orderings and symbolic factorisations so far: of the
+    /// Cholesky solver and of the condensed solver (part of the factorisation phase).
+    pub fn symbolic_seconds(&self) -> f64 {
+        self.linear.symbolic_seconds() + self.condensed_analysis_seconds
     }
 
     /// The linear solver (for its statistics).
@@ -476,6 +485,7 @@ impl<'a> Newton<'a> {
             },
         );
         let solver = solver?;
+        self.condensed_analysis_seconds += solver_seconds;
         let map = problem.interface_scatter(self.dofs, &|eq| solver.local_index(eq));
         let n_i = solver.interface_equations().len();
         let mut unknown_dofs = vec![0; n_i];

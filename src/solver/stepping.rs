@@ -324,7 +324,7 @@ pub fn run_steps_from(
         stats.add_output(observer.step(&result, &progress)?, true);
     }
     // Read at the end: the symbolic analysis runs at the first factorisation.
-    stats.symbolic_seconds = newton.linear().symbolic_seconds();
+    stats.symbolic_seconds = newton.symbolic_seconds();
     stats.factor_nnz = newton.linear().factor_nnz();
     stats.work.solver = *newton.work();
     Ok((solution, stats))
