@@ -62,7 +62,7 @@
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::perm::PermRef;
 use faer::sparse::linalg::amd;
-use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
+use faer::sparse::linalg::cholesky::supernodal::{SupernodalLltRef, SymbolicSupernodalCholesky};
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
     factorize_symbolic_cholesky,
@@ -738,9 +738,7 @@ impl CondensedSolver {
             };
             values[p] += *d;
         }
-        let SymbolicCholeskyRaw::Supernodal(symbolic) = self.symbolic.raw() else {
-            unreachable!("forced supernodal in `new`");
-        };
+        let symbolic = supernodal(&self.symbolic);
         let n_bulk = self.n_bulk;
         // Only the supernodes whose values change, when the last factor's matrix is known to
         // differ from this one in some columns only (a plastic zone's).
@@ -929,10 +927,7 @@ impl CondensedSolver {
             let (x_b, x_i) = self.x.split_at_mut(n_bulk);
             u.eliminate_bulk(x_b, x_i);
         } else {
-            let SymbolicCholeskyRaw::Supernodal(symbolic) = self.symbolic.raw() else {
-                unreachable!("forced supernodal in `new`");
-            };
-            let llt = SupernodalLltRef::new(symbolic, &self.factor);
+            let llt = SupernodalLltRef::new(supernodal(&self.symbolic), &self.factor);
             forward_bulk(llt, n_bulk, &mut self.x, &mut self.gather);
         }
     }
@@ -972,10 +967,7 @@ impl CondensedSolver {
             let (x_b, x_i) = self.x.split_at_mut(n_bulk);
             u.back_substitute(x_b, x_i);
         } else {
-            let SymbolicCholeskyRaw::Supernodal(symbolic) = self.symbolic.raw() else {
-                unreachable!("forced supernodal in `new`");
-            };
-            let llt = SupernodalLltRef::new(symbolic, &self.factor);
+            let llt = SupernodalLltRef::new(supernodal(&self.symbolic), &self.factor);
             let gathers = &self.backward_gathers;
             backward_bulk(
                 llt,
@@ -1043,6 +1035,15 @@ fn for_each_lower(
             f(col, row, p);
         }
     }
+}
+
+/// The supernodal structure of the bulk's symbolic factorisation (`CondensedSolver::new`
+/// forces a supernodal one).
+fn supernodal(symbolic: &SymbolicCholesky<u32>) -> &SymbolicSupernodalCholesky<u32> {
+    let SymbolicCholeskyRaw::Supernodal(supernodal) = symbolic.raw() else {
+        unreachable!("forced supernodal in `new`");
+    };
+    supernodal
 }
 
 #[cfg(test)]

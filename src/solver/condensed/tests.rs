@@ -450,9 +450,7 @@ fn condensed_handles_supernodes_straddling_the_interface_border() {
     let t = test_system_with(6, 4, 1.5, &[], true);
     let solver =
         CondensedSolver::with_relaxation(&t.pattern, &t.interface_eqs, Some(relax)).unwrap();
-    let SymbolicCholeskyRaw::Supernodal(sn) = solver.symbolic.raw() else {
-        unreachable!()
-    };
+    let sn = supernodal(&solver.symbolic);
     let straddling = (0..sn.n_supernodes())
         .filter(|&s| {
             (sn.supernode_begin()[s] as usize) < solver.n_bulk
