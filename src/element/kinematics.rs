@@ -92,20 +92,23 @@ fn kinematics_into(
         return Err(det);
     }
     let (b, twist) = (&mut pk.b, &mut pk.twist);
+    // Reciprocals once per point: a division costs ~10 multiplications, and there were three
+    // per node.
+    let (inverse_det, inverse_x) = (1.0 / det, 1.0 / x);
     for i in 0..nn {
-        let dx = (j22 * s.dxi[i] - j12 * s.deta[i]) / det;
-        let dy = (-j21 * s.dxi[i] + j11 * s.deta[i]) / det;
+        let dx = (j22 * s.dxi[i] - j12 * s.deta[i]) * inverse_det;
+        let dy = (-j21 * s.dxi[i] + j11 * s.deta[i]) * inverse_det;
         b[(0, 2 * i)] = dx;
         b[(1, 2 * i + 1)] = dy;
         b[(2, 2 * i)] = dy;
         b[(2, 2 * i + 1)] = dx;
         if analysis.is_axisymmetric() {
-            b[(ZZ, 2 * i)] = s.n[i] / x;
+            b[(ZZ, 2 * i)] = s.n[i] * inverse_x;
         }
         if analysis.has_twist() {
             // γ_rθ = ∂u_θ/∂r − u_θ/r (the rigid rotation u_θ = φ r strains nothing) and
             // γ_zθ = ∂u_θ/∂z.
-            twist[(0, i)] = dx - s.n[i] / x;
+            twist[(0, i)] = dx - s.n[i] * inverse_x;
             twist[(1, i)] = dy;
         }
     }
