@@ -62,6 +62,28 @@ def floor_of(r: dict) -> dict | None:
     return floor if isinstance(floor, dict) else None
 
 
+def beyond_floor(floor: dict | None, phases: dict) -> str:
+    """The largest kinds of work a run did beyond its floor (summary.json `floor.work_seconds`
+    against `floor.parts`, and the model build), as a sentence; empty without them."""
+    work = (floor or {}).get("work_seconds")
+    if not work:
+        return ""
+    parts = floor["parts"]
+    beyond = {
+        "state evaluations": work["state_evaluations"],
+        "K·u products": work["products"],
+        "element loops beyond the first": work["assemblies"] + work["force_assemblies"] - parts["assembly"],
+        "interface element loops": work["interface_assemblies"] + work["interface_force_assemblies"],
+        "factorisations beyond one": work["factorisations"] + work["kept_factorisations"]
+        + work["interface_factorisations"] + work["kept_interface_factorisations"] - parts["factorisation"],
+        "solves beyond one per increment": work["solves"] - parts["solves"],
+        "the model build": phases.get("model", 0.0),
+    }
+    largest = sorted(((s, k) for k, s in beyond.items() if s > 0.0), reverse=True)[:4]
+    listed = ", ".join(f"{k} {s:.2f} s" for s, k in largest)
+    return f"Largest beyond the floor (summary.json `floor.work_seconds`): {listed}." if listed else ""
+
+
 def table(r: dict, load: tuple[float, float]) -> str:
     p = r.get("phases", {})
     phase = lambda k: f"{p[k]:.2f}" if k in p else "–"  # noqa: E731
@@ -72,6 +94,7 @@ def table(r: dict, load: tuple[float, float]) -> str:
     busy = (" (the machine was busy: wall times are not representative)" if load[0] > 1.5 * (os.cpu_count() or 1)
             else "")
     verdict = ("within" if r["wall_s"] < WALL_LIMIT_S and r["rss_mb"] < MEMORY_LIMIT_MB else "OUTSIDE")
+    beyond = beyond_floor(floor, p)
     return "\n".join([
         f"### Scale: tapered press fit at {r.get('unknowns', 0) / 1e6:.2f} M unknowns, {now}, {bc.cpu_name()}, "
         f"{os.cpu_count()} cores",
@@ -93,6 +116,7 @@ def table(r: dict, load: tuple[float, float]) -> str:
         f"{phase('model')} | {phase('assembly')} | {phase('factorisation')} | {phase('solve')} | "
         f"{phase('output')} | {r['wall_s']:.2f} | {r['cpu_s']:.2f} | {r['rss_mb']:.0f} | {floor_s} | {ratio} |",
         "",
+        *([beyond, ""] if beyond else []),
     ])
 
 
