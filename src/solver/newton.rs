@@ -742,7 +742,8 @@ impl<'a> Newton<'a> {
                 "newton"
             );
             let criteria = &settings.criteria;
-            let engineering = criteria.converged(log.iterations, &measures);
+            // A residual that is not finite (an overflowing law, a NaN state) never converges.
+            let engineering = residual.is_finite() && criteria.converged(log.iterations, &measures);
             // CalculiX's estimate of the next correction, assuming the residual keeps
             // falling at its last rate: it spares an iteration that would only meet round-off.
             let previous = log.residuals.iter().rev().nth(1).copied();
@@ -1049,12 +1050,24 @@ fn solve_factored(
 
 /// ‖v‖∞.
 fn max_abs(v: &[f64]) -> f64 {
-    v.iter().fold(0.0, |m, x| m.max(x.abs()))
+    v.iter().fold(0.0, |m, x| nan_max(m, x.abs()))
+}
+
+/// The larger of `m` and `x`, NaN if either is (`f64::max` drops a NaN: a NaN residual
+/// would read as the largest finite entry and could pass a convergence test).
+fn nan_max(m: f64, x: f64) -> f64 {
+    if m.is_nan() || x.is_nan() {
+        f64::NAN
+    } else {
+        m.max(x)
+    }
 }
 
 /// ‖a − b‖∞.
 fn max_change(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).fold(0.0, |m, (x, y)| m.max((x - y).abs()))
+    a.iter()
+        .zip(b)
+        .fold(0.0, |m, (x, y)| nan_max(m, (x - y).abs()))
 }
 
 /// Iterations after which an increment of an unsymmetric (LU-factored) bulk may be given up
