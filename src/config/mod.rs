@@ -598,10 +598,39 @@ impl Default for OutputSpec {
     }
 }
 
+/// Largest input file (case, fit or sweep specification) read: far beyond any case's text
+/// (a 5 000-point amplitude table is ~100 kB), and a bound on what a mistaken path such as a
+/// device or a mesh makes the reader take in.
+pub const MAX_INPUT_BYTES: u64 = 64 << 20;
+
+/// The text of the input file `path` (a case, fit or sweep specification): at most
+/// [`MAX_INPUT_BYTES`] of UTF-8.
+pub fn read_input(path: &Path) -> Result<String> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut bytes = Vec::new();
+    file.take(MAX_INPUT_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    if bytes.len() as u64 > MAX_INPUT_BYTES {
+        return Err(Error::Case {
+            path: path.to_path_buf(),
+            message: format!(
+                "larger than {} MiB: not a case, fit or sweep file",
+                MAX_INPUT_BYTES >> 20
+            ),
+        });
+    }
+    String::from_utf8(bytes).map_err(|e| Error::Case {
+        path: path.to_path_buf(),
+        message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
+    })
+}
+
 impl Case {
     /// Reads and checks a case file.
     pub fn from_file(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = read_input(path)?;
         Self::from_toml(&text, path)
     }
 

@@ -242,7 +242,7 @@ impl FitResult {
 impl Fit {
     /// Reads and checks fit file `path` and its data.
     pub fn from_file(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = crate::config::read_input(path)?;
         let file: FitFile = toml::from_str(&text).map_err(|e| Error::toml(path, &e))?;
         if file.tests.is_empty() {
             return Err(Error::Case {

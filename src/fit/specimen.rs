@@ -45,7 +45,7 @@ impl Specimen {
         steps: &[f64],
         data: &Path,
     ) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = crate::config::read_input(path)?;
         let mut case = Case::from_toml(&text, path)?;
         if contact >= case.contacts.len() {
             return Err(case.invalid(

@@ -165,7 +165,7 @@ fn invalid(path: &Path, key: String, value: impl ToString, reason: impl Into<Str
 /// Plans sweep file `path` into the folder `study`; `exe` is the asperity executable the job
 /// files call.
 pub fn plan(path: &Path, study: &Path, exe: &Path) -> Result<Manifest> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::config::read_input(path)?;
     let sweep: SweepFile = toml::from_str(&text).map_err(|e| Error::toml(path, &e))?;
     if sweep.keys.is_empty() {
         return Err(invalid(path, "vary".into(), "[]", "no [[vary]] key"));
@@ -192,7 +192,7 @@ pub fn plan(path: &Path, study: &Path, exe: &Path) -> Result<Manifest> {
     }
     let base = path.parent().unwrap_or(Path::new("")).join(&sweep.base);
     let base = base.canonicalize().map_err(|e| Error::io(&base, e))?;
-    let base_text = std::fs::read_to_string(&base).map_err(|e| Error::io(&base, e))?;
+    let base_text = crate::config::read_input(&base)?;
     let mut tree: Value = toml::from_str(&base_text).map_err(|e| Error::toml(&base, &e))?;
     absolute_mesh_paths(&mut tree, base.parent().unwrap_or(Path::new("/")));
     let points = points(&sweep, path)?;
