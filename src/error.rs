@@ -492,8 +492,14 @@ impl Error {
     pub fn toml(path: impl Into<PathBuf>, error: &toml::de::Error) -> Self {
         Error::Case {
             path: path.into(),
-            message: shorten_floats(error.to_string().trim_end()),
+            message: shorten_numbers(error.to_string().trim_end()),
         }
+    }
+
+    /// The message for a terminal, `summary.json` and `run.json`: the `Display` text with
+    /// long numbers in exponent form and overlong lines cut.
+    pub fn readable(&self) -> String {
+        shorten_lines(&shorten_numbers(&self.to_string()))
     }
 
     /// Shorthand for an [`Error::Io`].
@@ -505,20 +511,31 @@ impl Error {
     }
 }
 
-/// `message` with every float quoted as ``floating point `…` `` that is longer than
-/// [`LONG_FLOAT`] characters written as `{:e}` (serde quotes a float's full decimal
-/// expansion).
-pub(crate) fn shorten_floats(message: &str) -> String {
-    const QUOTE: &str = "floating point `";
+/// `message` with every number longer than [`LONG_NUMBER`] characters written as `{:e}`:
+/// `f64`'s `Display` (and serde's quote of a float) writes 1e300 as its 301 digits and
+/// 1e-300 as 302.
+pub(crate) fn shorten_numbers(message: &str) -> String {
     let mut out = String::with_capacity(message.len());
     let mut rest = message;
-    while let Some(start) = rest.find(QUOTE) {
-        let (head, tail) = rest.split_at(start + QUOTE.len());
+    while let Some(start) = rest.find(|c: char| c.is_ascii_digit()) {
+        let (head, tail) = rest.split_at(start);
         out.push_str(head);
-        let end = tail.find('`').unwrap_or(tail.len());
+        let end = tail
+            .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .unwrap_or(tail.len());
         let number = &tail[..end];
+        // Not a part of a name or path (`run_000…1.toml`, `a-000…1`); a minus sign is.
+        let word = |c: Option<char>| c.is_some_and(|c| c.is_alphanumeric() || "_/".contains(c));
+        let mut before = head.chars().rev();
+        let previous = match before.next() {
+            Some('-') => before.next().filter(|c| c.is_alphanumeric()),
+            other => other,
+        };
+        let alone = !word(previous) && !word(tail[end..].chars().next());
         match number.parse::<f64>() {
-            Ok(value) if number.len() > LONG_FLOAT => out.push_str(&format!("{value:e}")),
+            Ok(value) if alone && number.len() > LONG_NUMBER => {
+                out.push_str(&format!("{value:e}"));
+            }
             _ => out.push_str(number),
         }
         rest = &tail[end..];
@@ -527,8 +544,28 @@ pub(crate) fn shorten_floats(message: &str) -> String {
     out
 }
 
-/// Longest float [`shorten_floats`] leaves as it is.
-const LONG_FLOAT: usize = 24;
+/// Longest number [`shorten_numbers`] leaves as it is.
+const LONG_NUMBER: usize = 24;
+
+/// `message` with every line longer than [`LONG_LINE`] characters cut there (an echoed
+/// 5 000-value array or a 2 MB line of a case file would otherwise fill the terminal).
+fn shorten_lines(message: &str) -> String {
+    let lines: Vec<String> = message
+        .split('\n')
+        .map(|line| match line.char_indices().nth(LONG_LINE) {
+            Some((cut, _)) => format!(
+                "{}… ({} more characters)",
+                &line[..cut],
+                line[cut..].chars().count()
+            ),
+            None => line.to_string(),
+        })
+        .collect();
+    lines.join("\n")
+}
+
+/// Longest line of a message [`Error::readable`] leaves whole.
+const LONG_LINE: usize = 400;
 
 /// What is wrong with a mesh file ([`Error::Mesh`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -1205,5 +1242,36 @@ fn step_key(index: Option<usize>, key: &str) -> String {
     match index {
         Some(i) => format!("step[{i}].{key}"),
         None => format!("the step's {key}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn long_numbers_are_written_in_exponent_form_but_names_are_left_alone() {
+        let huge = format!("{}", 1e300);
+        let tiny = format!("{}", -1e-300);
+        let message = format!("a = {huge}, b = {tiny}: run_{huge}.toml, x-{huge} 12.5 0.001");
+        assert_eq!(
+            shorten_numbers(&message),
+            format!("a = 1e300, b = -1e-300: run_{huge}.toml, x-{huge} 12.5 0.001")
+        );
+        assert_eq!(
+            shorten_numbers("floating point `100000000000000000000000000.0`"),
+            "floating point `1e26`"
+        );
+    }
+
+    #[test]
+    fn overlong_lines_are_cut_with_the_count_of_what_is_left_out() {
+        let long = "x".repeat(LONG_LINE + 10);
+        let cut = shorten_lines(&format!("first\n{long}\nlast"));
+        assert_eq!(
+            cut,
+            format!("first\n{}… (10 more characters)\nlast", &long[..LONG_LINE])
+        );
+        assert_eq!(shorten_lines("ünïcode"), "ünïcode");
     }
 }

@@ -289,7 +289,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let log_file = init_logging(&cli);
     if let Err(e) = init_threads(cli.threads) {
-        eprintln!("error: {e}");
+        eprintln!("error: {}", e.readable());
         return ExitCode::from(e.exit_code());
     }
     if let Command::Converge { .. } = cli.command {
@@ -298,7 +298,7 @@ fn main() -> ExitCode {
             // A study that cannot run keeps its documented 2 (docs/guide/troubleshooting.md) until its
             // callers move to the shared codes of `Error::exit_code`.
             Err(e) => {
-                eprintln!("error: {e}");
+                eprintln!("error: {}", e.readable());
                 ExitCode::from(2)
             }
         };
@@ -308,7 +308,7 @@ fn main() -> ExitCode {
             Ok(true) => ExitCode::SUCCESS,
             Ok(false) => ExitCode::FAILURE,
             Err(e) => {
-                eprintln!("error: {e}");
+                eprintln!("error: {}", e.readable());
                 ExitCode::from(e.exit_code())
             }
         };
@@ -317,7 +317,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         // Exit codes (docs/guide/troubleshooting.md): one mapping for every subcommand, in the library.
         Err(e) => {
-            eprintln!("error: {e}");
+            eprintln!("error: {}", e.readable());
             ExitCode::from(e.exit_code())
         }
     }

@@ -271,6 +271,6 @@ pub fn parse_quantity(text: &str) -> std::result::Result<QuantitySpec, String> {
         }
     }
     serde::Deserialize::deserialize(toml::Value::Table(table)).map_err(|e: toml::de::Error| {
-        bad(crate::error::shorten_floats(e.to_string().trim()).replace('\n', " "))
+        bad(crate::error::shorten_numbers(e.to_string().trim()).replace('\n', " "))
     })
 }

@@ -481,7 +481,7 @@ impl Summary {
             crate::Error::Interrupted { .. } => Status::Interrupted,
             _ => Status::Failed,
         };
-        self.error = Some(error.to_string());
+        self.error = Some(error.readable());
     }
 
     /// Writes the summary to `path` (atomically).

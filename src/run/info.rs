@@ -65,7 +65,7 @@ impl RunInfo {
             Err(Error::Interrupted { .. }) => "interrupted",
             Err(_) => "failed",
         };
-        self.error = result.as_ref().err().map(ToString::to_string);
+        self.error = result.as_ref().err().map(crate::Error::readable);
     }
 
     pub(super) fn write(&self, folder: &OutputFolder) -> Result<()> {
