@@ -87,6 +87,7 @@ pub fn run_steps_from(
     let mut f_ext = vec![0.0; model.dofs.dof_count()];
     let constant_tangent = !model.control.plastic && model.interface.elements.is_empty();
     let schedule = &model.schedule;
+    let mut warned_far_from_equilibrium = false;
     while state.step <= schedule.steps() {
         let step = state.step;
         // Every log line of the step (Newton iterations, cut-backs, its output) names it.
@@ -160,6 +161,9 @@ pub fn run_steps_from(
                     converged_u.copy_from_slice(&solution.u);
                     state.time = trial_time;
                     log_increment(model, &state, &log);
+                    if !warned_far_from_equilibrium {
+                        warned_far_from_equilibrium = warn_if_far_from_equilibrium(&state, &log);
+                    }
                     if state.time == target {
                         break log;
                     }
@@ -439,6 +443,29 @@ fn release_slip(states: &mut [InterfaceState]) {
 
 /// The INFO line of a converged increment (one per increment, for batch logs), naming its
 /// analysis step and cycle.
+/// Relative residual (‖r‖ / max(‖f_ext‖, ‖f_int‖, ‖r₀‖)) of a converged increment above
+/// which the run warns: the engineering criteria accept a residual relative to the average
+/// force q̃, and a q̃ given far too large (`[solver] average_force`) or tolerances far too
+/// loose accept states out of balance by a fraction of the loads. Converged increments of the
+/// default criteria stay below 1e-6.
+const FAR_FROM_EQUILIBRIUM: f64 = 1e-2;
+
+/// Warns (once per run: returns whether it did) when the increment just accepted is
+/// [`FAR_FROM_EQUILIBRIUM`].
+fn warn_if_far_from_equilibrium(state: &LoopState, log: &NewtonLog) -> bool {
+    let residual = log.residuals.last().copied().unwrap_or(0.0);
+    let far = residual > FAR_FROM_EQUILIBRIUM;
+    if far {
+        tracing::warn!(
+            "the increment to time {} was accepted with a relative residual of {residual:.2e}: \
+             far from equilibrium (reactions and stresses may be wrong); check [solver] \
+             average_force and the tolerances (docs/guide/solver.md)",
+            state.time
+        );
+    }
+    far
+}
+
 fn log_increment(model: &Model, state: &LoopState, log: &NewtonLog) {
     let timeline = model.schedule.timeline();
     let frame = timeline.frame(state.time);
