@@ -86,6 +86,27 @@ fn force_and_resume_remove_only_what_the_manifest_lists() {
     assert!(out.join("bodies_0002.vtu").is_file());
 }
 
+/// A manifest edited to list a user's own file (a name no run writes) does not make --force
+/// delete it: the run leaves it in place and says so.
+#[test]
+fn force_keeps_a_file_a_manifest_lists_that_no_run_writes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let case = block_case(dir.path(), 2);
+    let (code, text) = run(dir.path(), &case, &out, &[]);
+    assert_eq!(code, Some(0), "{text}");
+    std::fs::write(out.join("mynotes.txt"), "mine").unwrap();
+    let manifest = out.join("run_files.txt");
+    std::fs::write(&manifest, read(&manifest) + "mynotes.txt\n").unwrap();
+    let (code, text) = run(dir.path(), &case, &out, &["--force"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert_eq!(read(&out.join("mynotes.txt")), "mine");
+    assert!(
+        text.contains("'mynotes.txt', which is no name a run writes"),
+        "{text}"
+    );
+}
+
 /// The case reads its mesh from the output folder under the name of the mesh a run writes
 /// (`mesh.msh`): `--force` keeps it, whether or not an earlier run listed it.
 #[test]

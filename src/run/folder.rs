@@ -133,18 +133,34 @@ fn step_of_file(name: &str, is_pair: impl Fn(&str) -> bool) -> Option<usize> {
 /// Whether a run with contact pairs `pairs` may write a file called `name` (`mesh.msh` too,
 /// whether or not the run meshes a script).
 fn is_run_file(name: &str, pairs: &[String]) -> bool {
-    let per_pair = |pair: &String| {
-        [
-            FrettingTable::Hysteresis(pair),
-            FrettingTable::PointLoops(pair),
-            FrettingTable::Wear(pair),
-        ]
-        .map(|t| RunFile::Fretting(t).name())
-    };
+    is_run_file_of(name, |pair| pairs.iter().any(|p| p == pair))
+}
+
+/// Whether `name` is a name a run writes, its per-pair files for a pair that `is_pair`
+/// accepts.
+fn is_run_file_of(name: &str, is_pair: impl Fn(&str) -> bool + Copy) -> bool {
+    let per_pair = [
+        FrettingTable::Hysteresis(""),
+        FrettingTable::PointLoops(""),
+        FrettingTable::Wear(""),
+    ]
+    .map(|t| RunFile::Fretting(t).name());
     name == MANIFEST
         || SINGLE_FILES.iter().any(|(_, n)| *n == name)
-        || step_of_file(name, |pair| pairs.iter().any(|p| p == pair)).is_some()
-        || pairs.iter().any(|p| per_pair(p).iter().any(|n| n == name))
+        || step_of_file(name, is_pair).is_some()
+        || per_pair.iter().any(|empty| {
+            let (prefix, suffix) = empty.split_once('.').expect("a table's name has a suffix");
+            name.strip_prefix(prefix)
+                .and_then(|rest| rest.strip_suffix(&format!(".{suffix}")))
+                .is_some_and(|pair| !pair.is_empty() && is_pair(pair))
+        })
+}
+
+/// Whether `name` is a name some run writes (any contact pair): what `--force` and
+/// `--resume` may remove of what a manifest lists. A manifest edited to list another name
+/// (a user's own file) does not make a run delete it.
+fn is_any_run_file(name: &str) -> bool {
+    is_run_file_of(name, |_| true)
 }
 
 /// The file whose temporary file `name` is (the atomic writer names them `.NAME.XXXXXX.tmp`).
@@ -246,6 +262,16 @@ impl OutputFolder {
         let ours: Vec<&String> = entries
             .iter()
             .filter(|n| listed.contains(*n) && n.as_str() != MANIFEST && !is_input(&dir.join(n)))
+            .filter(|n| {
+                let run_file = is_any_run_file(n);
+                if !run_file {
+                    tracing::warn!(
+                        "{}: {MANIFEST} lists '{n}', which is no name a run writes: left in place",
+                        dir.display()
+                    );
+                }
+                run_file
+            })
             .collect();
         let resumable = listed.contains(RunFile::Restart.name().as_str())
             && dir.join(RunFile::Restart.name()).is_file();
@@ -258,7 +284,7 @@ impl OutputFolder {
         };
         let temporaries: Vec<&String> = entries
             .iter()
-            .filter(|n| temporary_of(n).is_some_and(|t| listed.contains(t)))
+            .filter(|n| temporary_of(n).is_some_and(|t| listed.contains(t) && is_any_run_file(t)))
             .collect();
         // A log alone holds no results (a sweep's pool opens it before the run starts).
         let log = RunFile::Log.name();
@@ -484,6 +510,26 @@ mod tests {
 
     fn pairs() -> Vec<String> {
         vec!["fit".into(), "a_b".into()]
+    }
+
+    #[test]
+    fn any_run_file_takes_every_pair_but_no_other_name() {
+        for name in [
+            "contact_other_0001.csv",
+            "wear_x.csv",
+            "log.txt",
+            "frame_0001.vtm",
+        ] {
+            assert!(is_any_run_file(name), "{name}");
+        }
+        for name in [
+            "mynotes.txt",
+            "hysteresis_.csv",
+            "wear_x.txt",
+            "bodies_1.vtu",
+        ] {
+            assert!(!is_any_run_file(name), "{name}");
+        }
     }
 
     #[test]
