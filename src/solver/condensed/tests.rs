@@ -15,11 +15,11 @@ impl Rng {
 }
 
 /// A contact-like test system: two bodies, each an `nx` × `ny` grid of 4-node cells with
-/// random symmetric positive semi-definite cell matrices (translations cost no energy), body A on top of body B along a line of coincident node pairs
-/// joined by 2-node interface "elements" with a random unsymmetric matrix (penalty
-/// plus `slip` times an unsymmetric part). Body B is held at its bottom; body A only
-/// through the interface. `fixed_interface_nodes` additionally prescribes both dofs of
-/// some interface nodes.
+/// random symmetric positive semi-definite cell matrices (translations cost no energy), body
+/// A on top of body B along a line of coincident node pairs joined by 2-node interface
+/// "elements" with a random unsymmetric matrix (penalty plus `slip` times an unsymmetric
+/// part). Body B is held at its bottom; body A only through the interface.
+/// `fixed_interface_nodes` additionally prescribes both dofs of some interface nodes.
 struct TestSystem {
     pattern: SparsityPattern,
     dofs: DofMap,

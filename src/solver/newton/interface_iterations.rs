@@ -28,9 +28,9 @@
 //! that with a linear bulk the iterates are those of plain Newton with its line search; the
 //! iterations stop when ‖R‖∞ is below the tolerance given, when a step leaves more than
 //! [`SLOW_PROGRESS`] of ‖R‖ and the next would need a new LU (a block with the factored one's
-//! bits keeps it: with the elastic contact matrix every step does), when no step lowers ‖R‖ (the first step then stays the full
-//! Newton step, which the Newton loop's line search judges against the whole model), or after
-//! the limit.
+//! bits keeps it: with the elastic contact matrix every step does), when no step lowers ‖R‖
+//! (the first step then stays the full Newton step, which the Newton loop's line search
+//! judges against the whole model), or after the limit.
 
 use std::time::Instant;
 
