@@ -814,6 +814,9 @@ pub struct NoConvergence {
     /// The mechanism the contact states of the last attempt show (friction capacity
     /// exhausted, a body that lost its support), if one does.
     pub mechanism: Option<Mechanism>,
+    /// The input that drove the last attempt's forces, stresses or displacements beyond the
+    /// range of double precision, if one did (the mechanism is not looked for then).
+    pub out_of_range: Option<String>,
     /// What else the run showed (the secant stiffness of the last converged increment).
     pub note: Option<String>,
 }
@@ -1157,6 +1160,12 @@ impl fmt::Display for NoConvergence {
             self.reached,
             self.target
         )?;
+        if let Some(input) = &self.out_of_range {
+            write!(
+                f,
+                ".\n  Likely cause: values beyond the range of double precision (1e150): {input}"
+            )?;
+        }
         if let Some(mechanism) = &self.mechanism {
             write!(f, ".\n  Likely cause: {mechanism}")?;
         }

@@ -195,3 +195,72 @@ fn a_block_pulled_off_its_contact_has_lost_its_support() {
         "{text}"
     );
 }
+
+/// Inputs far outside any physical range drive forces, stresses or stiffnesses beyond what
+/// the residual norms can square in double precision (NaN or infinite residuals). The run
+/// cannot converge at any increment; the failure names the input that did it — the loads,
+/// a support's prescribed value, a contact law's parameters — by its case-file key, and is
+/// not taken for a mechanism (the contact states of such an attempt mean nothing).
+#[test]
+fn values_beyond_double_precision_name_the_input_that_drove_them() {
+    let press = |pressure: f64| {
+        (
+            vec![load("press", "block_top", "pressure", pressure.into())],
+            vec![step("press", 2, &[("press", 1.0.into())])],
+        )
+    };
+    let rough_m = with_keys(sliding_rough_joint(), &[("m", 1e300)]);
+    let cases = [
+        (
+            "huge pressure",
+            linear_coulomb(1e4, 1e4, 0.3),
+            1e300,
+            None,
+            "the applied loads reach",
+        ),
+        (
+            "huge k_N",
+            linear_coulomb(1e300, 1e4, 0.3),
+            1.0,
+            None,
+            "contact 'joint' (linear Coulomb, k_N = 1e300",
+        ),
+        (
+            "huge rough-law m",
+            rough_m,
+            1.0,
+            None,
+            "contact 'joint' (rough joint",
+        ),
+        (
+            "huge prescribed ux",
+            linear_coulomb(1e4, 1e4, 0.3),
+            1.0,
+            Some(1e300),
+            "[[support]] 'block_top' prescribes 1e300",
+        ),
+    ];
+    for (label, law, pressure, push, expected) in cases {
+        let (loads, mut steps) = press(pressure);
+        if push.is_some() {
+            let supports = table(&[("block_top", 1.0.into())]);
+            steps[0].insert("supports".into(), supports.into());
+        }
+        let (mesh, mut case) = block(law, &loads, &steps);
+        if let Some(ux) = push {
+            case = case.support("block_top", &[("ux", ux)]);
+        }
+        let error = failure(mesh, &case);
+        let text = error.to_string();
+        let Error::NoConvergence(details) = &error else {
+            panic!("{label}: expected a failure to converge, got: {text}");
+        };
+        let cause = details.out_of_range.as_deref().unwrap_or_default();
+        assert!(cause.contains(expected), "{label}: {text}");
+        assert!(details.mechanism.is_none(), "{label}: {text}");
+        assert!(
+            text.contains("Likely cause: values beyond the range of double precision"),
+            "{label}: {text}"
+        );
+    }
+}

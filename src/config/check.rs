@@ -119,7 +119,7 @@ impl Case {
             _ => {}
         }
         if !self.mesh.size.is_finite() || self.mesh.size <= 0.0 {
-            return Err(self.invalid("mesh.size", self.mesh.size, "must be positive"));
+            return Err(self.invalid("mesh.size", self.mesh.size, "must be positive and finite"));
         }
         for (name, &value) in &self.mesh.parameters {
             let key = format!("mesh.parameters.{name}");

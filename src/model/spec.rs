@@ -457,7 +457,7 @@ fn arc_length(case: &Case, supports: &[Prescribed]) -> Result<Option<ArcLength>>
         ("max_increments", arc.max_increments as f64),
     ] {
         if !(value > 0.0 && value.is_finite()) {
-            return Err(case.invalid(format!("steps.{key}"), value, "must be positive"));
+            return Err(case.invalid(format!("steps.{key}"), value, "must be positive and finite"));
         }
     }
     if arc.min_arc_length > 1.0 || arc.max_arc_length < 1.0 {

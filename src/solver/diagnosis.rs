@@ -4,18 +4,52 @@
 //! ([`diagnose`], with the model's rigid-body check [`Model::free_bodies_with`]); whether a
 //! converged increment is implausible for small-strain theory ([`implausible_increment`]);
 //! and whether a failed step is a limit load — such a mechanism, or a plastic collapse — or
-//! a failure of the solver ([`step_failure`]).
+//! a failure of the solver ([`step_failure`]); and which input drove its values beyond the
+//! range of double precision, when one did (`out_of_range`).
 
 use crate::Error;
-use crate::element::set::ElementSet;
+use crate::element::quadrature::MAX_CELL_POINTS;
+use crate::element::set::{ElementSet, INTERFACE_POINTS};
 use crate::error::{AttemptFailure, FreeBody, Implausible, Mechanism, NoConvergence, ResidualAt};
 use crate::model::{Hold, Model};
 use crate::solver::state::{Solution, StiffnessHistory};
 
+/// The largest magnitude a force, a stress, a stiffness or a displacement may have for the
+/// solver's norms, which square such values, to stay finite in double precision
+/// (√(1.8e308) ≈ 1.3e154). Beyond it a residual becomes infinite or NaN and Newton's method
+/// cannot converge, whatever the increment.
+const FLOAT_RANGE: f64 = 1e150;
+
+/// The first quantity of an interface point's state beyond [`FLOAT_RANGE`]: its symbol, value
+/// and unit.
+fn interface_out_of_range(
+    s: &crate::contact::InterfaceState,
+) -> Option<(&'static str, f64, &'static str)> {
+    [
+        ("u_N", s.relative[1], "mm"),
+        ("p_N", s.stress[1], "MPa"),
+        ("k_N", s.stiffness[1], "MPa/mm"),
+        ("u_T", s.relative[0], "mm"),
+        ("p_T", s.stress[0], "MPa"),
+        ("k_T", s.stiffness[0], "MPa/mm"),
+        ("u_θ", s.relative[2], "mm"),
+        ("p_θ", s.stress[2], "MPa"),
+    ]
+    .into_iter()
+    .find(|&(_, value, _)| beyond_range(value))
+}
+
+/// Whether `x` is NaN, infinite or beyond [`FLOAT_RANGE`].
+fn beyond_range(x: f64) -> bool {
+    !(x.abs() <= FLOAT_RANGE)
+}
+
 /// Completes `failure` with where it happened: the node with the largest out-of-balance
 /// force of the last attempt (and its body), how many interface points changed their
 /// contact status against the last converged state, and the mechanism its contact states
-/// show, if any (`contact_mechanism`).
+/// show, if any (`contact_mechanism`) — or, when the last attempt's values went beyond the
+/// range of double precision, the input that drove them there (`out_of_range`), the
+/// contact states being meaningless then.
 pub fn diagnose(
     model: &Model,
     solution: &Solution,
@@ -30,8 +64,82 @@ pub fn diagnose(
         .zip(&solution.interface_committed)
         .filter(|(t, c)| t.status != c.status)
         .count();
-    failure.mechanism = contact_mechanism(model, solution);
+    failure.out_of_range = out_of_range(model, solution, f_ext);
+    if failure.out_of_range.is_none() {
+        failure.mechanism = contact_mechanism(model, solution);
+    }
     failure
+}
+
+/// The input that drove the last attempt's values beyond [`FLOAT_RANGE`], named by its
+/// case-file key, checked from the most direct: the applied loads (`[[load]]` values times
+/// `[analysis] thickness`), a support's prescribed values, a contact law's stresses and
+/// stiffnesses (its parameters and `interference`), a body's stresses (its material).
+fn out_of_range(model: &Model, solution: &Solution, f_ext: &[f64]) -> Option<String> {
+    let d = model.analysis.dofs_per_node();
+    let tag = |node: usize| {
+        model
+            .mesh
+            .node_tags
+            .get(node)
+            .copied()
+            .unwrap_or(node as u64)
+    };
+    if let Some((dof, f)) = f_ext.iter().enumerate().find(|(_, f)| beyond_range(**f)) {
+        return Some(format!(
+            "the applied loads reach {f:.3e} N at node {}: check the [[load]] values, \
+             [analysis] thickness and the steps' factors",
+            tag(dof / d)
+        ));
+    }
+    let prescribed = |s: &crate::model::Support| {
+        let circumferential = s.circumferential.map(|c| c.value());
+        s.values
+            .into_iter()
+            .chain([circumferential])
+            .flatten()
+            .find(|&v| beyond_range(v))
+    };
+    if let Some((support, value)) = model
+        .supports
+        .iter()
+        .find_map(|s| prescribed(s).map(|v| (s, v)))
+    {
+        return Some(format!(
+            "[[support]] '{}' prescribes {value:e}: check its values",
+            support.name
+        ));
+    }
+    for pair in &model.interface.pairs {
+        let points = &solution.interface_trial
+            [pair.elements.start * INTERFACE_POINTS..pair.elements.end * INTERFACE_POINTS];
+        if let Some((name, value, unit)) = points.iter().find_map(interface_out_of_range) {
+            return Some(format!(
+                "contact '{}' ({}; interference {} mm) reaches {name} = {value:.3e} {unit}: \
+                 check its law's parameters and interference (units: \
+                 docs/guide/contact-laws.md)",
+                pair.name,
+                crate::error::shorten_numbers(&pair.describe()),
+                pair.interference,
+            ));
+        }
+    }
+    let cells = &model.continuum.cells;
+    let stressed = (0..cells.len()).find(|&e| {
+        solution.trial[e * MAX_CELL_POINTS..(e + 1) * MAX_CELL_POINTS]
+            .iter()
+            .any(|p| p.stress.iter().any(|&x| beyond_range(x)))
+    });
+    if let Some(e) = stressed {
+        let body = &model.bodies[cells[e].body as usize];
+        return Some(format!(
+            "body '{body}' reaches stresses beyond it: check its material ({})",
+            crate::error::shorten_numbers(
+                &model.continuum.materials[cells[e].body as usize].describe()
+            )
+        ));
+    }
+    None
 }
 
 /// The free node with the largest out-of-balance force |f_ext − f_int|, with its body.
@@ -195,6 +303,9 @@ pub fn step_failure(
     mut failure: NoConvergence,
     stiffness: &StiffnessHistory,
 ) -> Error {
+    if failure.out_of_range.is_some() {
+        return Error::NoConvergence(Box::new(failure));
+    }
     let converged = failure.converged_load_factor;
     let failed = failure
         .attempts
