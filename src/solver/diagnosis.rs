@@ -92,12 +92,12 @@ fn out_of_range(model: &Model, solution: &Solution, f_ext: &[f64]) -> Option<Str
             tag(dof / d)
         ));
     }
+    // The values the supports prescribe in the last attempt: their values times the
+    // multipliers (amplitudes, step factors) at its time.
     let prescribed = |s: &crate::model::Support| {
-        let circumferential = s.circumferential.map(|c| c.value());
-        s.values
-            .into_iter()
-            .chain([circumferential])
-            .flatten()
+        s.dofs
+            .iter()
+            .map(|&dof| solution.u[dof])
             .find(|&v| beyond_range(v))
     };
     if let Some((support, value)) = model
@@ -106,7 +106,8 @@ fn out_of_range(model: &Model, solution: &Solution, f_ext: &[f64]) -> Option<Str
         .find_map(|s| prescribed(s).map(|v| (s, v)))
     {
         return Some(format!(
-            "[[support]] '{}' prescribes {value:e}: check its values",
+            "[[support]] '{}' prescribes {value:.3e}: check its values and the multipliers \
+             (amplitudes, steps' factors) applied to it",
             support.name
         ));
     }
