@@ -41,7 +41,7 @@ fn interface_out_of_range(
 
 /// Whether `x` is NaN, infinite or beyond [`FLOAT_RANGE`].
 fn beyond_range(x: f64) -> bool {
-    !(x.abs() <= FLOAT_RANGE)
+    x.is_nan() || x.abs() > FLOAT_RANGE
 }
 
 /// Completes `failure` with where it happened: the node with the largest out-of-balance
