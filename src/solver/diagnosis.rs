@@ -115,14 +115,15 @@ fn out_of_range(model: &Model, solution: &Solution, f_ext: &[f64]) -> Option<Str
         let points = &solution.interface_trial
             [pair.elements.start * INTERFACE_POINTS..pair.elements.end * INTERFACE_POINTS];
         if let Some((name, value, unit)) = points.iter().find_map(interface_out_of_range) {
-            return Some(format!(
+            // Parameters as given, a huge one in exponent form.
+            return Some(crate::error::shorten_numbers(&format!(
                 "contact '{}' ({}; interference {} mm) reaches {name} = {value:.3e} {unit}: \
                  check its law's parameters and interference (units: \
                  docs/guide/contact-laws.md)",
                 pair.name,
-                crate::error::shorten_numbers(&pair.describe()),
+                pair.describe(),
                 pair.interference,
-            ));
+            )));
         }
     }
     let cells = &model.continuum.cells;
@@ -134,7 +135,7 @@ fn out_of_range(model: &Model, solution: &Solution, f_ext: &[f64]) -> Option<Str
     if let Some(e) = stressed {
         let body = &model.bodies[cells[e].body as usize];
         return Some(format!(
-            "body '{body}' reaches stresses beyond it: check its material ({})",
+            "body '{body}' reaches stresses beyond that range: check its material ({})",
             crate::error::shorten_numbers(
                 &model.continuum.materials[cells[e].body as usize].describe()
             )
