@@ -139,6 +139,53 @@ fn force_never_removes_an_input_of_the_run() {
     );
 }
 
+/// An input of the run (its mesh, its case file) lying in the output folder under the name of
+/// a file the run writes (`cycles.csv`, `history.csv`, `summary.json`) is refused before
+/// anything is written, with or without `--force` and whether or not a manifest lists the
+/// name: the run would replace its own input.
+#[test]
+fn an_input_under_a_run_files_name_is_never_overwritten() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let mesh = std::fs::read(fixture("two_bodies_ascii.msh")).unwrap();
+    std::fs::write(out.join("cycles.csv"), &mesh).unwrap();
+    let case = held_block()
+        .mesh_file(&out.join("cycles.csv"))
+        .steps(1)
+        .write(&dir.path().join("case.toml"));
+    for flags in [&[][..], &["--force"]] {
+        let (code, text) = run(dir.path(), &case, &out, flags);
+        assert_eq!(code, Some(2), "{flags:?}: {text}");
+        assert!(
+            text.contains("cycles.csv") && text.contains("input"),
+            "{text}"
+        );
+        assert_eq!(std::fs::read(out.join("cycles.csv")).unwrap(), mesh);
+        assert_eq!(
+            common::file_names(&out),
+            ["cycles.csv"],
+            "{flags:?} wrote files"
+        );
+    }
+    // The case file itself, named like a result of an earlier run that listed it.
+    let mesh_case = held_block()
+        .mesh_file(&fixture("two_bodies_ascii.msh"))
+        .steps(1)
+        .write(&dir.path().join("case.toml"));
+    let earlier = dir.path().join("earlier");
+    let (code, text) = run(dir.path(), &mesh_case, &earlier, &[]);
+    assert_eq!(code, Some(0), "{text}");
+    let text_of_case = read(&mesh_case);
+    for name in ["history.csv", "summary.json"] {
+        let case_there = earlier.join(name);
+        std::fs::write(&case_there, &text_of_case).unwrap();
+        let (code, text) = run(dir.path(), &case_there, &earlier, &["--force"]);
+        assert_eq!(code, Some(2), "{name}: {text}");
+        assert_eq!(read(&case_there), text_of_case, "{name} was replaced");
+    }
+}
+
 /// A file the run would write but that no manifest lists (a log of the user's, results of
 /// another program) is refused, before anything is written, with --force too; it is left
 /// untouched.

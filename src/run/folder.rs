@@ -234,7 +234,8 @@ impl OutputFolder {
     /// (`Fresh`), removes them (`Force`, and `Resume` without a restart record), or removes
     /// only the temporary files a killed run left (`Resume`). Only files that the folder's
     /// manifest lists are removed, never an input of the run; a file the run would write that
-    /// no manifest lists is an error ([`Error::OutputForeign`]), before anything is created.
+    /// no manifest lists, or an input under the name of a file the run writes, is an error
+    /// ([`Error::OutputForeign`]), before anything is created.
     pub fn open(dir: &Path, mode: OutputMode, plan: &FolderPlan) -> Result<Self> {
         let dir = &normalized(dir);
         if dir.exists() && !dir.is_dir() {
@@ -246,9 +247,18 @@ impl OutputFolder {
         let is_input = |path: &Path| canonical(path).is_some_and(|c| inputs.contains(&c));
         for name in &entries {
             let path = dir.join(name);
+            if plan.writes(name) && is_input(&path) {
+                return Err(foreign(
+                    dir,
+                    &path,
+                    "this is an input of the run (its case file, mesh or .geo script), and the \
+                     run writes a file of this name, which would replace it: rename the input \
+                     or choose another output folder",
+                ));
+            }
             // The manifest itself was checked by `read_manifest`.
             let unlisted = name != MANIFEST && !listed.contains(name);
-            if plan.writes(name) && unlisted && !is_input(&path) {
+            if plan.writes(name) && unlisted {
                 return Err(foreign(
                     dir,
                     &path,
