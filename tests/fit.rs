@@ -385,6 +385,26 @@ fn bad_input_names_file_and_key() {
         let (_, k) = key_of(fit(d, &format!("{text}\n{tests}")).unwrap_err());
         assert_eq!(k, key);
     }
+
+    // More starts than the documented limit, named by its key before any fit runs.
+    let (_, k) = key_of(fit(d, &format!("starts = 1001\n{FREE}\n{tests}")).unwrap_err());
+    assert_eq!(k, "starts");
+    // A data file is read no further than the 64 MiB limit (here an endless one).
+    #[cfg(unix)]
+    {
+        let endless = tests.replace(
+            normal_csv.file_name().unwrap().to_str().unwrap(),
+            "/dev/zero",
+        );
+        assert_ne!(endless, tests);
+        match fit(d, &format!("{FREE}\n{endless}")).unwrap_err() {
+            Error::Case { path, message } => {
+                assert_eq!(path, Path::new("/dev/zero"));
+                assert!(message.contains("larger than 64 MiB"), "{message}");
+            }
+            other => panic!("expected a file error, got {other}"),
+        }
+    }
 }
 
 /// Shear −0.05 MPa measured in full slip at 10 MPa: the data drive the friction coefficient

@@ -606,6 +606,17 @@ pub const MAX_INPUT_BYTES: u64 = 64 << 20;
 /// The text of the input file `path` (a case, fit or sweep specification): at most
 /// [`MAX_INPUT_BYTES`] of UTF-8.
 pub fn read_input(path: &Path) -> Result<String> {
+    let bytes = read_bounded(path, "not a case, fit or sweep file")?;
+    String::from_utf8(bytes).map_err(|e| Error::Case {
+        path: path.to_path_buf(),
+        message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
+    })
+}
+
+/// The bytes of an input file of at most [`MAX_INPUT_BYTES`] (a case, fit or sweep file, a
+/// measured curve), read no further than one byte beyond: a larger file (or `/dev/zero`) is an
+/// error naming the file, `what` saying what it cannot be.
+pub fn read_bounded(path: &Path, what: &str) -> Result<Vec<u8>> {
     use std::io::Read;
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let mut bytes = Vec::new();
@@ -615,16 +626,10 @@ pub fn read_input(path: &Path) -> Result<String> {
     if bytes.len() as u64 > MAX_INPUT_BYTES {
         return Err(Error::Case {
             path: path.to_path_buf(),
-            message: format!(
-                "larger than {} MiB: not a case, fit or sweep file",
-                MAX_INPUT_BYTES >> 20
-            ),
+            message: format!("larger than {} MiB: {what}", MAX_INPUT_BYTES >> 20),
         });
     }
-    String::from_utf8(bytes).map_err(|e| Error::Case {
-        path: path.to_path_buf(),
-        message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
-    })
+    Ok(bytes)
 }
 
 impl Case {

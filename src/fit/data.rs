@@ -83,9 +83,10 @@ fn bad(
 }
 
 impl Table {
-    /// Reads `path`: UTF-8 text, with or without a byte-order mark.
+    /// Reads `path`: UTF-8 text, with or without a byte-order mark, of at most
+    /// [`crate::config::MAX_INPUT_BYTES`].
     pub fn read(path: &Path) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bytes = crate::config::read_bounded(path, "not a measured curve")?;
         if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
             return Err(bad(
                 path,

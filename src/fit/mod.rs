@@ -263,6 +263,14 @@ impl Fit {
                 });
             }
         }
+        if let Some(starts) = file.starts.filter(|&s| s > starts::MAX) {
+            return Err(Error::InvalidParameter {
+                path: path.to_path_buf(),
+                key: "starts".into(),
+                value: starts.to_string(),
+                reason: format!("at most {} starting points", starts::MAX),
+            });
+        }
         let parameters = Parameters::new(file.law, &file.parameters, path)?;
         let mut experiments = file
             .tests

@@ -30,6 +30,11 @@ pub const DEFAULT: usize = 12;
 /// The default number of starts when a test solves a full model (each evaluation is a solve).
 pub const DEFAULT_MODEL: usize = 3;
 
+/// The most starts a fit file may ask for: each is a whole fit (a thousand fits of the rough
+/// joint to examples/fit's three curves take 7 s, a thousand with a model test a thousand
+/// times its solves); beyond, the points and their fits only cost memory and time.
+pub const MAX: usize = 1000;
+
 /// A free parameter's values along u = v·log₁₀ 3: x(u) = anchor + (x₀ − anchor)·10^u.
 struct Axis {
     anchor: f64,
