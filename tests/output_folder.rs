@@ -186,6 +186,37 @@ fn an_input_under_a_run_files_name_is_never_overwritten() {
     }
 }
 
+/// `--resume` with another case file (a restart record of another case) is refused before
+/// anything of the earlier run is touched: its summary, run.json, log and manifest keep their
+/// bytes.
+#[test]
+fn a_refused_resume_leaves_the_earlier_run_as_it_was() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let case = block_case(dir.path(), 2);
+    let (code, text) = run(dir.path(), &case, &out, &[]);
+    assert_eq!(code, Some(0), "{text}");
+    let snapshot = |out: &Path| -> Vec<(String, Vec<u8>)> {
+        common::file_names(out)
+            .into_iter()
+            .map(|name| {
+                let bytes = std::fs::read(out.join(&name)).unwrap();
+                (name, bytes)
+            })
+            .collect()
+    };
+    let before = snapshot(&out);
+    assert!(before.iter().any(|(name, _)| name == "restart.bin"));
+    let other = held_block().steps(3).write(&dir.path().join("other.toml"));
+    let (code, text) = run(dir.path(), &other, &out, &["--resume"]);
+    assert_eq!(code, Some(3), "{text}");
+    assert!(text.contains("case file changed"), "{text}");
+    assert!(
+        snapshot(&out) == before,
+        "the refused resume changed the folder"
+    );
+}
+
 /// A file the run would write but that no manifest lists (a log of the user's, results of
 /// another program) is refused, before anything is written, with --force too; it is left
 /// untouched.

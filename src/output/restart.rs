@@ -277,29 +277,38 @@ pub(super) fn encode_record(
     Ok(())
 }
 
-/// Reads the record at `path` for the case whose text is `case` and a model whose solution
-/// has the sizes of `template` (from [`Solution::new`]) and whose records hold `states`. A
-/// record of another case, program version or model size, or a damaged one, is an
-/// [`Error::Restart`]. Continuum states left out are `template`'s, for the run to evaluate.
-pub fn read_record(
-    path: &Path,
-    case: &str,
-    template: &Solution,
-    states: ContinuumStates,
-) -> Result<Record> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+/// Checks, before a resumed run writes or meshes anything, that the record at `path` is one
+/// of this program version for the case whose text is `case`, reading no more than its header
+/// can take (the magic, the version, a case text of at most
+/// [`crate::config::MAX_INPUT_BYTES`]).
+pub fn check_record(path: &Path, case: &str) -> Result<()> {
+    use std::io::Read;
+    let limit = (MAGIC.len() + 1024) as u64 + crate::config::MAX_INPUT_BYTES;
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut bytes = Vec::new();
+    file.take(limit)
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    checked_header(path, &bytes, case).map(drop)
+}
+
+/// Why postcard could not read a record.
+fn damage(e: postcard::Error) -> String {
+    match e {
+        postcard::Error::DeserializeUnexpectedEnd => "the record is truncated".into(),
+        e => format!("the record is damaged ({e})"),
+    }
+}
+
+/// The bytes after a record's header, once the magic, the program version and the case text
+/// are checked against this program and `case`.
+fn checked_header<'b>(path: &Path, bytes: &'b [u8], case: &str) -> Result<&'b [u8]> {
     let refuse = |reason: String| Error::Restart {
         path: path.to_path_buf(),
         reason,
     };
-    let damaged = |e: postcard::Error| {
-        refuse(match e {
-            postcard::Error::DeserializeUnexpectedEnd => "the record is truncated".into(),
-            e => format!("the record is damaged ({e})"),
-        })
-    };
     let Some(rest) = bytes.strip_prefix(MAGIC) else {
-        return Err(refuse(if MAGIC.starts_with(&bytes) {
+        return Err(refuse(if MAGIC.starts_with(bytes) {
             "the record is truncated".into()
         } else if bytes.starts_with(&MAGIC[..MAGIC_NAME]) {
             "the record has another format (of another version of asperity); run without \
@@ -309,7 +318,8 @@ pub fn read_record(
             "not an asperity restart record".into()
         }));
     };
-    let (header, rest) = postcard::take_from_bytes::<Header>(rest).map_err(damaged)?;
+    let (header, rest) =
+        postcard::take_from_bytes::<Header>(rest).map_err(|e| refuse(damage(e)))?;
     if header.version != env!("CARGO_PKG_VERSION") {
         return Err(refuse(format!(
             "it was written by asperity {}, this is {}",
@@ -322,6 +332,26 @@ pub fn read_record(
             "the case file changed since the record was written; run without --resume".into(),
         ));
     }
+    Ok(rest)
+}
+
+/// Reads the record at `path` for the case whose text is `case` and a model whose solution
+/// has the sizes of `template` (from [`Solution::new`]) and whose records hold `states`. A
+/// record of another case, program version or model size, or a damaged one, is an
+/// [`Error::Restart`]. Continuum states left out are `template`'s, for the run to evaluate.
+pub fn read_record(
+    path: &Path,
+    case: &str,
+    template: &Solution,
+    states: ContinuumStates,
+) -> Result<Record> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let rest = checked_header(path, &bytes, case)?;
+    let refuse = |reason: String| Error::Restart {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let damaged = |e: postcard::Error| refuse(damage(e));
     let (mut body, rest) = postcard::take_from_bytes::<Body>(rest).map_err(damaged)?;
     if !rest.is_empty() {
         return Err(refuse("the record has trailing bytes".into()));

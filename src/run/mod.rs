@@ -242,6 +242,12 @@ pub fn run_with(
     check_history(case)?;
     let case_text = std::fs::read_to_string(&case.path).map_err(|e| Error::io(&case.path, e))?;
     let folder = OutputFolder::open(out_dir, options.mode, &folder_plan(case))?;
+    if folder.resumable() {
+        // A record of another case refuses the resume before the earlier run's files (its
+        // summary, run.json, log and mesh) are touched.
+        let record = folder.dir().join(RunFile::Restart.name());
+        crate::output::restart::check_record(&record, &case_text)?;
+    }
     folder_ready(&folder)?;
     let info = RunInfo::new(case, &case_text, options);
     info.write(&folder)?;
