@@ -231,6 +231,88 @@ fn local_pool_runs_restarts_and_collect_reports_a_failed_run() {
     assert!(c.failures.is_empty(), "{:?}", c.failures);
 }
 
+/// A study planned again into its folder with other values: the runs whose case changed are
+/// stale — reported as such by collect, never as the new values' results — and run again
+/// (over their own files); the unchanged ones stay done.
+#[test]
+fn a_study_planned_again_runs_the_runs_whose_case_changed() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("study");
+    let s = study.to_str().unwrap();
+    let with_c_n = |values: &str| {
+        let values = values.to_string();
+        sweep_file(dir.path(), move |t| {
+            t.replace(
+                "range = { from = 1e-3, to = 4e-3, count = 3, log = true }",
+                &format!("values = {values}"),
+            )
+            .replace("values = [0.4, 0.6]", "values = [0.4]")
+        })
+    };
+    let path = with_c_n("[1e-3, 2e-3]");
+    assert!(run_cli(&["sweep", "plan", path.to_str().unwrap(), "--out", s]).0);
+    let (ok, text) = run_cli(&["sweep", "run", s, "--jobs", "2"]);
+    assert!(ok && text.contains("ran 2 runs"), "{text}");
+    // Columns: run, c_n, m, status, force, ...
+    let force = |study: &Path| -> Vec<String> {
+        let c = sweep::collect(study, false).unwrap();
+        let csv = std::fs::read_to_string(&c.csv).unwrap();
+        csv.lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(4).unwrap().to_string())
+            .collect()
+    };
+    let first = force(&study);
+    let path = with_c_n("[1e-3, 4e-3]");
+    assert!(run_cli(&["sweep", "plan", path.to_str().unwrap(), "--out", s]).0);
+    let c = sweep::collect(&study, false).unwrap();
+    assert_eq!(c.failures.len(), 1, "{:?}", c.failures);
+    assert_eq!((c.failures[0].0, c.failures[0].1.as_str()), (1, "stale"));
+    let (ok, text) = run_cli(&["sweep", "run", s, "--jobs", "2"]);
+    assert!(ok && text.contains("ran 1 runs"), "{text}");
+    let second = force(&study);
+    assert_eq!(second[0], first[0]);
+    let (old, new): (f64, f64) = (first[1].parse().unwrap(), second[1].parse().unwrap());
+    // c_n = 4e-3 is a softer joint than 2e-3: a smaller compressive reaction.
+    assert!(new < 0.0 && new > old, "{old} → {new}");
+}
+
+/// A plan refuses, before it writes anything, a study folder whose files of a plan's names are
+/// not a sweep's (a jobs.txt of the user's, a manifest.json that is no sweep's), and a sweep
+/// that varies one key twice; a refused plan leaves no folder behind.
+#[test]
+fn a_plan_never_overwrites_what_no_sweep_wrote() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = sweep_file(dir.path(), |t| t);
+    for name in ["jobs.txt", "manifest.json"] {
+        let study = dir.path().join(format!("mine_{name}"));
+        std::fs::create_dir(&study).unwrap();
+        std::fs::write(study.join(name), "mine").unwrap();
+        match sweep::plan(&path, &study, &exe()) {
+            Err(Error::OutputForeign { file, .. }) => assert_eq!(file, study.join(name)),
+            other => panic!("{name}: expected a refusal, got {other:?}"),
+        }
+        assert_eq!(std::fs::read_to_string(study.join(name)).unwrap(), "mine");
+        assert_eq!(
+            std::fs::read_dir(&study).unwrap().count(),
+            1,
+            "{name}: wrote files"
+        );
+    }
+    let twice = sweep_file(dir.path(), |t| {
+        t.replace("key = \"contact.0.law.m\"", "key = \"contact.0.law.c_n\"")
+    });
+    let study = dir.path().join("twice");
+    let (p, key, reason) = key_error(sweep::plan(&twice, &study, &exe()).unwrap_err());
+    assert_eq!((p, key.as_str()), (twice, "vary[1].key"));
+    assert!(reason.contains("vary[0]"), "{reason}");
+    let bad = sweep_file(dir.path(), |t| {
+        t.replace("values = [0.4, 0.6]", "values = [0.4, -0.6]")
+    });
+    assert!(sweep::plan(&bad, &study, &exe()).is_err());
+    assert!(!study.exists(), "a refused plan made its folder");
+}
+
 // ---- Hostile inputs: values and paths that reach generated job files and file names ----
 
 /// The shipped sweep file with its `[slurm]` section replaced by `slurm` (TOML lines).

@@ -174,10 +174,8 @@ pub fn plan(path: &Path, study: &Path, exe: &Path) -> Result<Manifest> {
     // before anything is written.
     let sweep_path = jobs::job_path(path, "sweep file", path)?;
     let exe = jobs::job_path(path, "asperity executable", exe)?;
-    jobs::study_path(
-        path,
-        &std::path::absolute(study).map_err(|e| Error::io(study, e))?,
-    )?;
+    let absolute_study = std::path::absolute(study).map_err(|e| Error::io(study, e))?;
+    jobs::study_path(path, &absolute_study)?;
     sweep.slurm.check(path)?;
     check_quantity_names(path, &sweep.quantities)?;
     for (i, vary) in sweep.keys.iter().enumerate() {
@@ -189,6 +187,15 @@ pub fn plan(path: &Path, study: &Path, exe: &Path) -> Result<Manifest> {
                 "a key holds no control character (line break, tab, ...)",
             ));
         }
+        // The later value would silently win, and sweep.csv would have two such columns.
+        if let Some(j) = sweep.keys[..i].iter().position(|k| k.key == vary.key) {
+            return Err(invalid(
+                path,
+                format!("vary[{i}].key"),
+                &vary.key,
+                format!("varied already by vary[{j}]: vary a key once (its values in one list)"),
+            ));
+        }
     }
     let base = path.parent().unwrap_or(Path::new("")).join(&sweep.base);
     let base = base.canonicalize().map_err(|e| Error::io(&base, e))?;
@@ -196,21 +203,17 @@ pub fn plan(path: &Path, study: &Path, exe: &Path) -> Result<Manifest> {
     let mut tree: Value = toml::from_str(&base_text).map_err(|e| Error::toml(&base, &e))?;
     absolute_mesh_paths(&mut tree, base.parent().unwrap_or(Path::new("/")));
     let points = points(&sweep, path)?;
-    std::fs::create_dir_all(study).map_err(|e| Error::io(study, e))?;
-    let study = study.canonicalize().map_err(|e| Error::io(study, e))?;
-    // Once more after symbolic links are resolved: they name the folder in the job files.
-    let study_text = jobs::study_path(path, &study)?;
-    let mut runs = Vec::with_capacity(points.len());
+    // Every run's case is made and checked before the study folder is made or touched.
+    let mut cases = Vec::with_capacity(points.len());
     for (id, values) in points.into_iter().enumerate() {
         let dir = PathBuf::from(format!("runs/{id:04}"));
-        let case_path = study.join(&dir).join("case.toml");
         let mut t = tree.clone();
         for (i, (vary, v)) in sweep.keys.iter().zip(&values).enumerate() {
             keys::set(&mut t, &vary.key, v.clone())
                 .map_err(|reason| invalid(path, format!("vary[{i}].key"), &vary.key, reason))?;
         }
         let text = toml::to_string(&t).map_err(|e| Error::External(e.to_string()))?;
-        check_run(&text, &case_path).map_err(|e| {
+        check_run(&text, &absolute_study.join(&dir).join("case.toml")).map_err(|e| {
             invalid(
                 path,
                 format!("vary ({})", describe(&sweep.keys, &values)),
@@ -218,14 +221,24 @@ pub fn plan(path: &Path, study: &Path, exe: &Path) -> Result<Manifest> {
                 format!("run {id} is not a valid case: {e}"),
             )
         })?;
+        cases.push((RunEntry { id, dir, values }, text));
+    }
+    check_study_folder(study)?;
+    std::fs::create_dir_all(study).map_err(|e| Error::io(study, e))?;
+    let study = study.canonicalize().map_err(|e| Error::io(study, e))?;
+    // Once more after symbolic links are resolved: they name the folder in the job files.
+    let study_text = jobs::study_path(path, &study)?;
+    let mut runs = Vec::with_capacity(cases.len());
+    for (run, text) in cases {
         let header = comment(&format!(
-            "run {id} of sweep {sweep_path}: {}",
-            describe(&sweep.keys, &values)
+            "run {} of sweep {sweep_path}: {}",
+            run.id,
+            describe(&sweep.keys, &run.values)
         ));
-        write_atomically(&case_path, |w| {
+        write_atomically(&study.join(&run.dir).join("case.toml"), |w| {
             w.write_all(format!("{header}{text}").as_bytes())
         })?;
-        runs.push(RunEntry { id, dir, values });
+        runs.push(run);
     }
     let manifest = Manifest {
         sweep: path.to_path_buf(),
@@ -242,6 +255,46 @@ pub fn plan(path: &Path, study: &Path, exe: &Path) -> Result<Manifest> {
     })?;
     jobs::write_jobs(study_text, manifest.runs.len(), exe, &sweep.slurm)?;
     Ok(manifest)
+}
+
+/// The names a plan writes in its study folder (`runs` holds the runs' folders).
+const PLAN_FILES: [&str; 4] = ["manifest.json", "jobs.txt", "array.sbatch", "runs"];
+
+/// Refuses ([`Error::OutputForeign`], before anything is written) a study folder whose
+/// files of a plan's names are not a sweep's: a `manifest.json` that is no sweep manifest,
+/// or `jobs.txt`, `array.sbatch` or `runs` without one. A folder holding a sweep's plan may
+/// be planned again: its runs whose case changes are run again ([`run::run_task`]).
+fn check_study_folder(study: &Path) -> Result<()> {
+    if !study.exists() {
+        return Ok(());
+    }
+    let foreign = |file: &str, reason: &str| Error::OutputForeign {
+        dir: study.to_path_buf(),
+        file: study.join(file),
+        reason: reason.to_string(),
+    };
+    if !study.is_dir() {
+        return Err(foreign("", "the study folder is a file"));
+    }
+    if study.join(PLAN_FILES[0]).exists() {
+        return Manifest::read(study).map(drop).map_err(|_| {
+            foreign(
+                PLAN_FILES[0],
+                "not the manifest of a sweep: move it away or choose another study folder",
+            )
+        });
+    }
+    match PLAN_FILES[1..]
+        .iter()
+        .find(|name| study.join(name).exists())
+    {
+        Some(name) => Err(foreign(
+            name,
+            "a sweep plan writes a file of this name, but the folder holds no sweep's \
+             manifest.json: move it away or choose another study folder",
+        )),
+        None => Ok(()),
+    }
 }
 
 /// `key = value, ...` of one run.

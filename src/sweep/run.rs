@@ -15,12 +15,32 @@ use crate::{Error, Result};
 use crate::{python, run};
 
 /// Whether run `dir` is done: its `summary.json` exists (converged, or failed and not
-/// `retry_failed`).
+/// `retry_failed`) and was made from the run's present `case.toml` ([`made_from_its_case`]).
 fn done(dir: &Path, retry_failed: bool) -> bool {
     match read_summary(dir) {
-        Ok(s) => !(retry_failed && s.get("status").and_then(|v| v.as_str()) != Some("converged")),
-        Err(_) => false,
+        Ok(s) if made_from_its_case(dir) => {
+            !(retry_failed && s.get("status").and_then(|v| v.as_str()) != Some("converged"))
+        }
+        _ => false,
     }
+}
+
+/// Whether the results in run folder `dir` are of its present `case.toml`: they are unless its
+/// `run.json` holds another case text. A study planned again into the same folder rewrites
+/// the case files of the runs it changes; their earlier results are then stale (not done,
+/// not collected, and replaced rather than resumed). A run refused before it started (a
+/// case file that does not parse) has no `run.json`: its summary stands.
+fn made_from_its_case(dir: &Path) -> bool {
+    let Ok(text) = std::fs::read_to_string(dir.join(RunFile::Info.name())) else {
+        return true;
+    };
+    let info = serde_json::from_str::<serde_json::Value>(&text).ok();
+    let recorded = info
+        .as_ref()
+        .and_then(|i| i.get("case"))
+        .and_then(|c| c.as_str());
+    let present = std::fs::read_to_string(dir.join("case.toml")).ok();
+    recorded.is_some() && recorded == present.as_deref()
 }
 
 fn read_summary(dir: &Path) -> Result<serde_json::Value> {
@@ -53,12 +73,13 @@ pub fn run_task(study: &Path, k: usize, retry_failed: bool) -> Result<bool> {
         return Ok(false);
     }
     let case_path = dir.join("case.toml");
-    // A retried run starts over; otherwise a run stopped part-way (a killed or pre-empted job)
-    // continues from its restart record, or starts over without one. Either way only the
-    // files the run folder's manifest lists are removed.
+    // A retried run, or one whose results are of an earlier plan, starts over; otherwise a
+    // run stopped part-way (a killed or pre-empted job) continues from its restart record, or
+    // starts over without one. Either way only the files the run folder's manifest lists are
+    // removed.
     let options = run::RunOptions {
         progress: false,
-        mode: if retry_failed {
+        mode: if retry_failed || !made_from_its_case(&dir) {
             OutputMode::Force
         } else {
             OutputMode::Resume
@@ -193,6 +214,15 @@ pub fn collect(study: &Path, plot: bool) -> Result<Collected> {
         }));
         let dir = study.join(&run.dir);
         let (status, mut error, summary) = match read_summary(&dir) {
+            Ok(_) if !made_from_its_case(&dir) => (
+                "stale".to_string(),
+                format!(
+                    "the results in {} are of an earlier plan of this run (its run.json holds \
+                     another case than case.toml): run the sweep again",
+                    dir.display()
+                ),
+                None,
+            ),
             Ok(s) => {
                 let status = s
                     .get("status")
