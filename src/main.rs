@@ -371,8 +371,10 @@ fn fit_or_sweep(command: Command) -> asperity::Result<bool> {
     };
     match command {
         Command::Fit { file, out, no_plot } => {
-            let result = asperity::fit::Fit::from_file(&file)?.run()?;
             let out = out.unwrap_or_else(|| default_out("fit", &file));
+            let fit = asperity::fit::Fit::from_file(&file)?;
+            asperity::fit::check_folder(&out)?;
+            let result = fit.run()?;
             let plots = asperity::fit::write(&result, &out, !no_plot)?;
             say!("{result}");
             say!(

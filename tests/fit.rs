@@ -671,3 +671,29 @@ fn command_line_exit_codes_and_streams() {
     );
     assert!(!d.join("bad").exists());
 }
+
+/// A fit's folder: a file of a fit's name (`curves.csv`, `fit.json`, ...) that no fit wrote
+/// is refused before the fit runs and before it writes, and left as it was; a folder whose
+/// `fit.json` is a fit's is an earlier fit's, whose files a new fit replaces.
+#[test]
+fn a_fit_never_overwrites_files_no_fit_wrote() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path();
+    asperity::fit::check_folder(&out.join("new")).unwrap();
+    asperity::fit::check_folder(out).unwrap();
+    for name in ["curves.csv", "fit.json"] {
+        std::fs::write(out.join(name), "mine").unwrap();
+        match asperity::fit::check_folder(out) {
+            Err(Error::OutputForeign { file, .. }) => assert_eq!(file, out.join(name)),
+            other => panic!("{name}: expected a refusal, got {other:?}"),
+        }
+        std::fs::remove_file(out.join(name)).unwrap();
+    }
+    std::fs::write(out.join("curves.csv"), "an earlier fit's").unwrap();
+    std::fs::write(
+        out.join("fit.json"),
+        r#"{"fit_file": "joint.toml", "chi_square": 1.0}"#,
+    )
+    .unwrap();
+    asperity::fit::check_folder(out).unwrap();
+}

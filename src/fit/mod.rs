@@ -50,7 +50,7 @@ use serde::Deserialize;
 pub use data::{Dimension, Table};
 pub use experiment::{Experiment, TestSpec};
 pub use params::{ParameterSpec, Parameters};
-pub use report::write;
+pub use report::{check_folder, write};
 
 use crate::model::PenaltyDefault;
 use crate::{Error, Result};

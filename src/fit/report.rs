@@ -11,11 +11,46 @@ use crate::output::csv::{Cell, CsvTable, write_csv};
 use crate::python;
 use crate::{Error, Result};
 
+/// The files a fit writes into its folder.
+const FIT_FILES: [&str; 5] = [
+    "fit.json",
+    "curves.csv",
+    "law.toml",
+    "fit.png",
+    "residuals.png",
+];
+
+/// Refuses ([`Error::OutputForeign`]) a folder where the fit would replace a file no fit
+/// wrote: a fit's file name is taken only in a folder whose `fit.json` is a fit's (an earlier
+/// fit, whose files the new one replaces). Called before the fit runs and again before it
+/// writes.
+pub fn check_folder(out: &Path) -> Result<()> {
+    let fit_json = out.join(FIT_FILES[0]);
+    let earlier_fit = std::fs::read_to_string(&fit_json)
+        .ok()
+        .and_then(|text| serde_json::from_str::<serde_json::Value>(&text).ok())
+        .is_some_and(|v| v.get("fit_file").is_some() && v.get("chi_square").is_some());
+    if earlier_fit {
+        return Ok(());
+    }
+    match FIT_FILES.iter().find(|name| out.join(name).exists()) {
+        Some(name) => Err(Error::OutputForeign {
+            dir: out.to_path_buf(),
+            file: out.join(name),
+            reason: "a fit writes a file of this name, but the folder holds no fit's fit.json: \
+                     move it away or choose another --out"
+                .into(),
+        }),
+        None => Ok(()),
+    }
+}
+
 /// Writes the result's files into `out`; returns what happened to the plots. Everything is
 /// checked before the first file is written (a non-finite number is an error and leaves no
-/// file), `fit.json` is written last, and each file atomically: a folder with `fit.json` has
-/// the complete set.
+/// file; a file of a fit's name that no fit wrote is refused, [`check_folder`]), `fit.json` is
+/// written last, and each file atomically: a folder with `fit.json` has the complete set.
 pub fn write(result: &FitResult, out: &Path, plot_too: bool) -> Result<String> {
+    check_folder(out)?;
     let mut table = CsvTable::new(
         ["test", "x", "measured", "fitted", "sigma", "residual"]
             .map(String::from)
