@@ -754,6 +754,8 @@ pub enum TopologyProblem {
     TooManyNodes,
     /// The pair has no interface elements.
     NoElements,
+    /// A face of the pair is a face of another pair too.
+    SharedFace,
 }
 
 /// A constitutive parameter out of its range, as a material or interface-law constructor

@@ -435,6 +435,30 @@ mod bad_input {
         assert!(e.to_string().contains("loose_side"), "{e}");
     }
 
+    /// A second `[[contact]]` on the same curves (or any pair joining a face another pair
+    /// joins) would add its stiffness to the same surface: refused, naming both pairs.
+    #[test]
+    fn two_pairs_on_one_surface_are_refused() {
+        let faces = |name: &str| {
+            [
+                ("name", name.into()),
+                ("side_a", "lower_top".into()),
+                ("side_b", "upper_bottom".into()),
+            ]
+        };
+        let case = CaseBuilder::plane_strain()
+            .body("lower", elastic(1000.0, 0.3))
+            .body("upper", elastic(1000.0, 0.3))
+            .contact(&faces("j0"), linear_coulomb(1e4, 1e4, 0.0))
+            .contact(&faces("j"), linear_coulomb(1e4, 1e4, 0.0))
+            .case();
+        let (problem, at) = topology(&case, two_blocks(4));
+        assert_eq!(problem, TopologyProblem::SharedFace);
+        assert_eq!(at.unwrap()[1], 1.0);
+        let e = model(two_blocks(4), &case).unwrap_err();
+        assert!(e.to_string().contains("contact 'j0'"), "{e}");
+    }
+
     #[test]
     fn a_negative_stiffness_is_rejected_with_its_name() {
         let e = ModelSpec::new(&pair("lower_top", "upper_bottom", -1e4)).unwrap_err();

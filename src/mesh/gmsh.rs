@@ -121,27 +121,57 @@ fn make_mesh(geo: &Path, size: f64, parameters: &[(String, f64)], out: &Path) ->
         elements,
         probe,
         probe_elements,
+        growth,
     }) = estimate
         && elements > MAX_MESH_ELEMENTS
     {
-        return Err(Error::mesh(
+        // A count that grew with the finer probes as a 2D mesh does (at least 4 of the 16
+        // times per probe step) follows the size factor; one that hardly grew does not.
+        let follows_size = growth >= PROBE_STEP;
+        let wanted = probe * (probe_elements as f64 / MAX_MESH_ELEMENTS as f64).sqrt();
+        return Err(too_large(
             geo,
-            MeshProblem::TooLarge,
-            None,
             format!(
                 "mesh.size = {size} would make about {elements:.1e} elements (extrapolated from \
-                 the script meshed at size factor {probe}: {probe_elements} elements), more \
-                 than the limit of {MAX_MESH_ELEMENTS}; increase mesh.size (to about {:.2e}) \
-                 or coarsen the script",
-                probe * (probe_elements as f64 / MAX_MESH_ELEMENTS as f64).sqrt(),
+                 the script meshed at size factor {probe}: {probe_elements} elements)"
             ),
+            follows_size.then_some(wanted),
         ));
     }
     tracing::info!("meshing {} (size factor {size})", geo.display());
     let mut cmd = gmsh(geo, size, parameters, out);
     cmd.args(["-order", "2"])
         .args(["-setnumber", "Mesh.SecondOrderIncomplete", "1"]);
-    run(cmd, geo, out)
+    run(cmd, geo, out)?;
+    // The estimate bounds a count that follows the size factor; the mesh itself is counted
+    // too (and is neither solved nor cached beyond the limit).
+    let elements = element_count(out)?;
+    if elements > MAX_MESH_ELEMENTS {
+        let _ = std::fs::remove_file(out);
+        return Err(too_large(
+            geo,
+            format!("the mesh gmsh made at mesh.size = {size} has {elements} elements"),
+            None,
+        ));
+    }
+    Ok(())
+}
+
+/// The error of a mesh over [`MAX_MESH_ELEMENTS`]: `what` says how many elements, and `size`,
+/// when the count follows the size factor, the factor that would meet the limit.
+fn too_large(geo: &Path, what: String, size: Option<f64>) -> Error {
+    let advice = match size {
+        Some(size) => format!("increase mesh.size (to about {size:.2e}) or coarsen the script"),
+        None => "its element counts do not follow mesh.size (transfinite or fixed counts): \
+                 lower the counts the script sets (its [mesh] parameters) or coarsen it"
+            .into(),
+    };
+    Error::mesh(
+        geo,
+        MeshProblem::TooLarge,
+        None,
+        format!("{what}, more than the limit of {MAX_MESH_ELEMENTS}; {advice}"),
+    )
 }
 
 /// The element count of a mesh of `geo` at size factor `size`, extrapolated from a coarser
@@ -180,14 +210,15 @@ pub fn estimate_elements(
             continue;
         };
         let extrapolate = |growth: f64| (count as f64 * growth.powi(k)).min(u64::MAX as f64) as u64;
-        let estimate = |elements| Estimate {
+        let estimate = |elements, growth| Estimate {
             elements,
             probe,
             probe_elements: count,
+            growth,
         };
         let bound = extrapolate(most_growth);
         if bound <= MAX_MESH_ELEMENTS {
-            return Ok(Some(estimate(bound)));
+            return Ok(Some(estimate(bound, most_growth)));
         }
         if let Some(before) = previous
             && count >= RELIABLE_PROBE
@@ -195,7 +226,7 @@ pub fn estimate_elements(
             let growth = (count as f64 / before.max(1) as f64).clamp(1.0, most_growth);
             let elements = extrapolate(growth);
             if elements > MAX_MESH_ELEMENTS {
-                return Ok(Some(estimate(elements)));
+                return Ok(Some(estimate(elements, growth)));
             }
         }
         previous = Some(count);
@@ -213,11 +244,39 @@ pub struct Estimate {
     pub probe: f64,
     /// Number of elements of the probe.
     pub probe_elements: u64,
+    /// The growth of the count per probe step it was extrapolated with (16 for a 2D mesh
+    /// that follows the size factor, about 1 for fixed transfinite counts).
+    pub growth: f64,
 }
 
-/// The gmsh command meshing `geo` in 2D at size factor `size` into `out` (MSH 4.1, ASCII).
+/// The address space a gmsh run may take: meshing the limit's million elements (second
+/// order) takes about 1.5 GB; a script whose fixed counts reach a billion elements would
+/// take the machine's whole memory before the element limit could refuse it, and is stopped
+/// here instead (gmsh aborts when an allocation fails).
+pub const GMSH_MEMORY_BYTES: u64 = 8 << 30;
+
+/// The gmsh command meshing `geo` in 2D at size factor `size` into `out` (MSH 4.1, ASCII),
+/// its address space capped at [`GMSH_MEMORY_BYTES`].
 fn gmsh(geo: &Path, size: f64, parameters: &[(String, f64)], out: &Path) -> Command {
     let mut cmd = Command::new("gmsh");
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::CommandExt;
+        let limit = libc::rlimit {
+            rlim_cur: GMSH_MEMORY_BYTES as libc::rlim_t,
+            rlim_max: GMSH_MEMORY_BYTES as libc::rlim_t,
+        };
+        // SAFETY: between fork and exec the closure only calls setrlimit, which is
+        // async-signal-safe, on a limit made before the fork.
+        unsafe {
+            cmd.pre_exec(move || {
+                if libc::setrlimit(libc::RLIMIT_AS, &limit) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
+    }
     cmd.arg(geo)
         .args(["-2", "-format", "msh41", "-v", "2"])
         .arg("-clscale")
@@ -289,10 +348,14 @@ fn ended_by(status: ExitStatus) -> String {
     {
         use std::os::unix::process::ExitStatusExt;
         if let Some(signal) = status.signal() {
-            let hint = if signal == 9 {
-                " (as the system does when memory runs out)"
-            } else {
-                ""
+            let hint = match signal {
+                9 => " (as the system does when memory runs out)".to_string(),
+                6 => format!(
+                    " (as gmsh does when an allocation fails: its memory is capped at {} GiB, \
+                     which a mesh within the element limit never needs)",
+                    GMSH_MEMORY_BYTES >> 30
+                ),
+                _ => String::new(),
             };
             return format!("gmsh was killed by signal {signal}{hint}");
         }
@@ -304,20 +367,25 @@ fn ended_by(status: ExitStatus) -> String {
 }
 
 /// The number of elements of the MSH 4.1 ASCII file `path` (of every dimension), from its
-/// `$Elements` header `numEntityBlocks numElements minTag maxTag`.
+/// `$Elements` header `numEntityBlocks numElements minTag maxTag` (the file streamed up to
+/// it: a gmsh mesh of a million elements is hundreds of MB).
 fn element_count(path: &Path) -> Result<u64> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let mut lines = text.lines().skip_while(|l| l.trim() != "$Elements").skip(1);
+    use std::io::BufRead;
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut lines = std::io::BufReader::new(file)
+        .lines()
+        .map_while(std::result::Result::ok)
+        .skip_while(|l| l.trim() != "$Elements")
+        .skip(1);
     lines
         .next()
-        .and_then(|header| header.split_whitespace().nth(1))
-        .and_then(|n| n.parse().ok())
+        .and_then(|header| header.split_whitespace().nth(1)?.parse().ok())
         .ok_or_else(|| {
             Error::mesh(
                 path,
                 MeshProblem::MissingSection,
                 None,
-                "gmsh's probe mesh has no readable $Elements header",
+                "gmsh's mesh has no readable $Elements header",
             )
         })
 }

@@ -195,10 +195,50 @@ fn insert_interfaces(
     contacts: &[Contact],
 ) -> Result<Vec<InterfaceTopology>> {
     let names: Vec<&str> = bodies.iter().map(|b| b.group.as_str()).collect();
-    contacts
+    let topologies = contacts
         .iter()
         .map(|c| insert_interface(mesh, &c.pairing, &c.name, &names))
-        .collect()
+        .collect::<Result<Vec<_>>>()?;
+    check_faces_used_once(mesh, contacts, &topologies)?;
+    Ok(topologies)
+}
+
+/// Refuses a face (the three nodes of a boundary line) that two interface elements join —
+/// two `[[contact]]` pairs on the same curves, or overlapping ones: each would add its own
+/// interface stiffness and stress on the same surface, counting the joint twice.
+fn check_faces_used_once(
+    mesh: &Mesh,
+    contacts: &[Contact],
+    topologies: &[InterfaceTopology],
+) -> Result<()> {
+    let mut owner: std::collections::HashMap<[u32; 3], usize> = std::collections::HashMap::new();
+    for (pair, topology) in topologies.iter().enumerate() {
+        for element in &topology.elements {
+            for face in [&element[..3], &element[3..]] {
+                let mut key = [face[0], face[1], face[2]];
+                key.sort_unstable();
+                match owner.insert(key, pair) {
+                    Some(other) if other != pair => {
+                        let [p, q] = [face[0], face[1]].map(|n| mesh.nodes[n as usize]);
+                        return Err(Error::Topology {
+                            pair: contacts[pair].name.clone(),
+                            problem: TopologyProblem::SharedFace,
+                            node: Some(mesh.node_tags[face[0] as usize]),
+                            element: None,
+                            message: format!(
+                                "its face from ({}, {}) to ({}, {}) is also a face of contact \
+                                 '{}': two pairs on one surface would count the joint twice; \
+                                 give each surface to one [[contact]]",
+                                p[0], p[1], q[0], q[1], contacts[other].name
+                            ),
+                        });
+                    }
+                    _ => {}
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The body whose cells hold each node (None: the node is in no body).
