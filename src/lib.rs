@@ -39,6 +39,7 @@ pub mod python;
 pub mod reference;
 pub mod run;
 pub mod solver;
+pub mod stop;
 pub mod study;
 pub mod sweep;
 pub mod thermal;

@@ -385,3 +385,56 @@ fn ctrl_c_stops_cleanly_and_the_run_resumes() {
         );
     }
 }
+
+/// SIGTERM while gmsh meshes (a script that loops for minutes): gmsh is stopped and the run
+/// ends at once with exit code 130 and an interrupted summary, instead of waiting for gmsh.
+#[cfg(unix)]
+#[test]
+fn sigterm_while_gmsh_meshes_stops_gmsh_and_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let geo = dir.path().join("slow.geo");
+    std::fs::write(
+        &geo,
+        "x = 0;\nFor i In {1:2000000000}\n  x = x + 1;\nEndFor\n\
+         Point(1) = {0, 0, 0};\nPoint(2) = {1, 0, 0};\nPoint(3) = {1, 1, 0};\n\
+         Line(1) = {1, 2};\nLine(2) = {2, 3};\nLine(3) = {3, 1};\n\
+         Curve Loop(1) = {1, 2, 3};\nPlane Surface(1) = {1};\n\
+         Physical Surface(\"plate\") = {1};\nPhysical Curve(\"bottom\") = {1};\n",
+    )
+    .unwrap();
+    let case = held_block()
+        .mesh_geo(&geo, 1.0)
+        .steps(1)
+        .write(&dir.path().join("case.toml"));
+    let out = dir.path().join("out");
+    let child = Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args([
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let signalled = Instant::now();
+    let status = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let output = child.wait_with_output().unwrap();
+    let text = String::from_utf8_lossy(&output.stderr);
+    // gmsh is polled every few milliseconds; the bound leaves room for a loaded machine.
+    assert!(
+        signalled.elapsed() < Duration::from_secs(10),
+        "took {:?} after SIGTERM",
+        signalled.elapsed()
+    );
+    assert_eq!(output.status.code(), Some(130), "{text}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&read(&out.join("summary.json"))).unwrap();
+    assert_eq!(summary["status"], "interrupted", "{summary}");
+}

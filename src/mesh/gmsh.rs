@@ -205,9 +205,13 @@ pub fn estimate_elements(
         // A script may not mesh at a coarse factor (a count that rounds to zero, a division
         // by it): such a probe tells nothing, and only the mesh at `size` itself must succeed.
         let meshed = run(gmsh(geo, probe, parameters, &out), geo, &out);
-        let Ok(count) = meshed.and_then(|()| element_count(&out)) else {
-            previous = None;
-            continue;
+        let count = match meshed.and_then(|()| element_count(&out)) {
+            Ok(count) => count,
+            Err(stop @ Error::Interrupted { .. }) => return Err(stop),
+            Err(_) => {
+                previous = None;
+                continue;
+            }
         };
         let extrapolate = |growth: f64| (count as f64 * growth.powi(k)).min(u64::MAX as f64) as u64;
         let estimate = |elements, growth| Estimate {
@@ -302,6 +306,12 @@ fn run(mut cmd: Command, geo: &Path, out: &Path) -> Result<()> {
             ))
         })?;
     let (status, log) = wait_with_timeout(child, GMSH_TIMEOUT).map_err(|e| match e {
+        // Ctrl-C or SIGTERM while gmsh runs: it is stopped, and the run with it.
+        Some(e) if e.kind() == std::io::ErrorKind::Interrupted => Error::Interrupted {
+            step: 0,
+            dir: out.parent().unwrap_or(Path::new(".")).to_path_buf(),
+            resume: None,
+        },
         Some(e) => Error::External(format!("gmsh on {}: {e}", geo.display())),
         None => Error::External(format!(
             "gmsh did not finish meshing {} within {} s and was stopped; check the script \
@@ -391,7 +401,8 @@ fn element_count(path: &Path) -> Result<u64> {
 }
 
 /// Waits for `child` at most `timeout`, collecting its stderr and stdout (read on threads so
-/// that a full pipe cannot stall it). On time-out the child is killed and the error is `None`.
+/// that a full pipe cannot stall it). On time-out the child is killed and the error is `None`;
+/// on a stop request ([`crate::stop`]) it is killed and the error is of kind `Interrupted`.
 fn wait_with_timeout(
     mut child: Child,
     timeout: Duration,
@@ -421,6 +432,11 @@ fn wait_with_timeout(
     let status = loop {
         if let Some(status) = child.try_wait().map_err(Some)? {
             break status;
+        }
+        if crate::stop::stop_requested() {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(Some(std::io::Error::from(std::io::ErrorKind::Interrupted)));
         }
         if start.elapsed() > timeout {
             let _ = child.kill();

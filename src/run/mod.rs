@@ -162,7 +162,16 @@ pub fn load_mesh(case: &Case, folder: &OutputFolder) -> Result<(Mesh, Option<f64
                 case.mesh.size,
                 &params,
                 &folder.path(RunFile::Mesh)?,
-            )?;
+            )
+            .map_err(|e| match e {
+                // Stopped while gmsh ran (its probes mesh in a temporary folder).
+                Error::Interrupted { step, resume, .. } => Error::Interrupted {
+                    step,
+                    dir: folder.dir().to_path_buf(),
+                    resume,
+                },
+                e => e,
+            })?;
             (meshed.path, Some(meshed.gmsh_seconds))
         }
         (None, None) => {

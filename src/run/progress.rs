@@ -3,7 +3,6 @@
 
 use std::fs::File;
 use std::io::Write;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use tracing_subscriber::fmt::MakeWriter;
@@ -13,20 +12,7 @@ use indicatif::ProgressBar;
 use super::folder::{OutputFolder, RunFile};
 use crate::{Error, Result};
 
-/// Whether the run was asked to stop ([`request_stop`]).
-static STOP_REQUESTED: AtomicBool = AtomicBool::new(false);
-
-/// Asks the run in progress to stop after its current increment, its converged steps' files
-/// complete (the CLI calls it on the first Ctrl-C or SIGTERM). Returns whether a stop had
-/// been asked for already (the CLI then exits at once).
-pub fn request_stop() -> bool {
-    STOP_REQUESTED.swap(true, Ordering::SeqCst)
-}
-
-/// Whether a stop was asked for ([`request_stop`]).
-pub fn stop_requested() -> bool {
-    STOP_REQUESTED.load(Ordering::SeqCst)
-}
+pub use crate::stop::{request_stop, stop_requested};
 
 /// The progress bar of the run in progress, if it is drawn: [`LogToStderr`] writes log lines
 /// through it.
