@@ -3,7 +3,7 @@
 //! facts as data, so that callers (and tests) can act on them without parsing messages.
 
 use std::fmt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Errors of asperity. Messages are complete sentences meant for the user.
 #[derive(Debug, thiserror::Error)]
@@ -24,7 +24,7 @@ pub enum Error {
     Case { path: PathBuf, message: String },
     /// A case-file value is out of its range: `key` is its path in the case
     /// (`contact[2].law.friction`, `body[0].material.nu`, `steps.count`).
-    #[error("{}: {key} = {value}: {reason}", path.display())]
+    #[error("{}: {key}{}: {reason}", file_or_model(path), equals(value))]
     InvalidParameter {
         path: PathBuf,
         key: String,
@@ -394,6 +394,26 @@ pub enum ArcFailure {
 impl From<Error> for ArcFailure {
     fn from(e: Error) -> Self {
         ArcFailure::Solver(Box::new(e))
+    }
+}
+
+/// ` = value` of a parameter error, nothing for an error of a key without one value (a
+/// count of zero, a missing column).
+fn equals(value: &str) -> String {
+    if value.is_empty() {
+        String::new()
+    } else {
+        format!(" = {value}")
+    }
+}
+
+/// The file a parameter error names, or `model` for one the model building found (a
+/// torque on the axis, a defaulted penalty out of range), which knows no case file.
+fn file_or_model(path: &Path) -> String {
+    if path.as_os_str().is_empty() {
+        "model".to_string()
+    } else {
+        path.display().to_string()
     }
 }
 

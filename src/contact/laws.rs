@@ -194,9 +194,15 @@ pub fn check(parameters: &[ParameterDescriptor], values: &[f64]) -> Result<(), P
 /// How a law parameter's value shows in a message: NaN is one not given.
 pub fn shown(value: f64) -> String {
     if value.is_nan() {
-        "(missing)".into()
+        return "(missing)".into();
+    }
+    // f64's Display writes 1e-300 (or the smallest positive double, a range's bound) in
+    // full: hundreds of digits.
+    let plain = value.to_string();
+    if plain.len() > 24 {
+        format!("{value:e}")
     } else {
-        value.to_string()
+        plain
     }
 }
 

@@ -283,7 +283,11 @@ fn free_parameter(
     if let (Some(a), Some(b)) = (s.min, s.max)
         && a >= b
     {
-        return Err(format!("`min` = {a} must be below `max` = {b}"));
+        return Err(format!(
+            "`min` = {} must be below `max` = {}",
+            laws::shown(a),
+            laws::shown(b)
+        ));
     }
     let (law_min, law_max) = law_range(parameter);
     let (min, max) = (
@@ -299,7 +303,9 @@ fn free_parameter(
     }
     if !(min <= x0 && x0 <= max) {
         return Err(format!(
-            "`initial` must lie within {min}..{max} (`min`..`max` within the law's range)"
+            "`initial` must lie within {}..{} (`min`..`max` within the law's range)",
+            laws::shown(min),
+            laws::shown(max)
         ));
     }
     let scale = if s.log {
