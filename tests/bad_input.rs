@@ -1100,3 +1100,23 @@ fn load_history_errors_name_their_key() {
     );
     result.unwrap();
 }
+
+/// Two supports of one group that prescribe different values of a component are named by
+/// their `name`s (the group alone would name both the same).
+#[test]
+fn conflicting_supports_are_named_by_their_names() {
+    let case = case_plus(
+        "[[support]]\nname = \"s1\"\ngroup = \"top\"\nux = 0.0\n\
+         [[support]]\nname = \"s2\"\ngroup = \"top\"\nux = 0.05\n",
+    );
+    let (result, _dir) = run(&case, Some(PLATE_MSH.as_bytes()));
+    let error = result.unwrap_err();
+    assert!(
+        matches!(&error, Error::ConflictingSupports { first, second, .. } if first == "s1" && second == "s2"),
+        "{error}"
+    );
+    assert!(
+        error.to_string().contains("supports 's1' and 's2'"),
+        "{error}"
+    );
+}

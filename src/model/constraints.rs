@@ -96,8 +96,8 @@ pub(super) fn prescribe(
                                 || (v - value).abs() > 1e-12 * v.abs().max(value.abs())) =>
                     {
                         return Err(Error::ConflictingSupports {
-                            first: specs[j].group.clone(),
-                            second: spec.group.clone(),
+                            first: specs[j].name.clone(),
+                            second: spec.name.clone(),
                             component: c,
                             values: [v, value],
                             node: mesh.node_tags[n as usize],
