@@ -920,6 +920,12 @@ fn load_history_errors_name_their_key() {
             Invalid("step[0].supports.botom"),
         ),
         (
+            // named as unknown, not as a cyclic step without an amplitude
+            "unknown load in a cyclic step",
+            with_steps("[[step]]\ncycles = 2\nloads = { topp = 1.0 }"),
+            Invalid("step[0].loads.topp"),
+        ),
+        (
             "unknown amplitude",
             with_steps("[[step]]\nloads = { top = \"wave\" }"),
             Invalid("step[0].loads.top"),

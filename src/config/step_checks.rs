@@ -54,6 +54,7 @@ impl Case {
                 ));
             }
             self.check_step_targets(i, step)?;
+            self.check_cyclic_amplitude(i, step)?;
         }
         self.check_legs()?;
         self.check_every_history_used()
@@ -173,6 +174,12 @@ impl Case {
                 format!("must lie in [1, cycles = {}]", step.cycles),
             ));
         }
+        Ok(())
+    }
+
+    /// A cyclic step `i` repeats its amplitudes: it needs one (checked after its targets,
+    /// so that a target naming no load is named as such).
+    fn check_cyclic_amplitude(&self, i: usize, step: &StepSpec) -> Result<()> {
         if step.is_cyclic() && !self.step_has_amplitude(step) {
             return Err(self.invalid(
                 format!("step[{i}].cycles"),
