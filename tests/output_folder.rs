@@ -34,6 +34,30 @@ fn run(dir: &Path, case: &Path, out: &Path, flags: &[&str]) -> (Option<i32>, Str
     asperity_in(dir, &args)
 }
 
+/// `asperity run CASE --out OUT` started in the background, its output piped.
+fn spawn_run(case: &Path, out: &Path) -> std::process::Child {
+    Command::new(env!("CARGO_BIN_EXE_asperity"))
+        .args([
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+/// Sends `signal` (`-INT`, `-TERM`) to `child`.
+fn signal(child: &std::process::Child, signal: &str) {
+    let status = Command::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+}
+
 /// The held block of `tests/fixtures/two_bodies_ascii.msh` in `steps` steps, as `dir/case.toml`.
 fn block_case(dir: &Path, steps: i64) -> PathBuf {
     held_block().steps(steps).write(&dir.join("case.toml"))
@@ -330,17 +354,7 @@ fn ctrl_c_stops_cleanly_and_the_run_resumes() {
     let steps = 4000;
     let case = block_case(dir.path(), steps);
     let out = dir.path().join("out");
-    let child = Command::new(env!("CARGO_BIN_EXE_asperity"))
-        .args([
-            "run",
-            case.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let child = spawn_run(&case, &out);
     let start = Instant::now();
     while !out.join("restart.bin").is_file() {
         assert!(
@@ -349,11 +363,7 @@ fn ctrl_c_stops_cleanly_and_the_run_resumes() {
         );
         std::thread::sleep(Duration::from_millis(5));
     }
-    let status = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(status.success());
+    signal(&child, "-INT");
     let output = child.wait_with_output().unwrap();
     let text = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(130), "{text}");
@@ -407,24 +417,10 @@ fn sigterm_while_gmsh_meshes_stops_gmsh_and_the_run() {
         .steps(1)
         .write(&dir.path().join("case.toml"));
     let out = dir.path().join("out");
-    let child = Command::new(env!("CARGO_BIN_EXE_asperity"))
-        .args([
-            "run",
-            case.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let child = spawn_run(&case, &out);
     std::thread::sleep(Duration::from_millis(1500));
     let signalled = Instant::now();
-    let status = Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(status.success());
+    signal(&child, "-TERM");
     let output = child.wait_with_output().unwrap();
     let text = String::from_utf8_lossy(&output.stderr);
     // gmsh is polled every few milliseconds; the bound leaves room for a loaded machine.
