@@ -1065,6 +1065,16 @@ fn load_history_errors_name_their_key() {
             Invalid("load[1].name"),
         ),
         (
+            // named by its own table, not as a "[[thermal]]" that does not exist
+            "two temperatures of one name",
+            with_steps(
+                "[[temperature]]\ngroup = \"plate\"\nchange = 10.0\n\
+                 [[temperature]]\ngroup = \"plate\"\nchange = 20.0\n\
+                 [[step]]\nloads = { top = 1.0 }",
+            ),
+            Invalid("temperature[1].name"),
+        ),
+        (
             "two steps of one name",
             with_steps(
                 "[[step]]\nname = \"s\"\nloads = { top = 1.0 }\n[[step]]\nname = \"s\"\nloads = { top = 0.0 }",

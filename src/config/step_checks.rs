@@ -84,34 +84,47 @@ impl Case {
         Ok(())
     }
 
-    /// Load, support, amplitude and step names: safe, and unique within their kind.
+    /// Load, support, thermal-entry, amplitude and step names: safe, and unique within their
+    /// kind (the thermal entries — temperatures, thermal supports, heat sources — together:
+    /// they share a step's `thermal` table).
     fn check_history_names(&self) -> Result<()> {
-        let loads = self.loads.iter().map(|l| l.name());
-        let supports = self.supports.iter().map(|s| s.name());
-        let amplitudes = self.amplitudes.iter().map(|a| a.name.as_str());
-        let steps = (0..self.analysis_steps.len()).map(|i| self.analysis_steps[i].name(i));
-        let thermal = self.thermal_names().map(|(name, _)| name);
-        let kinds: [(&str, Vec<String>); 5] = [
-            ("load", loads.map(String::from).collect()),
-            ("support", supports.map(String::from).collect()),
-            ("thermal", thermal.map(String::from).collect()),
-            ("amplitude", amplitudes.map(String::from).collect()),
-            ("step", steps.collect()),
+        let keyed = |kind: &str, names: Vec<String>| -> Vec<(String, String)> {
+            let keys = (0..names.len()).map(|i| format!("{kind}[{i}]"));
+            keys.zip(names).collect()
+        };
+        let loads = keyed(
+            "load",
+            self.loads.iter().map(|l| l.name().to_string()).collect(),
+        );
+        let supports = self.supports.iter().map(|s| s.name().to_string()).collect();
+        let amplitudes = self.amplitudes.iter().map(|a| a.name.clone()).collect();
+        let steps = (0..self.analysis_steps.len())
+            .map(|i| self.analysis_steps[i].name(i))
+            .collect();
+        let thermal = self
+            .thermal_keys()
+            .zip(self.thermal_names().map(|(name, _)| name.to_string()))
+            .collect();
+        // Names that default to the entry's group get a hint to give `name`.
+        let defaulted = " (a name defaults to the entry's group: give `name`)";
+        let kinds: [(&str, Vec<(String, String)>, &str); 5] = [
+            ("[[load]]", loads, defaulted),
+            ("[[support]]", keyed("support", supports), defaulted),
+            (Role::Thermal.entries(), thermal, defaulted),
+            ("[[amplitude]]", keyed("amplitude", amplitudes), ""),
+            ("[[step]]", keyed("step", steps), ""),
         ];
-        for (kind, names) in kinds {
+        for (table, entries, hint) in kinds {
             let mut seen = BTreeSet::new();
-            for (i, name) in names.iter().enumerate() {
-                let key = format!("{kind}[{i}].name");
+            for (entry, name) in &entries {
+                let key = format!("{entry}.name");
                 check_name(name)
                     .map_err(|reason| self.invalid(&key, format!("{name:?}"), reason))?;
                 if !seen.insert(name) {
                     return Err(self.invalid(
                         key,
                         format!("{name:?}"),
-                        format!(
-                            "another [[{kind}]] has this name (a load's or support's name \
-                             defaults to its group: give `name`)"
-                        ),
+                        format!("another entry of {table} has this name{hint}"),
                     ));
                 }
             }

@@ -192,6 +192,15 @@ impl Case {
         t.chain(s).chain(h)
     }
 
+    /// The thermal entries' case-file keys (`temperature[0]`, `thermal_support[1]`,
+    /// `heat_source[0]`), in the order of [`Case::thermal_names`].
+    pub fn thermal_keys(&self) -> impl Iterator<Item = String> {
+        let t = (0..self.temperatures.len()).map(|i| format!("temperature[{i}]"));
+        let s = (0..self.thermal_supports.len()).map(|i| format!("thermal_support[{i}]"));
+        let h = (0..self.heat_sources.len()).map(|i| format!("heat_source[{i}]"));
+        t.chain(s).chain(h)
+    }
+
     /// The thermal entries' own `[steps]` factors with their case-file keys, in the order of
     /// [`Case::thermal_names`].
     fn thermal_factors(&self) -> impl Iterator<Item = (String, Option<&Vec<f64>>)> {
@@ -361,10 +370,11 @@ impl Case {
                 ));
             }
             spec.conductance().map_err(|(key, value, reason)| {
-                let key = if key.is_empty() {
-                    format!("contact[{i}].conductance")
+                // The table as a whole (keys that do not go together), or one of its values.
+                let (key, value) = if key.is_empty() {
+                    (format!("contact[{i}].conductance"), "{…}".to_string())
                 } else {
-                    format!("contact[{i}].conductance.{key}")
+                    (format!("contact[{i}].conductance.{key}"), value.to_string())
                 };
                 self.invalid(key, value, format!("{reason} (contact '{}')", c.name()))
             })?;
