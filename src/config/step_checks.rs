@@ -7,6 +7,9 @@ use std::collections::BTreeSet;
 
 use super::check::MAX_STEPS;
 use super::{Case, ControlKind, Leg, Motion, Role, StepSpec, Target, check_name};
+
+/// An entry's case-file key (`load[1]`, `temperature[0]`) and its name.
+type NamedEntry = (String, String);
 use crate::Result;
 
 /// Two multipliers that must meet (continuity between steps, a cycle that closes): equal up
@@ -84,11 +87,11 @@ impl Case {
         Ok(())
     }
 
-    /// Load, support, thermal-entry, amplitude and step names: safe, and unique within their
-    /// kind (the thermal entries — temperatures, thermal supports, heat sources — together:
-    /// they share a step's `thermal` table).
+    /// Load, support, thermal-entry, amplitude and step names (each with its entry's key, e.g.
+    /// `load[1]`): safe, and unique within their kind (the thermal entries — temperatures,
+    /// thermal supports, heat sources — together: they share a step's `thermal` table).
     fn check_history_names(&self) -> Result<()> {
-        let keyed = |kind: &str, names: Vec<String>| -> Vec<(String, String)> {
+        let keyed = |kind: &str, names: Vec<String>| -> Vec<NamedEntry> {
             let keys = (0..names.len()).map(|i| format!("{kind}[{i}]"));
             keys.zip(names).collect()
         };
@@ -101,13 +104,13 @@ impl Case {
         let steps = (0..self.analysis_steps.len())
             .map(|i| self.analysis_steps[i].name(i))
             .collect();
-        let thermal = self
+        let thermal: Vec<NamedEntry> = self
             .thermal_keys()
             .zip(self.thermal_names().map(|(name, _)| name.to_string()))
             .collect();
         // Names that default to the entry's group get a hint to give `name`.
         let defaulted = " (a name defaults to the entry's group: give `name`)";
-        let kinds: [(&str, Vec<(String, String)>, &str); 5] = [
+        let kinds = [
             ("[[load]]", loads, defaulted),
             ("[[support]]", keyed("support", supports), defaulted),
             (Role::Thermal.entries(), thermal, defaulted),
