@@ -86,16 +86,24 @@ impl Free {
         }
     }
 
-    /// Whether `x` lies within 1e-6 of the range (or of |x|, for an open side) of a bound.
+    /// Whether `x` lies within 1e-6 of the range (or of |x|, for an open side) of a bound — of
+    /// no more than the magnitude of x or of a nonzero bound, so that a bound far away on x's
+    /// scale (`max = 1e308`) does not pass for a near one.
     pub fn at_bound(&self, x: f64) -> bool {
         let width = if (self.max - self.min).is_finite() {
             self.max - self.min
         } else {
             x.abs().max(f64::MIN_POSITIVE)
         };
-        [self.min, self.max]
-            .iter()
-            .any(|b| b.is_finite() && (x - b).abs() <= 1e-6 * width)
+        [self.min, self.max].iter().any(|&b| {
+            // 0, or the smallest positive number standing for an excluded 0.
+            let scale = if b.abs() <= f64::MIN_POSITIVE {
+                width
+            } else {
+                width.min(x.abs().max(b.abs()))
+            };
+            b.is_finite() && (x - b).abs() <= 1e-6 * scale
+        })
     }
 }
 
@@ -329,6 +337,31 @@ fn free_parameter(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Near a bound means within 1e-6 of the range — and of x's magnitude when the bound is
+    /// not 0: `max = 1e308` is not near 0.49.
+    #[test]
+    fn a_bound_is_near_on_the_scale_of_the_range_and_of_x() {
+        let free = |min: f64, max: f64| Free {
+            min,
+            max,
+            scale: Scale::Linear,
+            ..free_parameter(
+                &crate::contact::rough::LAW.parameters[1],
+                1,
+                ParameterSpec::default(),
+                0.5,
+            )
+            .unwrap()
+        };
+        assert!(!free(0.05, 1e308).at_bound(0.489));
+        assert!(free(0.05, 1e308).at_bound(0.05 * (1.0 + 1e-9)));
+        assert!(free(0.05, 1.5).at_bound(1.5 - 1e-9));
+        // A zero bound (or the excluded zero of a positive parameter) on the range's scale.
+        assert!(free(0.0, 1.0).at_bound(1e-9));
+        assert!(free(f64::MIN_POSITIVE, 1.0).at_bound(1e-12));
+        assert!(!free(0.0, 1.0).at_bound(0.3));
+    }
 
     /// The range of a free parameter is the fit file's bounds within the law's table: beta of
     /// the rough joint lies in (0, 1], so `min = 0` becomes the smallest positive number and a
