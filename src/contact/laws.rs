@@ -197,13 +197,8 @@ pub fn shown(value: f64) -> String {
         return "(missing)".into();
     }
     // f64's Display writes 1e-300 (or the smallest positive double, a range's bound) in
-    // full: hundreds of digits.
-    let plain = value.to_string();
-    if plain.len() > 24 {
-        format!("{value:e}")
-    } else {
-        plain
-    }
+    // full: hundreds of digits, which messages write in exponent form.
+    crate::error::shorten_numbers(&value.to_string())
 }
 
 /// A law by its name (`"rough_joint"`); an unknown name lists the known ones.

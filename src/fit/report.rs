@@ -12,20 +12,19 @@ use crate::python;
 use crate::{Error, Result};
 
 /// The files a fit writes into its folder.
-const FIT_FILES: [&str; 5] = [
-    "fit.json",
-    "curves.csv",
-    "law.toml",
-    "fit.png",
-    "residuals.png",
-];
+const FIT_FILES: [&str; 5] = [FIT_JSON, CURVES, LAW, "fit.png", "residuals.png"];
+
+/// The fit's result, its curves and its paste-ready law line.
+const FIT_JSON: &str = "fit.json";
+const CURVES: &str = "curves.csv";
+const LAW: &str = "law.toml";
 
 /// Refuses ([`Error::OutputForeign`]) a folder where the fit would replace a file no fit
 /// wrote: a fit's file name is taken only in a folder whose `fit.json` is a fit's (an earlier
 /// fit, whose files the new one replaces). Called before the fit runs and again before it
 /// writes.
 pub fn check_folder(out: &Path) -> Result<()> {
-    let fit_json = out.join(FIT_FILES[0]);
+    let fit_json = out.join(FIT_JSON);
     let earlier_fit = std::fs::read_to_string(&fit_json)
         .ok()
         .and_then(|text| serde_json::from_str::<serde_json::Value>(&text).ok())
@@ -85,9 +84,9 @@ pub fn write(result: &FitResult, out: &Path, plot_too: bool) -> Result<String> {
     }
     let json = serde_json::to_string_pretty(result).map_err(|e| Error::External(e.to_string()))?;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
-    write_csv(&out.join("curves.csv"), &table)?;
-    write_atomically(&out.join("law.toml"), |w| writeln!(w, "{}", result.snippet))?;
-    write_atomically(&out.join("fit.json"), |w| w.write_all(json.as_bytes()))?;
+    write_csv(&out.join(CURVES), &table)?;
+    write_atomically(&out.join(LAW), |w| writeln!(w, "{}", result.snippet))?;
+    write_atomically(&out.join(FIT_JSON), |w| w.write_all(json.as_bytes()))?;
     Ok(if plot_too {
         plot(out)
     } else {

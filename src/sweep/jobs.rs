@@ -209,11 +209,16 @@ fn jobs_lines(dir: &str, n: usize, exe: &str, slurm: &Slurm) -> String {
 
 /// Writes `jobs.txt` (GNU parallel) and `array.sbatch` (Slurm) of a study with `n` runs;
 /// `study` and `exe` are the texts of [`study_path`] and [`job_path`], `slurm` is checked.
+/// The job files a plan writes into its study folder: one command per run, and the Slurm
+/// job array.
+pub(super) const JOBS: &str = "jobs.txt";
+pub(super) const ARRAY: &str = "array.sbatch";
+
 pub(super) fn write_jobs(study: &str, n: usize, exe: &str, slurm: &Slurm) -> Result<()> {
     let folder = Path::new(study);
     let (exe, dir) = (shell_quote(exe), shell_quote(study));
     let jobs = jobs_lines(&dir, n, &exe, slurm);
-    write_atomically(&folder.join("jobs.txt"), |w| w.write_all(jobs.as_bytes()))?;
+    write_atomically(&folder.join(JOBS), |w| w.write_all(jobs.as_bytes()))?;
     let partition = slurm
         .partition
         .as_ref()
@@ -244,9 +249,7 @@ pub(super) fn write_jobs(study: &str, n: usize, exe: &str, slurm: &Slurm) -> Res
         mem = slurm.memory,
         time = slurm.time,
     );
-    write_atomically(&folder.join("array.sbatch"), |w| {
-        w.write_all(script.as_bytes())
-    })
+    write_atomically(&folder.join(ARRAY), |w| w.write_all(script.as_bytes()))
 }
 
 #[cfg(test)]

@@ -124,7 +124,7 @@ pub struct RunEntry {
 impl Manifest {
     /// Reads `study/manifest.json`.
     pub fn read(study: &Path) -> Result<Self> {
-        let path = study.join("manifest.json");
+        let path = study.join(MANIFEST);
         let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
         let manifest: Self = serde_json::from_str(&text).map_err(|e| Error::Case {
             path: path.clone(),
@@ -250,15 +250,16 @@ pub fn plan(path: &Path, study: &Path, exe: &Path) -> Result<Manifest> {
     };
     let json =
         serde_json::to_string_pretty(&manifest).map_err(|e| Error::External(e.to_string()))?;
-    write_atomically(&study.join("manifest.json"), |w| {
-        w.write_all(json.as_bytes())
-    })?;
+    write_atomically(&study.join(MANIFEST), |w| w.write_all(json.as_bytes()))?;
     jobs::write_jobs(study_text, manifest.runs.len(), exe, &sweep.slurm)?;
     Ok(manifest)
 }
 
 /// The names a plan writes in its study folder (`runs` holds the runs' folders).
-const PLAN_FILES: [&str; 4] = ["manifest.json", "jobs.txt", "array.sbatch", "runs"];
+const PLAN_FILES: [&str; 4] = [MANIFEST, jobs::JOBS, jobs::ARRAY, "runs"];
+
+/// A study folder's plan: its runs and their values ([`Manifest`]).
+pub(super) const MANIFEST: &str = "manifest.json";
 
 /// Refuses ([`Error::OutputForeign`], before anything is written) a study folder whose
 /// files of a plan's names are not a sweep's: a `manifest.json` that is no sweep manifest,
@@ -276,10 +277,10 @@ fn check_study_folder(study: &Path) -> Result<()> {
     if !study.is_dir() {
         return Err(foreign("", "the study folder is a file"));
     }
-    if study.join(PLAN_FILES[0]).exists() {
+    if study.join(MANIFEST).exists() {
         return Manifest::read(study).map(drop).map_err(|_| {
             foreign(
-                PLAN_FILES[0],
+                MANIFEST,
                 "not the manifest of a sweep: move it away or choose another study folder",
             )
         });

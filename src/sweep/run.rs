@@ -60,7 +60,7 @@ pub fn run_task(study: &Path, k: usize, retry_failed: bool) -> Result<bool> {
         .runs
         .get(k)
         .ok_or_else(|| Error::InvalidParameter {
-            path: study.join("manifest.json"),
+            path: study.join(super::MANIFEST),
             key: "--task".into(),
             value: k.to_string(),
             reason: format!(
