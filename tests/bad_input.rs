@@ -1136,3 +1136,16 @@ fn conflicting_supports_are_named_by_their_names() {
         "{error}"
     );
 }
+
+/// An empty `kinematic` list is shown as a list, not as its length (a longer list than
+/// five is refused when the case is read).
+#[test]
+fn an_empty_kinematic_list_is_shown_as_a_list() {
+    let case = case_edit(
+        "material = { E = 1000.0, nu = 0.3 }",
+        "material = { E = 1000.0, nu = 0.3, yield_stress = 200.0, kinematic = [] }",
+    );
+    let (result, _dir) = run(&case, Some(PLATE_MSH.as_bytes()));
+    let error = result.unwrap_err().to_string();
+    assert!(error.contains("kinematic = []: give 1 to 5"), "{error}");
+}

@@ -119,31 +119,36 @@ pub struct Conductance {
 }
 
 impl ConductanceSpec {
-    /// The conductance, or what is wrong: (key below `conductance`, value, reason).
-    pub fn conductance(&self) -> std::result::Result<Conductance, (String, f64, String)> {
-        let (h0, exponent, gap) = match *self {
-            ConductanceSpec::Constant(h) => (h, 0.0, 0.0),
+    /// The conductance, or what is wrong: (the key's part below `conductance` as written,
+    /// such as `.h0`, or empty for the conductance as a whole; the value shown; the reason).
+    pub fn conductance(&self) -> std::result::Result<Conductance, (String, String, String)> {
+        let (h_key, h0, exponent, gap) = match *self {
+            ConductanceSpec::Constant(h) => ("", h, 0.0, 0.0),
             ConductanceSpec::Table(t) => match (t.h, t.h0, t.exponent) {
-                (Some(h), None, None) => (h, 0.0, t.gap.unwrap_or(0.0)),
-                (None, Some(h0), Some(n)) => (h0, n, t.gap.unwrap_or(0.0)),
+                (Some(h), None, None) => (".h", h, 0.0, t.gap.unwrap_or(0.0)),
+                (None, Some(h0), Some(n)) => (".h0", h0, n, t.gap.unwrap_or(0.0)),
                 _ => {
                     return Err((
                         String::new(),
-                        f64::NAN,
+                        "{…}".into(),
                         "give either `h` or both `h0` and `exponent`".into(),
                     ));
                 }
             },
         };
-        for (key, value) in [("h0", h0), ("exponent", exponent), ("gap", gap)] {
+        for (key, value) in [(h_key, h0), (".exponent", exponent), (".gap", gap)] {
             if !(value.is_finite() && value >= 0.0) {
-                return Err((key.into(), value, "must be finite and ≥ 0".into()));
+                return Err((
+                    key.into(),
+                    value.to_string(),
+                    "must be finite and ≥ 0".into(),
+                ));
             }
         }
         if h0 == 0.0 && gap == 0.0 {
             return Err((
-                "h0".into(),
-                h0,
+                h_key.into(),
+                h0.to_string(),
                 "a joint without conductance (h and gap both 0) carries no heat: omit \
                  `conductance`"
                     .into(),
@@ -370,13 +375,11 @@ impl Case {
                 ));
             }
             spec.conductance().map_err(|(key, value, reason)| {
-                // The table as a whole (keys that do not go together), or one of its values.
-                let (key, value) = if key.is_empty() {
-                    (format!("contact[{i}].conductance"), "{…}".to_string())
-                } else {
-                    (format!("contact[{i}].conductance.{key}"), value.to_string())
-                };
-                self.invalid(key, value, format!("{reason} (contact '{}')", c.name()))
+                self.invalid(
+                    format!("contact[{i}].conductance{key}"),
+                    value,
+                    format!("{reason} (contact '{}')", c.name()),
+                )
             })?;
         }
         Ok(())
@@ -476,11 +479,14 @@ mod tests {
                 .conductance()
                 .is_err()
         );
-        assert!(
-            table(None, Some(0.2), Some(-1.0), None)
-                .conductance()
-                .is_err()
-        );
-        assert!(ConductanceSpec::Constant(0.0).conductance().is_err());
+        // Each error names the key as written below `conductance` (empty for the number).
+        let key = |spec: ConductanceSpec| spec.conductance().unwrap_err().0;
+        assert_eq!(key(table(Some(0.1), Some(0.2), None, None)), "");
+        assert_eq!(key(table(None, Some(0.2), Some(-1.0), None)), ".exponent");
+        assert_eq!(key(table(Some(-1.0), None, None, None)), ".h");
+        assert_eq!(key(table(None, Some(-1.0), Some(1.0), None)), ".h0");
+        assert_eq!(key(table(Some(1.0), None, None, Some(f64::NAN))), ".gap");
+        assert_eq!(key(ConductanceSpec::Constant(-1.0)), "");
+        assert_eq!(key(ConductanceSpec::Constant(0.0)), "");
     }
 }
