@@ -169,6 +169,7 @@ pub fn run_steps_from(
                     }
                     // Grow the sub-increment again after a success.
                     state.size *= 2.0;
+                    state.halvings = state.halvings.saturating_sub(1);
                     let progress = Progress {
                         state: state.clone(),
                         stats: &stats,
@@ -198,7 +199,7 @@ pub fn run_steps_from(
                     if let Ok(log) = &outcome {
                         stats.add(log);
                     }
-                    if state.cutbacks == settings.max_cutbacks || (singular && constant_tangent) {
+                    if state.halvings == settings.max_cutbacks || (singular && constant_tangent) {
                         let failure = diagnose(
                             model,
                             &solution,
@@ -212,6 +213,7 @@ pub fn run_steps_from(
                                 reached: schedule.load_point(state.time, target),
                                 target: schedule.load_point(target, target),
                                 cutbacks: state.cutbacks,
+                                halvings: state.halvings,
                                 attempts,
                                 ..NoConvergence::default()
                             },
@@ -229,6 +231,7 @@ pub fn run_steps_from(
                         return Err(step_failure(model, failure, &state.stiffness));
                     }
                     state.cutbacks += 1;
+                    state.halvings += 1;
                     stats.cutbacks += 1;
                     solution.u.copy_from_slice(&converged_u);
                     state.size = 0.5 * (trial_time - state.time);
