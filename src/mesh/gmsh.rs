@@ -189,7 +189,8 @@ fn too_large(geo: &Path, what: String, size: Option<f64>) -> Error {
 /// fixed transfinite counts does not grow at all), still exceeds the limit. The probes cost
 /// a small fraction of the mesh they predict: a 10⁻⁶ factor on a small model is refused
 /// after a few probes of at most a few thousand elements. A probe gmsh cannot make (a script
-/// written for fine sizes) is skipped.
+/// written for fine sizes) is skipped, unless it ran out of memory or time: the mesh at
+/// `size` would too, and that failure is the error.
 pub fn estimate_elements(
     geo: &Path,
     size: f64,
@@ -204,10 +205,28 @@ pub fn estimate_elements(
         let probe = size * PROBE_STEP.powi(k);
         // A script may not mesh at a coarse factor (a count that rounds to zero, a division
         // by it): such a probe tells nothing, and only the mesh at `size` itself must succeed.
-        let meshed = run(gmsh(geo, probe, parameters, &out), geo, &out);
-        let count = match meshed.and_then(|()| element_count(&out)) {
+        let meshed = attempt(gmsh(geo, probe, parameters, &out), geo, &out);
+        let count = match meshed {
+            Ok(()) => element_count(&out),
+            Err(Failure {
+                error: stop @ Error::Interrupted { .. },
+                ..
+            }) => return Err(stop),
+            // A finer probe, and the mesh itself, would need more memory or time still.
+            Err(Failure {
+                error,
+                exhausted: true,
+            }) => {
+                return Err(Error::External(format!(
+                    "{error}\n(meshing a coarser probe at size factor {probe}, to estimate \
+                     the element count at mesh.size = {size}: the mesh itself would need \
+                     more; lower the script's counts or raise mesh.size)"
+                )));
+            }
+            Err(Failure { error, .. }) => Err(error),
+        };
+        let count = match count {
             Ok(count) => count,
-            Err(stop @ Error::Interrupted { .. }) => return Err(stop),
             Err(_) => {
                 previous = None;
                 continue;
@@ -295,30 +314,56 @@ fn gmsh(geo: &Path, size: f64, parameters: &[(String, f64)], out: &Path) -> Comm
 /// Runs gmsh (`cmd`, meshing `geo` into `out`); its failure is an error with gmsh's own
 /// `Error` lines, or, when it printed none (killed, crashed), how it ended and its last
 /// lines of output.
-fn run(mut cmd: Command, geo: &Path, out: &Path) -> Result<()> {
+fn run(cmd: Command, geo: &Path, out: &Path) -> Result<()> {
+    attempt(cmd, geo, out).map_err(|failure| failure.error)
+}
+
+/// A failed gmsh run: its error, and whether gmsh ran out of memory or time, which a finer
+/// mesh of the same script would too.
+struct Failure {
+    error: Error,
+    exhausted: bool,
+}
+
+/// [`run`], telling a run out of memory or time apart.
+fn attempt(mut cmd: Command, geo: &Path, out: &Path) -> std::result::Result<(), Failure> {
+    let failure = |error, exhausted| Failure { error, exhausted };
     let child = cmd
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .map_err(|e| {
-            Error::External(format!(
-                "cannot run gmsh ({e}); install it with `apt-get install gmsh` or run `make deps`"
-            ))
+            failure(
+                Error::External(format!(
+                    "cannot run gmsh ({e}); install it with `apt-get install gmsh` or run \
+                     `make deps`"
+                )),
+                false,
+            )
         })?;
     let (status, log) = wait_with_timeout(child, GMSH_TIMEOUT).map_err(|e| match e {
         // Ctrl-C or SIGTERM while gmsh runs: it is stopped, and the run with it.
-        Some(e) if e.kind() == std::io::ErrorKind::Interrupted => Error::Interrupted {
-            step: 0,
-            dir: out.parent().unwrap_or(Path::new(".")).to_path_buf(),
-            resume: None,
-        },
-        Some(e) => Error::External(format!("gmsh on {}: {e}", geo.display())),
-        None => Error::External(format!(
-            "gmsh did not finish meshing {} within {} s and was stopped; check the script \
-             (and its parameters) in the gmsh GUI",
-            geo.display(),
-            GMSH_TIMEOUT.as_secs()
-        )),
+        Some(e) if e.kind() == std::io::ErrorKind::Interrupted => failure(
+            Error::Interrupted {
+                step: 0,
+                dir: out.parent().unwrap_or(Path::new(".")).to_path_buf(),
+                resume: None,
+            },
+            false,
+        ),
+        Some(e) => failure(
+            Error::External(format!("gmsh on {}: {e}", geo.display())),
+            false,
+        ),
+        None => failure(
+            Error::External(format!(
+                "gmsh did not finish meshing {} within {} s and was stopped; check the script \
+                 (and its parameters) in the gmsh GUI",
+                geo.display(),
+                GMSH_TIMEOUT.as_secs()
+            )),
+            true,
+        ),
     })?;
     let mut errors: Vec<&str> = Vec::new();
     for line in log.lines().map(str::trim_end) {
@@ -345,10 +390,25 @@ fn run(mut cmd: Command, geo: &Path, out: &Path) -> Result<()> {
             format!("{ended}; its last output:\n{tail}")
         }
     };
-    Err(Error::External(format!(
-        "gmsh failed on {}:\n{reason}",
-        geo.display()
-    )))
+    Err(failure(
+        Error::External(format!("gmsh failed on {}:\n{reason}", geo.display())),
+        out_of_memory(status, &log),
+    ))
+}
+
+/// Whether gmsh ended for want of memory: killed by SIGKILL (the kernel's out-of-memory
+/// killer), or aborted on a failed allocation (its address space is capped).
+fn out_of_memory(status: ExitStatus, log: &str) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::ExitStatusExt;
+        match status.signal() {
+            Some(9) => return true,
+            Some(6) => return log.contains("std::bad_alloc"),
+            _ => {}
+        }
+    }
+    false
 }
 
 /// How a failed gmsh ended: its exit code, or the signal that killed it (SIGKILL is what the
@@ -447,4 +507,26 @@ fn wait_with_timeout(
     };
     let log = stderr.join().unwrap_or_default() + &stdout.join().unwrap_or_default();
     Ok((status, log))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::os::unix::process::ExitStatusExt;
+
+    /// The wait status of a process killed by `signal`.
+    fn killed(signal: i32) -> ExitStatus {
+        ExitStatus::from_raw(signal)
+    }
+
+    #[test]
+    fn only_a_failed_allocation_or_the_kernels_kill_is_out_of_memory() {
+        let bad_alloc = "terminate called after throwing an instance of 'std::bad_alloc'";
+        assert!(out_of_memory(killed(9), ""));
+        assert!(out_of_memory(killed(6), bad_alloc));
+        // an assertion of gmsh's own, a crash, an error exit: a finer mesh may still succeed
+        assert!(!out_of_memory(killed(6), "Assertion `n > 0' failed."));
+        assert!(!out_of_memory(killed(11), bad_alloc));
+        assert!(!out_of_memory(ExitStatus::from_raw(1 << 8), bad_alloc));
+    }
 }
