@@ -302,6 +302,19 @@ fn symbolic_links_are_never_written_through() {
     assert_eq!(code, Some(0), "{text}");
     assert_eq!(read(&outside), "keep");
     assert!(!out.join("log.txt").symlink_metadata().unwrap().is_symlink());
+    // --resume appends to the log and the growing tables: a link in their place is refused
+    // before anything is written (exit 2), as is one in place of a file it replaces.
+    for name in ["log.txt", "history.csv", "summary.json"] {
+        let kept = out.join("kept");
+        std::fs::rename(out.join(name), &kept).unwrap();
+        std::os::unix::fs::symlink(&outside, out.join(name)).unwrap();
+        let (code, text) = run(dir.path(), &case, &out, &["--resume"]);
+        assert_eq!(code, Some(2), "{name}: {text}");
+        assert!(text.contains("symbolic link"), "{text}");
+        assert_eq!(read(&outside), "keep");
+        std::fs::remove_file(out.join(name)).unwrap();
+        std::fs::rename(&kept, out.join(name)).unwrap();
+    }
 
     let geo_out = dir.path().join("geo_out");
     std::fs::create_dir(&geo_out).unwrap();
@@ -315,6 +328,41 @@ fn symbolic_links_are_never_written_through() {
     let (code, text) = run(dir.path(), &geo_case, &geo_out, &["--force"]);
     assert_eq!(code, Some(2), "{text}");
     assert!(!target.exists(), "gmsh wrote through the dangling link");
+}
+
+/// A snapshot of an output folder made of hard links (`cp -al`, `rsync --link-dest`) is not
+/// changed by a `--resume` of the folder, which cuts back and appends to its growing files in
+/// place: they get copies of their own first.
+#[cfg(unix)]
+#[test]
+fn resume_leaves_a_hard_linked_snapshot_as_it_was() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let case = block_case(dir.path(), 2);
+    let (code, text) = run(dir.path(), &case, &out, &[]);
+    assert_eq!(code, Some(0), "{text}");
+    let snap = dir.path().join("snap");
+    std::fs::create_dir(&snap).unwrap();
+    let names = common::file_names(&out);
+    let before: Vec<Vec<u8>> = names
+        .iter()
+        .map(|name| {
+            std::fs::hard_link(out.join(name), snap.join(name)).unwrap();
+            std::fs::read(snap.join(name)).unwrap()
+        })
+        .collect();
+    let (code, text) = run(dir.path(), &case, &out, &["--resume"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert_ne!(
+        read(&out.join("log.txt")).len(),
+        before[names.iter().position(|n| n == "log.txt").unwrap()].len()
+    );
+    for (name, bytes) in names.iter().zip(&before) {
+        assert!(
+            std::fs::read(snap.join(name)).unwrap() == *bytes,
+            "{name} changed"
+        );
+    }
 }
 
 /// A relative `[output] dir` is relative to the case file, whatever the working directory;

@@ -256,6 +256,15 @@ impl OutputFolder {
                      or choose another output folder",
                 ));
             }
+            // Only `--force` removes a link in its place (a link is never written through).
+            if plan.writes(name) && mode != OutputMode::Force && is_link(&path) {
+                return Err(foreign(
+                    dir,
+                    &path,
+                    "it is a symbolic link, and a run never writes through one: remove it, \
+                     or run with --force, which removes the link (not what it points to)",
+                ));
+            }
             // The manifest itself was checked by `read_manifest`.
             let unlisted = name != MANIFEST && !listed.contains(name);
             if plan.writes(name) && unlisted {
@@ -310,6 +319,9 @@ impl OutputFolder {
             OutputMode::Fresh => true,
             OutputMode::Resume if resumable => {
                 remove(&temporaries)?;
+                for name in &ours {
+                    unshare(&dir.join(name))?;
+                }
                 false
             }
             OutputMode::Force | OutputMode::Resume => {
@@ -367,10 +379,7 @@ impl OutputFolder {
         if manifest.listed.contains(&name) {
             return Ok(path);
         }
-        if path
-            .symlink_metadata()
-            .is_ok_and(|m| m.file_type().is_symlink())
-        {
+        if is_link(&path) {
             return Err(foreign(
                 &self.dir,
                 &path,
@@ -441,6 +450,27 @@ fn foreign(dir: &Path, file: &Path, reason: &str) -> Error {
         file: file.to_path_buf(),
         reason: reason.to_string(),
     }
+}
+
+/// Whether `path` is a symbolic link (not followed).
+fn is_link(path: &Path) -> bool {
+    path.symlink_metadata()
+        .is_ok_and(|m| m.file_type().is_symlink())
+}
+
+/// Gives the file `path` a copy of its own when another name shares it (a hard link, such as
+/// a snapshot made with `cp -al` or `rsync --link-dest`): a resumed run cuts back and appends
+/// to its growing files in place, which must not change the snapshot.
+fn unshare(path: &Path) -> Result<()> {
+    use std::os::unix::fs::MetadataExt;
+    let shared = path
+        .symlink_metadata()
+        .is_ok_and(|m| m.is_file() && m.nlink() > 1);
+    if !shared {
+        return Ok(());
+    }
+    let mut source = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    crate::output::atomic::write_atomically(path, |w| std::io::copy(&mut source, w).map(drop))
 }
 
 /// `path` with symbolic links resolved, if it exists.
