@@ -300,7 +300,19 @@ fn converge(
     edit: impl Fn(String) -> String,
     args: &[&str],
 ) -> (i32, String, tempfile::TempDir) {
+    converge_into(study, edit, args, |_| {})
+}
+
+/// [`converge`] with `prepare` called on the temporary folder first (the study writes into
+/// its `out`).
+fn converge_into(
+    study: &str,
+    edit: impl Fn(String) -> String,
+    args: &[&str],
+    prepare: impl Fn(&Path),
+) -> (i32, String, tempfile::TempDir) {
     let dir = tempfile::tempdir().unwrap();
+    prepare(dir.path());
     let text = std::fs::read_to_string(repo(study)).unwrap();
     let text = text.replace("\"../../geo/", &format!("\"{}/", repo("geo").display()));
     let case = dir.path().join("study.toml");
@@ -410,4 +422,58 @@ fn a_case_with_a_fixed_mesh_cannot_be_refined() {
     );
     assert_eq!(code, 2, "{text}");
     assert!(text.contains("no contact pair 'fit'"), "{text}");
+}
+
+/// A level's folder is taken over as a run's with `--force`: a link in place of the folder
+/// (which would send the level elsewhere) or a file of the user's under a run file's name is
+/// refused before anything is meshed (exit code 2), and left as it was.
+#[cfg(unix)]
+#[test]
+fn a_study_never_writes_through_a_link_nor_over_a_users_file() {
+    let (code, text, dir) = converge_into(
+        "pipelines/convergence/thick_cylinder.toml",
+        |t| t,
+        &["--levels", "3"],
+        |dir| {
+            std::fs::create_dir_all(dir.join("elsewhere")).unwrap();
+            std::fs::write(dir.join("elsewhere/summary.json"), "mine").unwrap();
+            std::fs::create_dir_all(dir.join("out")).unwrap();
+            std::os::unix::fs::symlink(dir.join("elsewhere"), dir.join("out/level_0")).unwrap();
+        },
+    );
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("level_0") && text.contains("symbolic link"), "{text}");
+    assert_eq!(common::file_names(&dir.path().join("elsewhere")), ["summary.json"]);
+    assert_eq!(read(&dir.path().join("elsewhere/summary.json")), "mine");
+    let (code, text, dir) = converge_into(
+        "pipelines/convergence/thick_cylinder.toml",
+        |t| t,
+        &["--levels", "3"],
+        |dir| {
+            std::fs::create_dir_all(dir.join("out/level_1")).unwrap();
+            std::fs::write(dir.join("out/level_1/summary.json"), "mine").unwrap();
+        },
+    );
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("summary.json") && text.contains("run_files.txt"), "{text}");
+    assert_eq!(read(&dir.path().join("out/level_1/summary.json")), "mine");
+    assert!(!dir.path().join("out/level_2/mesh.msh").exists(), "a level was meshed");
+}
+
+/// Two levels whose meshes are the same (the script's counts round to the same integers at a
+/// small ratio) say nothing about convergence: the study is refused (exit code 2), not
+/// reported converged on a difference of zero.
+#[test]
+fn levels_with_the_same_mesh_are_refused() {
+    let (code, text, _dir) = converge(
+        "pipelines/convergence/thick_cylinder.toml",
+        |t| t,
+        &["--levels", "3", "--ratio", "1.01"],
+    );
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("the mesh did not get finer"), "{text}");
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }

@@ -61,7 +61,10 @@ use crate::config::{Case, QuantitySpec};
 use crate::mesh::Mesh;
 use crate::model::ModelSpec;
 use crate::post::quantities::evaluate;
-use crate::run::{self, folder::OutputFolder};
+use crate::run::{
+    self,
+    folder::{OutputFolder, OutputMode},
+};
 use crate::{Error, Result};
 use report::{plot, write_table};
 use schedule::Gate;
@@ -127,8 +130,13 @@ pub fn run(case: &Case, options: &Options) -> Result<Report> {
         ));
     }
     std::fs::create_dir_all(&options.out).map_err(|e| Error::io(&options.out, e))?;
-
     let n = options.levels;
+    // Every level's folder is taken over before any level is meshed, as a run takes over
+    // its folder with --force: a refused one leaves the study as it was.
+    let mut folders: Vec<Option<OutputFolder>> = (0..n)
+        .map(|k| level_folder(case, options, k).map(Some))
+        .collect::<Result<_>>()?;
+
     let jobs = options
         .jobs
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
@@ -143,17 +151,25 @@ pub fn run(case: &Case, options: &Options) -> Result<Report> {
         results.lock().expect("results")[k] = Some(result);
     };
     rayon::in_place_scope(|scope| {
+        let mut finer: Option<(usize, usize)> = None;
         for k in (0..n).rev() {
             if cancel.load(Ordering::Relaxed) {
                 break;
             }
-            let meshed = match mesh_level(case, options, k) {
+            let folder = folders[k].take().expect("each level's folder is used once");
+            let meshed = match mesh_level(case, options, k, folder) {
                 Ok(meshed) => meshed,
                 Err(e) => {
                     finish(k, Err(e));
                     break;
                 }
             };
+            let nodes = meshed.mesh.nodes.len();
+            if let Some((finer_nodes, finer_k)) = finer.filter(|&(f, _)| nodes >= f) {
+                finish(k, Err(err(same_mesh(options, k, finer_k, nodes, finer_nodes))));
+                break;
+            }
+            finer = Some((nodes, k));
             let estimate = BYTES_PER_UNKNOWN * 2 * meshed.mesh.nodes.len() as u64;
             let permit = gate.acquire(k, estimate);
             if cancel.load(Ordering::Relaxed) {
@@ -248,8 +264,38 @@ struct Meshed {
     mesh_time: run::MeshTime,
 }
 
-/// Meshes level `k` into `level_k/`.
-fn mesh_level(case: &Case, options: &Options, k: usize) -> Result<Meshed> {
+/// Level `k`'s folder `level_k/`, taken over as a run's with `--force`: only the files an
+/// earlier study's run listed are removed, a file of the user's under a run file's name or a
+/// symbolic link in a run file's place is refused, and the folder itself must not be a link
+/// (the level would be written elsewhere).
+fn level_folder(case: &Case, options: &Options, k: usize) -> Result<OutputFolder> {
+    let dir = options.out.join(format!("level_{k}"));
+    if dir.symlink_metadata().is_ok_and(|m| m.file_type().is_symlink()) {
+        return Err(Error::OutputForeign {
+            dir: options.out.clone(),
+            file: dir,
+            reason: "a level's folder is a symbolic link, and a study never writes through \
+                     one: remove it or choose another study folder"
+                .into(),
+        });
+    }
+    OutputFolder::open(&dir, OutputMode::Force, &run::folder_plan(case))
+}
+
+/// Why levels `k` and `finer_k` cannot both be in the study: level `k`'s mesh has no fewer
+/// nodes than the finer level's (the script's counts did not follow the size factor).
+fn same_mesh(options: &Options, k: usize, finer_k: usize, nodes: usize, finer: usize) -> String {
+    format!(
+        "level {k} has {nodes} nodes and the finer level {finer_k} {finer}: the mesh did not \
+         get finer between them, so their difference says nothing about convergence (a script \
+         whose counts round to the same integer at --ratio {}, or fixed counts); use a larger \
+         --ratio, or make the script's counts follow the size factor",
+        options.ratio
+    )
+}
+
+/// Meshes level `k` into its `folder`.
+fn mesh_level(case: &Case, options: &Options, k: usize, folder: OutputFolder) -> Result<Meshed> {
     let mut case = case.clone();
     case.mesh.size = level_size(&case, options.ratio, k);
     // The study measures discretisation error, which the engineering convergence criteria
@@ -257,9 +303,7 @@ fn mesh_level(case: &Case, options: &Options, k: usize) -> Result<Meshed> {
     // the relative-norm criteria as well (the case's `force_tolerance`, else 1e-8), which is
     // the analysis' noise floor.
     case.solver.relative_norms = true;
-    let dir = options.out.join(format!("level_{k}"));
     let spec = ModelSpec::new(&case)?; // bad parameters fail before gmsh runs
-    let folder = OutputFolder::scratch(&dir)?;
     let (mesh, mesh_time) = run::mesh_case(&case, &folder)?;
     Ok(Meshed {
         level: k,
