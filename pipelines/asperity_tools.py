@@ -19,6 +19,7 @@ import json
 import os
 import subprocess
 import sys
+import tempfile
 import tomllib
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -251,6 +252,22 @@ def body_points(grid, body: str) -> np.ndarray:
     index = list(grid.field_data["body_names"]).index(body)
     cells = np.flatnonzero(np.asarray(grid.cell_data["body"]) == index)
     return np.unique(grid.extract_cells(cells).point_data["vtkOriginalPointIds"])
+
+
+def save_figure(fig, path: Path, dpi: int = 120) -> None:
+    """Saves `fig` as the PNG `path` through a temporary file in its folder renamed onto it,
+    as asperity writes its files: a symbolic link of that name is replaced, never written
+    through, and no half-written PNG is left behind."""
+    path = Path(path)
+    fd, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            fig.savefig(f, format="png", dpi=dpi)
+        os.chmod(temporary, 0o644)
+        os.replace(temporary, path)
+    except BaseException:
+        os.unlink(temporary)
+        raise
 
 
 def write_report(path: Path, title: str, sections: list[tuple[str, str]]) -> None:

@@ -19,6 +19,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from asperity_tools import save_figure  # noqa: E402
 
 
 def number(text: str) -> float | None:
@@ -76,7 +77,7 @@ def main() -> None:
         ax.legend(fontsize=7)
     fig.tight_layout()
     path = args.out / "convergence.png"
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path)
     plt.close(fig)
     print(f"wrote {path}")
 

@@ -18,7 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pyvista as pv  # noqa: E402
-from asperity_tools import read_step  # noqa: E402
+from asperity_tools import read_step, save_figure  # noqa: E402
 
 pv.OFF_SCREEN = True
 
@@ -66,7 +66,7 @@ def reaction_plot(out: Path) -> Path:
     ax.legend()
     fig.tight_layout()
     path = out / "reactions.png"
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path)
     plt.close(fig)
     return path
 
@@ -88,7 +88,7 @@ def contact_plots(out: Path) -> list[Path]:
         ax.legend()
         fig.tight_layout()
         path = out / f"{pair}.png"
-        fig.savefig(path, dpi=120)
+        save_figure(fig, path)
         plt.close(fig)
         paths.append(path)
     return paths

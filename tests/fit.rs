@@ -697,3 +697,38 @@ fn a_fit_never_overwrites_files_no_fit_wrote() {
     .unwrap();
     asperity::fit::check_folder(out).unwrap();
 }
+
+/// The plots a fit makes (`fit.png`, `residuals.png`, by `pipelines/fit/plot_fit.py`) replace
+/// a symbolic link of their name in the folder of an earlier fit, never write through it.
+#[cfg(unix)]
+#[test]
+fn a_fits_plots_never_write_through_a_link() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    let tests = write_curves(d, &[10.0, 30.0], 0.0, &mut rng, "");
+    std::fs::write(d.join("fit.toml"), format!("{FREE}\n{tests}")).unwrap();
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let run = || {
+        Command::new(env!("CARGO_BIN_EXE_asperity"))
+            .args(["fit", "fit.toml", "--out", "out"])
+            .env("ASPERITY_PIPELINES", repo.join("pipelines"))
+            .current_dir(d)
+            .output()
+            .unwrap()
+    };
+    let first = run();
+    assert!(d.join("out/fit.json").is_file(), "{first:?}");
+    let outside = d.join("precious.txt");
+    std::fs::write(&outside, "keep").unwrap();
+    let _ = std::fs::remove_file(d.join("out/fit.png"));
+    std::os::unix::fs::symlink(&outside, d.join("out/fit.png")).unwrap();
+    let second = run();
+    assert!(d.join("out/fit.json").is_file(), "{second:?}");
+    assert_eq!(std::fs::read_to_string(&outside).unwrap(), "keep");
+    // With the repository's Python environment (`make test` makes it) the plot was made.
+    if repo.join(".venv/bin/python").is_file() {
+        let png = d.join("out/fit.png").symlink_metadata().unwrap();
+        assert!(png.is_file(), "{second:?}");
+    }
+}

@@ -13,6 +13,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
+from asperity_tools import save_figure  # noqa: E402
+
 AXES = {  # (x label, y label) of each test kind, in asperity's units
     "normal": ("closure [mm]", "pressure [MPa]"),
     "tangential": ("tangential displacement [mm]", "shear stress [MPa]"),
@@ -49,7 +52,7 @@ def main(out):
     status = "" if result["identifiable"] else " (NOT identifiable)"
     fig.suptitle(f"{result['law']}: chi2 = {result['chi_square']:.4g} over {result['points']} points{status}")
     fig.tight_layout()
-    fig.savefig(out / "fit.png", dpi=120)
+    save_figure(fig, out / "fit.png")
     fig, axes = plt.subplots(1, n, figsize=(4.5 * n, 3.5), squeeze=False)
     for ax, (label, t) in zip(axes[0], tests.items()):
         ax.axhline(0, color="k", lw=0.8)
@@ -57,7 +60,7 @@ def main(out):
         ax.set(xlabel=AXES.get(kind(label), ("x",))[0], ylabel="(fitted - measured) / sigma",
                title=label.split(" (")[0])
     fig.tight_layout()
-    fig.savefig(out / "residuals.png", dpi=120)
+    save_figure(fig, out / "residuals.png")
 
 
 if __name__ == "__main__":

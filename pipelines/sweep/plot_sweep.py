@@ -14,6 +14,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
+from asperity_tools import save_figure  # noqa: E402
+
 
 def number(s):
     try:
@@ -37,7 +40,7 @@ def main(study):
             ax.set(xlabel=key, ylabel=q)
         fig.suptitle(f"{q} ({len(rows)} converged runs of {len(manifest['runs'])})")
         fig.tight_layout()
-        fig.savefig(study / f"{q}.png", dpi=120)
+        save_figure(fig, study / f"{q}.png")
         plt.close(fig)
 
 
