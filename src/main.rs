@@ -162,7 +162,9 @@ enum Command {
     /// Print the man page (roff) on standard output, or with --out write asperity.1 and one
     /// page per subcommand (asperity-run.1, ...) into DIR.
     Man {
-        /// Folder for the pages (created if missing), e.g. /usr/local/share/man/man1.
+        /// Folder for the pages (created if missing), e.g. /usr/local/share/man/man1. Earlier
+        /// pages of asperity's are replaced; a file of another origin (or a symbolic link)
+        /// under a page's name is refused before any page is written.
         #[arg(long)]
         out: Option<PathBuf>,
     },
@@ -263,6 +265,20 @@ fn init_threads(threads: Option<u16>) -> asperity::Result<()> {
             path: PathBuf::from("--threads"),
             message: format!("cannot start {n} threads: {e}"),
         })
+}
+
+/// The man page of `command` and of each of its subcommands (not hidden), as
+/// `clap_mangen::generate_to` names them (`asperity.1`, `asperity-run.1`, ...), in memory.
+fn man_pages(command: clap::Command) -> std::io::Result<Vec<(String, Vec<u8>)>> {
+    let mut pages = Vec::new();
+    for sub in command.get_subcommands().filter(|s| !s.is_hide_set()) {
+        pages.extend(man_pages(sub.clone())?);
+    }
+    let man = clap_mangen::Man::new(command);
+    let mut page = Vec::new();
+    man.render(&mut page)?;
+    pages.push((man.get_filename(), page));
+    Ok(pages)
 }
 
 /// `println!` for the command's results on standard output: when the reader has gone (a
@@ -532,9 +548,14 @@ fn execute(command: Command, log_file: &LogFile) -> asperity::Result<()> {
             say!("{}", String::from_utf8_lossy(&page).trim_end());
         }
         Command::Man { out: Some(dir) } => {
-            std::fs::create_dir_all(&dir).map_err(|e| asperity::Error::io(&dir, e))?;
-            let command = <Cli as clap::CommandFactory>::command().name("asperity");
-            clap_mangen::generate_to(command, &dir).map_err(|e| asperity::Error::io(&dir, e))?;
+            let mut command = <Cli as clap::CommandFactory>::command()
+                .name("asperity")
+                .disable_help_subcommand(true);
+            command.build();
+            let pages = man_pages(command).map_err(|e| asperity::Error::io("man page", e))?;
+            // An earlier version of a page (its title line names asperity) is replaced.
+            let ours = |head: &[u8]| String::from_utf8_lossy(head).contains("\n.TH asperity");
+            asperity::output::generated::write_generated(&dir, &pages, ours)?;
             say!("man pages written to {}", dir.display());
         }
     }

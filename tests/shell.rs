@@ -56,6 +56,31 @@ fn the_man_page_is_roff_with_every_subcommand() {
         let text = std::fs::read_to_string(out.join(page)).unwrap();
         assert!(text.starts_with(".ie") || text.contains(".TH"), "{page}");
     }
+    // Written again over the earlier pages; a page of another origin, or a link in a page's
+    // place, is refused (exit code 2) and left as it was.
+    asperity(&["man", "--out", out.to_str().unwrap()]);
+    std::fs::write(out.join("asperity-run.1"), "my notes").unwrap();
+    let refused = || {
+        Command::new(env!("CARGO_BIN_EXE_asperity"))
+            .args(["man", "--out", out.to_str().unwrap()])
+            .output()
+            .unwrap()
+    };
+    assert_eq!(refused().status.code(), Some(2));
+    assert_eq!(read(&out.join("asperity-run.1")), "my notes");
+    #[cfg(unix)]
+    {
+        let outside = dir.path().join("outside.txt");
+        std::fs::write(&outside, "keep").unwrap();
+        std::fs::remove_file(out.join("asperity-run.1")).unwrap();
+        std::os::unix::fs::symlink(&outside, out.join("asperity-run.1")).unwrap();
+        assert_eq!(refused().status.code(), Some(2));
+        assert_eq!(read(&outside), "keep");
+    }
+}
+
+fn read(path: &std::path::Path) -> String {
+    std::fs::read_to_string(path).unwrap()
 }
 
 /// The exit status paragraph of `--help` and the man page names every code of the guide's

@@ -10,6 +10,7 @@
 pub mod append;
 pub(crate) mod atomic;
 pub mod csv;
+pub mod generated;
 pub mod paths;
 pub mod pvd;
 pub mod restart;
