@@ -311,6 +311,33 @@ fn a_plan_never_overwrites_what_no_sweep_wrote() {
     });
     assert!(sweep::plan(&bad, &study, &exe()).is_err());
     assert!(!study.exists(), "a refused plan made its folder");
+    // A run's folder linked elsewhere is refused when the study is planned again, and what
+    // the link points to is left as it was.
+    #[cfg(unix)]
+    {
+        let path = sweep_file(dir.path(), |t| t);
+        let study = dir.path().join("linked");
+        sweep::plan(&path, &study, &exe()).unwrap();
+        let other = dir.path().join("other");
+        std::fs::create_dir(&other).unwrap();
+        std::fs::write(other.join("case.toml"), "mine").unwrap();
+        std::fs::remove_dir_all(study.join("runs/0001")).unwrap();
+        std::os::unix::fs::symlink(&other, study.join("runs/0001")).unwrap();
+        match sweep::plan(&path, &study, &exe()) {
+            Err(Error::OutputForeign { file, .. }) => assert_eq!(file, study.join("runs/0001")),
+            other => panic!("expected a refusal, got {other:?}"),
+        }
+        assert_eq!(
+            std::fs::read_to_string(other.join("case.toml")).unwrap(),
+            "mine"
+        );
+        // Nor does a run write through it.
+        match sweep::run_task(&study, 1, false) {
+            Err(Error::OutputForeign { file, .. }) => assert_eq!(file, study.join("runs/0001")),
+            other => panic!("expected a refusal, got {other:?}"),
+        }
+        assert_eq!(std::fs::read_dir(&other).unwrap().count(), 1);
+    }
 }
 
 // ---- Hostile inputs: values and paths that reach generated job files and file names ----

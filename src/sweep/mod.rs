@@ -223,7 +223,7 @@ pub fn plan(path: &Path, study: &Path, exe: &Path) -> Result<Manifest> {
         })?;
         cases.push((RunEntry { id, dir, values }, text));
     }
-    check_study_folder(study)?;
+    check_study_folder(study, cases.iter().map(|(run, _)| run.dir.as_path()))?;
     std::fs::create_dir_all(study).map_err(|e| Error::io(study, e))?;
     let study = study.canonicalize().map_err(|e| Error::io(study, e))?;
     // Once more after symbolic links are resolved: they name the folder in the job files.
@@ -265,15 +265,33 @@ pub(super) const MANIFEST: &str = "manifest.json";
 /// files of a plan's names are not a sweep's: a `manifest.json` that is no sweep manifest,
 /// or `jobs.txt`, `array.sbatch` or `runs` without one. A folder holding a sweep's plan may
 /// be planned again: its runs whose case changes are run again ([`run::run_task`]).
-fn check_study_folder(study: &Path) -> Result<()> {
+fn check_study_folder<'a>(study: &Path, runs: impl Iterator<Item = &'a Path>) -> Result<()> {
     if !study.exists() {
         return Ok(());
     }
-    let foreign = |file: &str, reason: &str| Error::OutputForeign {
+    let foreign = |file: &Path, reason: &str| Error::OutputForeign {
         dir: study.to_path_buf(),
         file: study.join(file),
         reason: reason.to_string(),
     };
+    // A linked `runs` or run folder would take the runs' cases (and results) elsewhere.
+    let is_link = |dir: &Path| {
+        study
+            .join(dir)
+            .symlink_metadata()
+            .is_ok_and(|m| m.file_type().is_symlink())
+    };
+    if let Some(link) = std::iter::once(Path::new("runs"))
+        .chain(runs)
+        .find(|dir| is_link(dir))
+    {
+        return Err(foreign(
+            link,
+            "it is a symbolic link, and a plan never writes through one: remove it or choose \
+             another study folder",
+        ));
+    }
+    let foreign = |file: &str, reason: &str| foreign(Path::new(file), reason);
     if !study.is_dir() {
         return Err(foreign("", "the study folder is a file"));
     }

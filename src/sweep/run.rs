@@ -69,6 +69,18 @@ pub fn run_task(study: &Path, k: usize, retry_failed: bool) -> Result<bool> {
             ),
         })?;
     let dir = study.join(&entry.dir);
+    if dir
+        .symlink_metadata()
+        .is_ok_and(|m| m.file_type().is_symlink())
+    {
+        return Err(Error::OutputForeign {
+            dir: study.to_path_buf(),
+            file: dir,
+            reason: "a run's folder is a symbolic link, and a sweep never writes through one: \
+                     remove it and plan the study again"
+                .into(),
+        });
+    }
     if done(&dir, retry_failed) {
         return Ok(false);
     }
