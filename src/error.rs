@@ -232,8 +232,8 @@ pub enum Error {
         dir.display(),
         resume.as_ref().map_or(String::new(), |case| format!(
             "; continue with `asperity run {} --out {} --resume`",
-            case.display(),
-            dir.display()
+            shell_quote(&case.to_string_lossy()),
+            shell_quote(&dir.to_string_lossy())
         ))
     )]
     Interrupted {
@@ -970,6 +970,12 @@ impl fmt::Display for Mechanism {
             }
         }
     }
+}
+
+/// Single-quotes `s` for a POSIX shell (a `'` becomes `'\''`): nothing in it is expanded,
+/// for the commands the program writes (job files) or shows to be pasted.
+pub fn shell_quote(s: &str) -> String {
+    format!("'{}'", s.replace('\'', r"'\''"))
 }
 
 /// 'a', 'b'

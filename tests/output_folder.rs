@@ -415,7 +415,13 @@ fn ctrl_c_stops_cleanly_and_the_run_resumes() {
     let output = child.wait_with_output().unwrap();
     let text = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(130), "{text}");
-    assert!(text.contains("--resume"), "{text}");
+    // The command to continue with, its paths quoted for the shell (as pasted).
+    let command = format!(
+        "`asperity run '{}' --out '{}' --resume`",
+        case.display(),
+        out.display()
+    );
+    assert!(text.contains(&command), "{text}");
     let summary: serde_json::Value =
         serde_json::from_str(&read(&out.join("summary.json"))).unwrap();
     assert_eq!(summary["status"], "interrupted", "{summary}");

@@ -278,6 +278,16 @@ pub struct Estimate {
 /// here instead (gmsh aborts when an allocation fails).
 pub const GMSH_MEMORY_BYTES: u64 = 8 << 30;
 
+/// `path` as gmsh's command line reads it as a file: a relative path starting with `-`
+/// (a script called `-info`) would be taken for an option, `./-info` is not.
+fn not_an_option(path: &Path) -> std::path::PathBuf {
+    if path.as_os_str().as_encoded_bytes().starts_with(b"-") {
+        Path::new(".").join(path)
+    } else {
+        path.to_path_buf()
+    }
+}
+
 /// The gmsh command meshing `geo` in 2D at size factor `size` into `out` (MSH 4.1, ASCII),
 /// its address space capped at [`GMSH_MEMORY_BYTES`].
 fn gmsh(geo: &Path, size: f64, parameters: &[(String, f64)], out: &Path) -> Command {
@@ -300,7 +310,7 @@ fn gmsh(geo: &Path, size: f64, parameters: &[(String, f64)], out: &Path) -> Comm
             });
         }
     }
-    cmd.arg(geo)
+    cmd.arg(not_an_option(geo))
         .args(["-2", "-format", "msh41", "-v", "2"])
         .arg("-clscale")
         .arg(size.to_string());
@@ -517,6 +527,16 @@ mod tests {
     /// The wait status of a process killed by `signal`.
     fn killed(signal: i32) -> ExitStatus {
         ExitStatus::from_raw(signal)
+    }
+
+    #[test]
+    fn a_script_named_like_an_option_is_passed_as_a_file() {
+        assert_eq!(not_an_option(Path::new("-info")), Path::new("./-info"));
+        assert_eq!(not_an_option(Path::new("a/-b.geo")), Path::new("a/-b.geo"));
+        assert_eq!(
+            not_an_option(Path::new("/x/-b.geo")),
+            Path::new("/x/-b.geo")
+        );
     }
 
     #[test]

@@ -14,6 +14,7 @@ use serde::Deserialize;
 
 use super::invalid;
 use crate::Result;
+use crate::error::shell_quote;
 use crate::output::atomic::write_atomically;
 
 /// The resource lines of `array.sbatch`.
@@ -170,11 +171,6 @@ pub(super) fn study_path<'p>(sweep: &Path, study: &'p Path) -> Result<&'p str> {
         ));
     }
     Ok(text)
-}
-
-/// Single-quotes `s` for a POSIX shell (a `'` becomes `'\''`): nothing in it is expanded.
-fn shell_quote(s: &str) -> String {
-    format!("'{}'", s.replace('\'', r"'\''"))
 }
 
 /// Quotes `s` for the argument parser of `#SBATCH` lines (sbatch's `_get_argument`): in
