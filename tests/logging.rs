@@ -79,10 +79,12 @@ fn quiet_silences_info_on_stderr_but_not_in_log_txt() {
             .any(|l| l.starts_with("model built")),
         "{log}"
     );
-    // -q with -v is a usage error, as is a pool without threads.
+    // -q with -v is a usage error, as is a pool without threads or with more than four
+    // per core.
     for args in [
         &["-q", "-v", "check", "x.toml"][..],
         &["--threads", "0", "check", "x.toml"],
+        &["--threads", "65535", "check", "x.toml"],
     ] {
         let out = asperity(args);
         assert_eq!(out.status.code(), Some(2), "{args:?}");
