@@ -1149,3 +1149,37 @@ fn an_empty_kinematic_list_is_shown_as_a_list() {
     let error = result.unwrap_err().to_string();
     assert!(error.contains("kinematic = []: give 1 to 5"), "{error}");
 }
+
+/// A `[mesh] parameters` name the `.geo` script never mentions (misspelt) is refused naming
+/// the key, before gmsh runs: gmsh would mesh with the script's own value, silently.
+#[test]
+fn a_mesh_parameter_the_script_never_mentions_is_refused() {
+    let scripts = tempfile::tempdir().unwrap();
+    let geo = scripts.path().join("plate.geo");
+    std::fs::write(
+        &geo,
+        "DefineConstant[ n = 4 ];\nPoint(1) = {0, 0, 0};\n// n_typos, nn: words that only contain the names\n",
+    )
+    .unwrap();
+    let mesh = format!("[mesh]\ngeo = \"{}\"\n", geo.display());
+    for (parameters, refused) in [
+        ("n = 2", None),
+        ("n_typo = 2", Some("mesh.parameters.n_typo")),
+    ] {
+        let case = CASE.replacen(
+            "[mesh]\n",
+            &format!("{mesh}parameters = {{ {parameters} }}\n#"),
+            1,
+        );
+        let (result, _dir) = run(&case, None);
+        match (refused, result) {
+            (Some(key), Err(Error::InvalidParameter { key: k, .. })) => assert_eq!(k, key),
+            (Some(_), other) => panic!("{parameters}: expected a refusal, got {other:?}"),
+            // `n` passes the check: whatever gmsh then makes of this script is no refusal of it.
+            (None, Err(Error::InvalidParameter { key, .. })) => {
+                panic!("{parameters}: refused {key}")
+            }
+            (None, _) => {}
+        }
+    }
+}

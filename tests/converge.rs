@@ -442,8 +442,14 @@ fn a_study_never_writes_through_a_link_nor_over_a_users_file() {
         },
     );
     assert_eq!(code, 2, "{text}");
-    assert!(text.contains("level_0") && text.contains("symbolic link"), "{text}");
-    assert_eq!(common::file_names(&dir.path().join("elsewhere")), ["summary.json"]);
+    assert!(
+        text.contains("level_0") && text.contains("symbolic link"),
+        "{text}"
+    );
+    assert_eq!(
+        common::file_names(&dir.path().join("elsewhere")),
+        ["summary.json"]
+    );
     assert_eq!(read(&dir.path().join("elsewhere/summary.json")), "mine");
     let (code, text, dir) = converge_into(
         "pipelines/convergence/thick_cylinder.toml",
@@ -455,9 +461,15 @@ fn a_study_never_writes_through_a_link_nor_over_a_users_file() {
         },
     );
     assert_eq!(code, 2, "{text}");
-    assert!(text.contains("summary.json") && text.contains("run_files.txt"), "{text}");
+    assert!(
+        text.contains("summary.json") && text.contains("run_files.txt"),
+        "{text}"
+    );
     assert_eq!(read(&dir.path().join("out/level_1/summary.json")), "mine");
-    assert!(!dir.path().join("out/level_2/mesh.msh").exists(), "a level was meshed");
+    assert!(
+        !dir.path().join("out/level_2/mesh.msh").exists(),
+        "a level was meshed"
+    );
 }
 
 /// Two levels whose meshes are the same (the script's counts round to the same integers at a

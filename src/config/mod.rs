@@ -106,7 +106,9 @@ pub struct MeshSource {
     #[serde(default = "one")]
     pub size: f64,
     /// Values for the script's `DefineConstant` parameters (`-setnumber NAME VALUE`): names
-    /// are identifiers, values finite. gmsh is stopped after 600 s.
+    /// are identifiers, values finite; a name the script never mentions (a misspelt one,
+    /// which gmsh would ignore) is an error, a warning only when the script includes other
+    /// files. gmsh is stopped after 600 s.
     #[serde(default)]
     pub parameters: BTreeMap<String, f64>,
 }

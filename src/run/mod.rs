@@ -151,6 +151,7 @@ pub fn load_mesh(case: &Case, folder: &OutputFolder) -> Result<(Mesh, Option<f64
     let (path, gmsh_seconds) = match (&case.mesh.file, &case.mesh.geo) {
         (Some(file), _) => (case.resolve(file), None),
         (None, Some(geo)) => {
+            check_parameters(case, &case.resolve(geo))?;
             let params: Vec<(String, f64)> = case
                 .mesh
                 .parameters
@@ -182,6 +183,46 @@ pub fn load_mesh(case: &Case, folder: &OutputFolder) -> Result<(Mesh, Option<f64
         }
     };
     Ok((msh::read_msh(&path)?, gmsh_seconds))
+}
+
+/// Refuses a `[mesh] parameters` name that the `.geo` script never mentions (a misspelt
+/// `N_typo` for the script's `n`): gmsh would set it and mesh with the script's own value,
+/// silently. A script that includes other files may define it there: then a warning only.
+fn check_parameters(case: &Case, geo: &Path) -> Result<()> {
+    if case.mesh.parameters.is_empty() || !geo.is_file() {
+        return Ok(());
+    }
+    let bytes = crate::config::read_bounded(geo, "not a gmsh script")?;
+    let script = String::from_utf8_lossy(&bytes);
+    let is_word = |c: char| c.is_alphanumeric() || c == '_';
+    let mentions = |name: &str| {
+        script.match_indices(name).any(|(i, _)| {
+            let before = script[..i].chars().next_back();
+            let after = script[i + name.len()..].chars().next();
+            !before.is_some_and(is_word) && !after.is_some_and(is_word)
+        })
+    };
+    for (name, value) in &case.mesh.parameters {
+        if mentions(name) {
+            continue;
+        }
+        let reason = format!(
+            "the script {} never mentions {name}, so the value would have no effect (a \
+             misspelt name?)",
+            geo.display()
+        );
+        if script.contains("Include") {
+            tracing::warn!("mesh.parameters.{name}: {reason}, unless a file it includes does");
+        } else {
+            return Err(Error::InvalidParameter {
+                path: case.path.clone(),
+                key: format!("mesh.parameters.{name}"),
+                value: value.to_string(),
+                reason,
+            });
+        }
+    }
+    Ok(())
 }
 
 /// The output folder of `case` when the command line names none: its `[output] dir`

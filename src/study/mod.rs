@@ -166,7 +166,10 @@ pub fn run(case: &Case, options: &Options) -> Result<Report> {
             };
             let nodes = meshed.mesh.nodes.len();
             if let Some((finer_nodes, finer_k)) = finer.filter(|&(f, _)| nodes >= f) {
-                finish(k, Err(err(same_mesh(options, k, finer_k, nodes, finer_nodes))));
+                finish(
+                    k,
+                    Err(err(same_mesh(options, k, finer_k, nodes, finer_nodes))),
+                );
                 break;
             }
             finer = Some((nodes, k));
@@ -270,7 +273,10 @@ struct Meshed {
 /// (the level would be written elsewhere).
 fn level_folder(case: &Case, options: &Options, k: usize) -> Result<OutputFolder> {
     let dir = options.out.join(format!("level_{k}"));
-    if dir.symlink_metadata().is_ok_and(|m| m.file_type().is_symlink()) {
+    if dir
+        .symlink_metadata()
+        .is_ok_and(|m| m.file_type().is_symlink())
+    {
         return Err(Error::OutputForeign {
             dir: options.out.clone(),
             file: dir,
