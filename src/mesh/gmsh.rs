@@ -446,28 +446,88 @@ fn ended_by(status: ExitStatus) -> String {
     }
 }
 
-/// The number of elements of the MSH 4.1 ASCII file `path` (of every dimension), from its
-/// `$Elements` header `numEntityBlocks numElements minTag maxTag` (the file streamed up to
-/// it: a gmsh mesh of a million elements is hundreds of MB).
+/// The number of elements of the MSH 4.1 file `path` (ASCII or binary: a script may set
+/// `Mesh.Binary`), of every dimension, from its `$Elements` header `numEntityBlocks
+/// numElements minTag maxTag` (the file streamed up to it: a gmsh mesh of a million
+/// elements is hundreds of MB). Another MSH version (a script that sets
+/// `Mesh.MshFileVersion`) is an error saying so.
 fn element_count(path: &Path) -> Result<u64> {
     use std::io::BufRead;
+    let problem = |problem, message: String| Error::mesh(path, problem, None, message);
+    let unreadable = || {
+        problem(
+            MeshProblem::MissingSection,
+            "gmsh's mesh has no readable $Elements header".into(),
+        )
+    };
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut lines = std::io::BufReader::new(file)
-        .lines()
-        .map_while(std::result::Result::ok)
-        .skip_while(|l| l.trim() != "$Elements")
-        .skip(1);
-    lines
-        .next()
-        .and_then(|header| header.split_whitespace().nth(1)?.parse().ok())
-        .ok_or_else(|| {
-            Error::mesh(
-                path,
-                MeshProblem::MissingSection,
-                None,
-                "gmsh's mesh has no readable $Elements header",
-            )
-        })
+    let mut reader = std::io::BufReader::new(file);
+    let mut line = Vec::new();
+    // Reads up to the next line break; false at the end of the file.
+    let next_line = |reader: &mut std::io::BufReader<std::fs::File>, line: &mut Vec<u8>| {
+        line.clear();
+        reader
+            .read_until(b'\n', line)
+            .map(|n| n > 0)
+            .map_err(|e| Error::io(path, e))
+    };
+    while next_line(&mut reader, &mut line)? && line.trim_ascii() != b"$MeshFormat" {}
+    if !next_line(&mut reader, &mut line)? {
+        return Err(unreadable());
+    }
+    let format = String::from_utf8_lossy(line.trim_ascii()).into_owned();
+    let mut fields = format.split_whitespace();
+    let (version, binary, size) = (fields.next(), fields.next(), fields.next());
+    if version != Some("4.1") {
+        return Err(problem(
+            MeshProblem::Version,
+            format!(
+                "gmsh wrote MSH format '{format}' (does the script set Mesh.MshFileVersion?): \
+                 asperity reads MSH 4.1; remove that setting from the script"
+            ),
+        ));
+    }
+    // Binary: the int 1 in the file's byte order follows the format line.
+    let little_endian = if binary == Some("1") {
+        let mut one = [0u8; 4];
+        reader
+            .read_exact(&mut one)
+            .map_err(|e| Error::io(path, e))?;
+        Some(i32::from_le_bytes(one) == 1)
+    } else {
+        None
+    };
+    while next_line(&mut reader, &mut line)? {
+        if line.trim_ascii() != b"$Elements" {
+            continue;
+        }
+        return match little_endian {
+            None => {
+                next_line(&mut reader, &mut line)?;
+                std::str::from_utf8(&line)
+                    .ok()
+                    .and_then(|h| h.split_whitespace().nth(1)?.parse().ok())
+                    .ok_or_else(unreadable)
+            }
+            Some(little) => {
+                // numEntityBlocks and numElements, each a size_t of `size` bytes (8).
+                if size != Some("8") {
+                    return Err(unreadable());
+                }
+                let mut header = [0u8; 16];
+                reader
+                    .read_exact(&mut header)
+                    .map_err(|e| Error::io(path, e))?;
+                let bytes: [u8; 8] = header[8..].try_into().expect("8 bytes");
+                Ok(if little {
+                    u64::from_le_bytes(bytes)
+                } else {
+                    u64::from_be_bytes(bytes)
+                })
+            }
+        };
+    }
+    Err(unreadable())
 }
 
 /// Waits for `child` at most `timeout`, collecting its stderr and stdout (read on threads so
@@ -527,6 +587,31 @@ mod tests {
     /// The wait status of a process killed by `signal`.
     fn killed(signal: i32) -> ExitStatus {
         ExitStatus::from_raw(signal)
+    }
+
+    #[test]
+    fn element_counts_are_read_from_ascii_and_binary_headers() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.msh");
+        let write = |bytes: &[u8]| std::fs::write(&path, bytes).unwrap();
+        write(b"$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Elements\n3 1234 1 1234\n");
+        assert_eq!(element_count(&path).unwrap(), 1234);
+        let mut binary = b"$MeshFormat\n4.1 1 8\n".to_vec();
+        binary.extend(1i32.to_le_bytes());
+        binary.extend(b"\n$EndMeshFormat\n$Nodes\n");
+        binary.extend([0x0a, 0x24, 0xff, 0x00]); // binary data with line breaks
+        binary.extend(b"\n$EndNodes\n$Elements\n");
+        for n in [3u64, 98_765, 1, 98_765] {
+            binary.extend(n.to_le_bytes());
+        }
+        write(&binary);
+        assert_eq!(element_count(&path).unwrap(), 98_765);
+        write(b"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Elements\n7\n");
+        let error = element_count(&path).unwrap_err().to_string();
+        assert!(
+            error.contains("'2.2 0 8'") && error.contains("MshFileVersion"),
+            "{error}"
+        );
     }
 
     #[test]
