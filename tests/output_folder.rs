@@ -92,6 +92,8 @@ fn force_and_resume_remove_only_what_the_manifest_lists() {
     for name in mine {
         std::fs::write(out.join(name), "mine").unwrap();
     }
+    // A folder named like a writer's temporary file is no writer's: left in place.
+    std::fs::create_dir(out.join(".log.txt.QQQQQQ.tmp")).unwrap();
     let case = block_case(dir.path(), 2);
     let (code, text) = run(dir.path(), &case, &out, &["--force"]);
     assert_eq!(code, Some(0), "{text}");
@@ -108,6 +110,7 @@ fn force_and_resume_remove_only_what_the_manifest_lists() {
         assert_eq!(read(&out.join(name)), "mine", "{name} was touched");
     }
     assert!(out.join("bodies_0002.vtu").is_file());
+    assert!(out.join(".log.txt.QQQQQQ.tmp").is_dir());
 }
 
 /// A manifest edited to list a user's own file (a name no run writes) does not make --force
@@ -315,6 +318,13 @@ fn symbolic_links_are_never_written_through() {
         std::fs::remove_file(out.join(name)).unwrap();
         std::fs::rename(&kept, out.join(name)).unwrap();
     }
+
+    // An output folder that is a link to nothing is named as such.
+    let dangling = dir.path().join("dangling");
+    std::os::unix::fs::symlink(dir.path().join("nothing"), &dangling).unwrap();
+    let (code, text) = run(dir.path(), &case, &dangling, &[]);
+    assert_eq!(code, Some(2), "{text}");
+    assert!(text.contains("symbolic link to nothing"), "{text}");
 
     let geo_out = dir.path().join("geo_out");
     std::fs::create_dir(&geo_out).unwrap();

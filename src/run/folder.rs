@@ -241,6 +241,14 @@ impl OutputFolder {
         if dir.exists() && !dir.is_dir() {
             return Err(foreign(dir, dir, "the output folder is a file"));
         }
+        if !dir.exists() && is_link(dir) {
+            return Err(foreign(
+                dir,
+                dir,
+                "the output folder is a symbolic link to nothing (a folder that does not \
+                 exist): remove the link or make its folder",
+            ));
+        }
         let listed = read_manifest(dir)?;
         let entries = entries(dir)?;
         let inputs: Vec<PathBuf> = plan.inputs.iter().filter_map(|p| canonical(p)).collect();
@@ -301,9 +309,11 @@ impl OutputFolder {
             }
             Ok(())
         };
+        // Temporary files only: a folder of that name is no writer's (left in place).
         let temporaries: Vec<&String> = entries
             .iter()
             .filter(|n| temporary_of(n).is_some_and(|t| listed.contains(t) && is_any_run_file(t)))
+            .filter(|n| dir.join(n).symlink_metadata().is_ok_and(|m| !m.is_dir()))
             .collect();
         // A log alone holds no results (a sweep's pool opens it before the run starts).
         let log = RunFile::Log.name();
