@@ -17,6 +17,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -180,6 +181,37 @@ def frame_parts(vtm: Path) -> dict[str, list[tuple[str, Path]]]:
             for block in ET.parse(vtm).getroot().iter("Block")}
 
 
+def read_vtu(path: Path):
+    """The VTU file `path` as a pyvista grid; a file that is cut short or damaged (VTK only
+    prints errors for it and gives a partial grid) raises ValueError naming it."""
+    import pyvista as pv
+
+    path = Path(path)
+    with open(path, "rb") as f:
+        head = f.read(4096).decode("utf-8", "replace")
+        f.seek(max(0, path.stat().st_size - 64))
+        tail = f.read().decode("utf-8", "replace")
+    counts = re.search(r'NumberOfPoints="(\d+)"\s+NumberOfCells="(\d+)"', head)
+    if counts is None or "</VTKFile>" not in tail:
+        raise ValueError(f"{path}: not a complete VTU file (cut short or damaged)")
+    grid = pv.read(path)
+    if (grid.n_points, grid.n_cells) != (int(counts[1]), int(counts[2])):
+        raise ValueError(f"{path}: {grid.n_cells} of its {counts[2]} cells could be read: the file is damaged")
+    return grid
+
+
+def run_main(main) -> None:
+    """Runs a script's `main`, a damaged or missing input ending it with a one-line error
+    (exit status 1) instead of a traceback."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        main()
+    except (OSError, ValueError, KeyError, IndexError, TypeError, ET.ParseError) as e:
+        what = f"{type(e).__name__}: {e}" if isinstance(e, (KeyError, IndexError, TypeError)) else str(e)
+        sys.exit(f"error: {Path(sys.argv[0]).name}: {what}")
+
+
 def read_frame(vtm: Path):
     """A frame's parts as a pyvista MultiBlock with the blocks `bodies` (all bodies in one
     UnstructuredGrid, cell data `body` telling them apart) and, with contact pairs,
@@ -189,7 +221,7 @@ def read_frame(vtm: Path):
 
     blocks = pv.MultiBlock()
     for block, key in (("bodies", "bodies"), ("contacts", "interface")):
-        grids = [pv.read(file) for _, file in frame_parts(vtm).get(block, [])]
+        grids = [read_vtu(file) for _, file in frame_parts(vtm).get(block, [])]
         if grids:
             blocks[key] = grids[0] if len(grids) == 1 else pv.MultiBlock(grids).combine()
     return blocks

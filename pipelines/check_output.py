@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import pyvista as pv
-from asperity_tools import frame_parts, frames, read_frame
+from asperity_tools import frame_parts, frames, read_frame, read_vtu, run_main
 
 POINT_ARRAYS = {"displacement": 3, "stress": 6, "von_mises": 1, "equivalent_plastic_strain": 1}
 CELL_ARRAYS = {"body": 1, "plastic": 1}
@@ -32,7 +32,7 @@ INTERFACE_ARRAYS = [
 
 
 def check_grid(path: Path) -> pv.UnstructuredGrid:
-    grid = pv.read(path)
+    grid = read_vtu(path)
     for name, ncomp in POINT_ARRAYS.items():
         if name not in grid.point_data:
             sys.exit(f"{path}: point array '{name}' missing (have {list(grid.point_data)})")
@@ -51,7 +51,7 @@ def check_grid(path: Path) -> pv.UnstructuredGrid:
 
 
 def check_interface(path: Path) -> pv.UnstructuredGrid:
-    grid = pv.read(path)
+    grid = read_vtu(path)
     for name in INTERFACE_ARRAYS:
         if name not in grid.point_data:
             sys.exit(f"{path}: interface array '{name}' missing (have {list(grid.point_data)})")
@@ -143,4 +143,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

@@ -19,7 +19,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from asperity_tools import save_figure  # noqa: E402
+from asperity_tools import run_main, save_figure  # noqa: E402
 
 
 def number(text: str) -> float | None:
@@ -32,6 +32,8 @@ def main() -> None:
     args = parser.parse_args()
     with open(args.out / "convergence.csv") as f:
         rows = list(csv.DictReader(f))
+    if not rows:
+        raise ValueError(f"{args.out / 'convergence.csv'}: no levels to plot")
     quantities: dict[str, list[dict]] = {}
     for row in rows:
         quantities.setdefault(row["quantity"], []).append(row)
@@ -83,4 +85,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

@@ -18,7 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pyvista as pv  # noqa: E402
-from asperity_tools import read_step, save_figure  # noqa: E402
+from asperity_tools import read_step, run_main, save_figure  # noqa: E402
 
 pv.OFF_SCREEN = True
 
@@ -105,4 +105,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

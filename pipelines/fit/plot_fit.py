@@ -14,7 +14,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
-from asperity_tools import save_figure  # noqa: E402
+from asperity_tools import run_main, save_figure  # noqa: E402
 
 AXES = {  # (x label, y label) of each test kind, in asperity's units
     "normal": ("closure [mm]", "pressure [MPa]"),
@@ -64,4 +64,4 @@ def main(out):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    run_main(lambda: main(sys.argv[1]))

@@ -15,7 +15,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
-from asperity_tools import save_figure  # noqa: E402
+from asperity_tools import run_main, save_figure  # noqa: E402
 
 
 def number(s):
@@ -45,4 +45,4 @@ def main(study):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    run_main(lambda: main(sys.argv[1]))

@@ -52,6 +52,24 @@ fn read_summary(dir: &Path) -> Result<serde_json::Value> {
     })
 }
 
+/// A run's folder `dir` of `study` that is a symbolic link is an error: a sweep never writes
+/// through one.
+fn refuse_linked_run(study: &Path, dir: &Path) -> Result<()> {
+    if dir
+        .symlink_metadata()
+        .is_ok_and(|m| m.file_type().is_symlink())
+    {
+        return Err(Error::OutputForeign {
+            dir: study.to_path_buf(),
+            file: dir.to_path_buf(),
+            reason: "a run's folder is a symbolic link, and a sweep never writes through one: \
+                     remove it and plan the study again"
+                .into(),
+        });
+    }
+    Ok(())
+}
+
 /// Runs task `k` of `study` unless it is done; returns whether it ran. A run that fails still
 /// leaves its `summary.json` (with the error) and returns the error.
 pub fn run_task(study: &Path, k: usize, retry_failed: bool) -> Result<bool> {
@@ -69,18 +87,7 @@ pub fn run_task(study: &Path, k: usize, retry_failed: bool) -> Result<bool> {
             ),
         })?;
     let dir = study.join(&entry.dir);
-    if dir
-        .symlink_metadata()
-        .is_ok_and(|m| m.file_type().is_symlink())
-    {
-        return Err(Error::OutputForeign {
-            dir: study.to_path_buf(),
-            file: dir,
-            reason: "a run's folder is a symbolic link, and a sweep never writes through one: \
-                     remove it and plan the study again"
-                .into(),
-        });
-    }
+    refuse_linked_run(study, &dir)?;
     if done(&dir, retry_failed) {
         return Ok(false);
     }
@@ -152,9 +159,20 @@ pub fn run_local(
             && let Some(k) = pending.pop()
         {
             let dir = study.join(&manifest.runs[k].dir);
-            // The run's log, listed in the run folder's manifest like the run's own files.
+            refuse_linked_run(study, &dir)?;
+            // The run's log, listed in the run folder's manifest like the run's own files
+            // (never opened through a link of that name).
             let log_path = OutputFolder::scratch(&dir)?.path(RunFile::Log)?;
-            let log = std::fs::File::create(&log_path).map_err(|e| Error::io(&log_path, e))?;
+            let log = {
+                use std::os::unix::fs::OpenOptionsExt;
+                std::fs::OpenOptions::new()
+                    .write(true)
+                    .create(true)
+                    .truncate(true)
+                    .custom_flags(libc::O_NOFOLLOW)
+                    .open(&log_path)
+                    .map_err(|e| Error::io(&log_path, e))?
+            };
             let err = log.try_clone().map_err(|e| Error::io(&log_path, e))?;
             let mut command = Command::new(exe);
             command
