@@ -826,8 +826,6 @@ pub struct NoConvergence {
     pub target: LoadPoint,
     /// Cut-backs made in this step.
     pub cutbacks: usize,
-    /// How often the failed increment had been halved (net of re-growth after successes).
-    pub halvings: usize,
     /// Every attempt of the step, in order.
     pub attempts: Vec<Attempt>,
     /// The free node carrying the largest out-of-balance force in the last attempt.
@@ -1183,11 +1181,10 @@ impl fmt::Display for NoConvergence {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "{} did not converge after {} cut-backs (the last increment halved {} times): it \
-             reached {} (the last converged state), on the way to {}",
+            "{} did not converge after {} cut-backs: it reached {} (the last converged state), \
+             on the way to {}",
             self.reached.describe_step(),
             self.cutbacks,
-            self.halvings,
             self.reached,
             self.target
         )?;

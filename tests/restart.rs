@@ -107,7 +107,6 @@ fn state() -> LoopState {
         cutbacks: 4,
         increments: 2,
         iterations: 17,
-        halvings: 2,
         force_floor: 1e-7 / 3.0,
         stiffness: StiffnessHistory {
             first: Some(1.0 / 7.0),

@@ -36,8 +36,7 @@ pub struct SolverSpec {
     /// Whether the case gave `force_tolerance` or `displacement_tolerance`: load-controlled
     /// increments then also require the relative-norm criteria.
     pub relative_norms: bool,
-    /// How often an increment that fails to converge may be halved (net of its growing
-    /// again after successes) before the step fails.
+    /// How often a step that fails to converge is halved and retried.
     pub max_cutbacks: usize,
     /// Most increment solves of a load-controlled run: output increments, sub-increments
     /// ending on amplitude breakpoints or made by cut-backs, and retried attempts.
@@ -103,10 +102,8 @@ struct RawSolverSpec {
     force_tolerance: Option<f64>,
     /// The older ‖δu‖ / ‖u‖ criterion, like `force_tolerance`.
     displacement_tolerance: Option<f64>,
-    /// How often an increment that does not converge is halved and retried: a converged
-    /// sub-increment lets the next one grow again (doubled), and the step fails when an
-    /// increment that has been halved this many times (net of that growth) fails (at most
-    /// 20; default 8).
+    /// How often an increment that does not converge is halved and retried (at most 20;
+    /// default 8).
     max_cutbacks: usize,
     /// Most increment solves of a load-controlled run: output increments, sub-increments
     /// ending on amplitude breakpoints or made by cut-backs, and retried attempts (default

@@ -43,8 +43,8 @@ use crate::{Error, Result};
 /// variables, the backstresses of kinematic hardening, and the energy ledger's thermal work;
 /// 6: six-component stresses and strains and three-component interface states, for twist;
 /// 7: the continuum's states left out when they follow from the displacements; 8: the
-/// predictor's last converged increment; 9: the step's halvings of its increment).
-const MAGIC: &[u8; 16] = b"asperity-rst-v9\n";
+/// predictor's last converged increment).
+const MAGIC: &[u8; 16] = b"asperity-rst-v8\n";
 /// Bytes of [`MAGIC`] before the format version.
 const MAGIC_NAME: usize = 14;
 

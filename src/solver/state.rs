@@ -324,9 +324,6 @@ pub struct LoopState {
     pub cutbacks: usize,
     pub increments: usize,
     pub iterations: usize,
-    /// How often the next sub-increment has been halved, less the times it grew again
-    /// after a success: the step fails when an increment halved `max_cutbacks` times fails.
-    pub halvings: usize,
     /// The absolute force level below which residuals count as zero.
     pub force_floor: f64,
     pub stiffness: StiffnessHistory,
@@ -346,7 +343,6 @@ impl LoopState {
             cutbacks: 0,
             increments: 0,
             iterations: 0,
-            halvings: 0,
             force_floor: 0.0,
             stiffness: StiffnessHistory::default(),
             force_average: ForceAverage::default(),
@@ -363,7 +359,6 @@ impl LoopState {
             cutbacks: 0,
             increments: 0,
             iterations: 0,
-            halvings: 0,
             ..self
         }
     }

@@ -169,7 +169,6 @@ pub fn run_steps_from(
                     }
                     // Grow the sub-increment again after a success.
                     state.size *= 2.0;
-                    state.halvings = state.halvings.saturating_sub(1);
                     let progress = Progress {
                         state: state.clone(),
                         stats: &stats,
@@ -199,7 +198,7 @@ pub fn run_steps_from(
                     if let Ok(log) = &outcome {
                         stats.add(log);
                     }
-                    if state.halvings == settings.max_cutbacks || (singular && constant_tangent) {
+                    if state.cutbacks == settings.max_cutbacks || (singular && constant_tangent) {
                         let failure = diagnose(
                             model,
                             &solution,
@@ -213,7 +212,6 @@ pub fn run_steps_from(
                                 reached: schedule.load_point(state.time, target),
                                 target: schedule.load_point(target, target),
                                 cutbacks: state.cutbacks,
-                                halvings: state.halvings,
                                 attempts,
                                 ..NoConvergence::default()
                             },
@@ -231,7 +229,6 @@ pub fn run_steps_from(
                         return Err(step_failure(model, failure, &state.stiffness));
                     }
                     state.cutbacks += 1;
-                    state.halvings += 1;
                     stats.cutbacks += 1;
                     solution.u.copy_from_slice(&converged_u);
                     state.size = 0.5 * (trial_time - state.time);
