@@ -1181,7 +1181,7 @@ impl fmt::Display for NoConvergence {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "{} did not converge after {} cut-backs: it reached {} (the last converged state), \
+            "{} did not converge after {} cut-backs in the step: it reached {} (the last converged state), \
              on the way to {}",
             self.reached.describe_step(),
             self.cutbacks,

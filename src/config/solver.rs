@@ -36,7 +36,8 @@ pub struct SolverSpec {
     /// Whether the case gave `force_tolerance` or `displacement_tolerance`: load-controlled
     /// increments then also require the relative-norm criteria.
     pub relative_norms: bool,
-    /// How often a step that fails to converge is halved and retried.
+    /// How many cut-backs a step may make in all (each halves a failed increment and retries
+    /// it); the step fails at its next failure after that many.
     pub max_cutbacks: usize,
     /// Most increment solves of a load-controlled run: output increments, sub-increments
     /// ending on amplitude breakpoints or made by cut-backs, and retried attempts.
@@ -102,8 +103,11 @@ struct RawSolverSpec {
     force_tolerance: Option<f64>,
     /// The older ‖δu‖ / ‖u‖ criterion, like `force_tolerance`.
     displacement_tolerance: Option<f64>,
-    /// How often an increment that does not converge is halved and retried (at most 20;
-    /// default 8).
+    /// How many cut-backs a step may make in all: each halves an increment that does not
+    /// converge (or is implausible) and retries it, and a converged sub-increment lets the
+    /// next one grow again (doubled); the step fails at its next failure after this many, so
+    /// that a load the model cannot carry is not crept up to by ever smaller increments
+    /// (at most 20; default 8).
     max_cutbacks: usize,
     /// Most increment solves of a load-controlled run: output increments, sub-increments
     /// ending on amplitude breakpoints or made by cut-backs, and retried attempts (default

@@ -103,7 +103,7 @@ pub struct NewtonSettings {
     /// control always uses them; load-controlled increments only if `criteria.relative_norms`.
     pub force_tolerance: f64,
     pub displacement_tolerance: f64,
-    /// How often a failed increment is halved and retried.
+    /// How many cut-backs (a failed increment halved and retried) a step may make in all.
     pub max_cutbacks: usize,
     /// Which interface tangent the iterations use (Buczkowski & Kleiber (1994), §2.4 and
     /// conclusions 2–3). A choice of the solution method, not of the model: every algorithm
