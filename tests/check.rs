@@ -137,6 +137,17 @@ fn init_never_overwrites() {
     assert_eq!(std::fs::read_to_string(&case).unwrap(), "# mine\n");
     // All or nothing: the script was not written either.
     assert!(!dir.path().join("block_on_foundation.geo").exists());
+    // A link to nothing under a template's name counts as a file: nothing is written.
+    #[cfg(unix)]
+    {
+        let dir = tempfile::tempdir().unwrap();
+        let geo = dir.path().join("block_on_foundation.geo");
+        std::os::unix::fs::symlink(dir.path().join("nothing"), &geo).unwrap();
+        let out = init(dir.path());
+        assert!(!out.status.success());
+        assert!(!dir.path().join("case.toml").exists(), "half a template");
+        assert!(!dir.path().join("nothing").exists());
+    }
 }
 
 /// A model free to move as a rigid body is an error of `check` and `run` alike, before

@@ -21,7 +21,17 @@ pub const TEMPLATES: [(&str, &str); 2] = [
 /// overwrites: if one of them exists already, nothing is written and the error names it.
 pub fn write_templates(dir: &Path) -> Result<Vec<PathBuf>> {
     let paths: Vec<PathBuf> = TEMPLATES.iter().map(|(name, _)| dir.join(name)).collect();
-    if let Some(existing) = paths.iter().find(|p| p.exists()) {
+    if dir.symlink_metadata().is_ok() && !dir.is_dir() {
+        return Err(Error::io(
+            dir,
+            std::io::Error::new(
+                std::io::ErrorKind::AlreadyExists,
+                "it is not a folder (a file, or a link to nothing)",
+            ),
+        ));
+    }
+    // A link to nothing counts as existing: create_new below would refuse it half-way.
+    if let Some(existing) = paths.iter().find(|p| p.symlink_metadata().is_ok()) {
         return Err(Error::io(
             existing,
             std::io::Error::new(

@@ -21,6 +21,13 @@ pub fn write_generated(
     files: &[(String, Vec<u8>)],
     ours: impl Fn(&[u8]) -> bool,
 ) -> Result<()> {
+    if dir.symlink_metadata().is_ok() && !dir.is_dir() {
+        return Err(Error::OutputForeign {
+            dir: dir.to_path_buf(),
+            file: dir.to_path_buf(),
+            reason: "it is not a folder (a file, or a link to nothing)".into(),
+        });
+    }
     for (name, _) in files {
         let path = dir.join(name);
         let Ok(meta) = path.symlink_metadata() else {
@@ -95,5 +102,8 @@ mod tests {
             !d.join("b.1").exists(),
             "written before every name was checked"
         );
+        // A file where the folder should be.
+        let error = write_generated(&outside, &files, ours).unwrap_err();
+        assert!(error.to_string().contains("not a folder"), "{error}");
     }
 }
