@@ -86,7 +86,7 @@ enum Command {
     Converge {
         /// The case file (TOML); it must mesh a .geo script.
         case: PathBuf,
-        /// Number of mesh levels (at least 3).
+        /// Number of mesh levels (3 to 20).
         #[arg(long, default_value_t = 3)]
         levels: usize,
         /// Refinement ratio: each level's mesh size factor is the previous one's / RATIO.

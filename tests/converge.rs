@@ -415,6 +415,17 @@ fn a_case_with_a_fixed_mesh_cannot_be_refined() {
     );
     assert_eq!(code, 2, "{text}");
     assert!(text.contains("at least 3 levels"), "{text}");
+    let (code, text, dir) = converge(
+        "pipelines/convergence/thick_cylinder.toml",
+        |t| t,
+        &["--levels", "1000"],
+    );
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("at most 20"), "{text}");
+    assert!(
+        !dir.path().join("out").exists(),
+        "a refused study made its folder"
+    );
     let (code, text, _dir) = converge(
         "pipelines/convergence/thick_cylinder.toml",
         |t| t,

@@ -89,6 +89,9 @@ pub struct Options {
     pub plot: bool,
 }
 
+/// The most levels a study may have.
+pub const MAX_LEVELS: usize = 20;
+
 /// Runs the study of `case` and writes `convergence.csv` (and `convergence.png`).
 pub fn run(case: &Case, options: &Options) -> Result<Report> {
     let start = Instant::now();
@@ -106,6 +109,13 @@ pub fn run(case: &Case, options: &Options) -> Result<Report> {
     if options.levels < 3 {
         return Err(err(format!(
             "--levels {}: the observed order needs at least 3 levels",
+            options.levels
+        )));
+    }
+    if options.levels > MAX_LEVELS {
+        return Err(err(format!(
+            "--levels {}: at most {MAX_LEVELS} (each level's folder is made before the first is \
+             meshed; the finest of 20 levels at --ratio 2 has 2^38 times the coarsest's elements)",
             options.levels
         )));
     }
