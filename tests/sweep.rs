@@ -229,6 +229,21 @@ fn local_pool_runs_restarts_and_collect_reports_a_failed_run() {
     assert!(ok && text.contains("ran 1 runs (0 failed"), "{text}");
     let c = sweep::collect(&study, false).unwrap();
     assert!(c.failures.is_empty(), "{:?}", c.failures);
+    // A damaged summary (cut short, or no run's) is reported as such, not as 'not run', and
+    // the run is not done: the next `sweep run` runs it again.
+    std::fs::write(study.join("runs/0001/summary.json"), "{").unwrap();
+    std::fs::write(study.join("runs/0002/summary.json"), "[]").unwrap();
+    let c = sweep::collect(&study, false).unwrap();
+    let damaged: Vec<(usize, &str)> = c.failures.iter().map(|f| (f.0, f.1.as_str())).collect();
+    assert_eq!(
+        damaged,
+        [(1, "damaged"), (2, "damaged")],
+        "{:?}",
+        c.failures
+    );
+    assert!(c.failures[0].2.contains("summary.json"), "{:?}", c.failures);
+    let (ok, text) = run_cli(&["sweep", "run", s, "--jobs", "2"]);
+    assert!(ok && text.contains("ran 2 runs (0 failed"), "{text}");
 }
 
 /// A study planned again into its folder with other values: the runs whose case changed are

@@ -18,9 +18,11 @@ use crate::{python, run};
 /// `retry_failed`) and was made from the run's present `case.toml` ([`made_from_its_case`]).
 fn done(dir: &Path, retry_failed: bool) -> bool {
     match read_summary(dir) {
-        Ok(s) if made_from_its_case(dir) => {
-            !(retry_failed && s.get("status").and_then(|v| v.as_str()) != Some("converged"))
-        }
+        // A summary without a status is no run's (damaged): the run is not done.
+        Ok(s) if made_from_its_case(dir) => match s.get("status").and_then(|v| v.as_str()) {
+            Some(status) => !(retry_failed && status != "converged"),
+            None => false,
+        },
         _ => false,
     }
 }
@@ -253,19 +255,33 @@ pub fn collect(study: &Path, plot: bool) -> Result<Collected> {
                 ),
                 None,
             ),
-            Ok(s) => {
-                let status = s
-                    .get("status")
-                    .and_then(|v| v.as_str())
-                    .unwrap_or("unknown")
-                    .to_string();
-                let error = s
-                    .get("error")
-                    .and_then(|v| v.as_str())
-                    .unwrap_or_default()
-                    .to_string();
-                (status, error, Some(s))
-            }
+            Ok(s) => match s.get("status").and_then(|v| v.as_str()) {
+                Some(status) => {
+                    let error = s
+                        .get("error")
+                        .and_then(|v| v.as_str())
+                        .unwrap_or_default()
+                        .to_string();
+                    (status.to_string(), error, Some(s))
+                }
+                None => (
+                    "damaged".to_string(),
+                    format!(
+                        "{}: no run's summary (no \"status\"): run the sweep again",
+                        dir.join(RunFile::Summary.name()).display()
+                    ),
+                    None,
+                ),
+            },
+            Err(_) if dir.join(RunFile::Summary.name()).exists() => (
+                "damaged".to_string(),
+                format!(
+                    "{}: not readable as a run's summary (damaged, or cut short): run the sweep \
+                     again",
+                    dir.join(RunFile::Summary.name()).display()
+                ),
+                None,
+            ),
             Err(_) => (
                 "not_run".to_string(),
                 format!(
