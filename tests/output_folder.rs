@@ -123,8 +123,12 @@ fn force_keeps_a_file_a_manifest_lists_that_no_run_writes() {
     let (code, text) = run(dir.path(), &case, &out, &[]);
     assert_eq!(code, Some(0), "{text}");
     std::fs::write(out.join("mynotes.txt"), "mine").unwrap();
+    // Paths added by hand are no files of the folder: ignored with a warning, not kept.
+    let victim = dir.path().join("victim.txt");
+    std::fs::write(&victim, "mine").unwrap();
     let manifest = out.join("run_files.txt");
-    std::fs::write(&manifest, read(&manifest) + "mynotes.txt\n").unwrap();
+    let added = format!("mynotes.txt\n../victim.txt\n{}\n", victim.display());
+    std::fs::write(&manifest, read(&manifest) + &added).unwrap();
     let (code, text) = run(dir.path(), &case, &out, &["--force"]);
     assert_eq!(code, Some(0), "{text}");
     assert_eq!(read(&out.join("mynotes.txt")), "mine");
@@ -132,6 +136,9 @@ fn force_keeps_a_file_a_manifest_lists_that_no_run_writes() {
         text.contains("'mynotes.txt', which is no name a run writes"),
         "{text}"
     );
+    assert!(text.contains("2 entries are no plain file names"), "{text}");
+    assert_eq!(read(&victim), "mine");
+    assert!(!read(&manifest).contains("victim"), "{}", read(&manifest));
 }
 
 /// The case reads its mesh from the output folder under the name of the mesh a run writes

@@ -527,7 +527,24 @@ fn read_manifest(dir: &Path) -> Result<HashSet<String>> {
             "it has the name of asperity's run manifest but is not one",
         ));
     }
-    Ok(lines.map(str::to_string).collect())
+    // Only plain names of the folder's own files: a path (`../x`, `/x`, `a/b`) is no file a
+    // run wrote here and is dropped, never acted on.
+    let (names, paths): (Vec<&str>, Vec<&str>) =
+        lines.filter(|l| !l.is_empty()).partition(|line| {
+            let mut parts = Path::new(line).components();
+            matches!(
+                (parts.next(), parts.next()),
+                (Some(std::path::Component::Normal(_)), None)
+            )
+        });
+    if let Some(first) = paths.first() {
+        tracing::warn!(
+            "{}: {} entries are no plain file names (such as '{first}'): ignored",
+            path.display(),
+            paths.len()
+        );
+    }
+    Ok(names.into_iter().map(str::to_string).collect())
 }
 
 /// Opens the manifest of `dir`, which lists `listed`, for appending: `continued`, or as a new
