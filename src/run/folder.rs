@@ -463,9 +463,23 @@ fn foreign(dir: &Path, file: &Path, reason: &str) -> Error {
 }
 
 /// Whether `path` is a symbolic link (not followed).
-fn is_link(path: &Path) -> bool {
+pub fn is_link(path: &Path) -> bool {
     path.symlink_metadata()
         .is_ok_and(|m| m.file_type().is_symlink())
+}
+
+/// Refuses a folder `dir` inside `parent` (a study's level or run folder) that is a symbolic
+/// link: what would be written into it would land where the link points. `what` names it
+/// and says what to do ("a level's folder ...").
+pub fn refuse_linked_folder(parent: &Path, dir: &Path, what: &str) -> Result<()> {
+    if is_link(dir) {
+        return Err(Error::OutputForeign {
+            dir: parent.to_path_buf(),
+            file: dir.to_path_buf(),
+            reason: what.to_string(),
+        });
+    }
+    Ok(())
 }
 
 /// Gives the file `path` a copy of its own when another name shares it (a hard link, such as

@@ -63,7 +63,7 @@ use crate::model::ModelSpec;
 use crate::post::quantities::evaluate;
 use crate::run::{
     self,
-    folder::{OutputFolder, OutputMode},
+    folder::{self, OutputFolder, OutputMode},
 };
 use crate::{Error, Result};
 use report::{plot, write_table};
@@ -283,18 +283,12 @@ struct Meshed {
 /// (the level would be written elsewhere).
 fn level_folder(case: &Case, options: &Options, k: usize) -> Result<OutputFolder> {
     let dir = options.out.join(format!("level_{k}"));
-    if dir
-        .symlink_metadata()
-        .is_ok_and(|m| m.file_type().is_symlink())
-    {
-        return Err(Error::OutputForeign {
-            dir: options.out.clone(),
-            file: dir,
-            reason: "a level's folder is a symbolic link, and a study never writes through \
-                     one: remove it or choose another study folder"
-                .into(),
-        });
-    }
+    folder::refuse_linked_folder(
+        &options.out,
+        &dir,
+        "a level's folder is a symbolic link, and a study never writes through one: remove \
+         it or choose another study folder",
+    )?;
     OutputFolder::open(&dir, OutputMode::Force, &run::folder_plan(case))
 }
 

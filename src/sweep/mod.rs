@@ -269,29 +269,20 @@ fn check_study_folder<'a>(study: &Path, runs: impl Iterator<Item = &'a Path>) ->
     if !study.exists() {
         return Ok(());
     }
-    let foreign = |file: &Path, reason: &str| Error::OutputForeign {
+    // A linked `runs` or run folder would take the runs' cases (and results) elsewhere.
+    for dir in std::iter::once(Path::new("runs")).chain(runs) {
+        crate::run::folder::refuse_linked_folder(
+            study,
+            &study.join(dir),
+            "it is a symbolic link, and a plan never writes through one: remove it or choose \
+             another study folder",
+        )?;
+    }
+    let foreign = |file: &str, reason: &str| Error::OutputForeign {
         dir: study.to_path_buf(),
         file: study.join(file),
         reason: reason.to_string(),
     };
-    // A linked `runs` or run folder would take the runs' cases (and results) elsewhere.
-    let is_link = |dir: &Path| {
-        study
-            .join(dir)
-            .symlink_metadata()
-            .is_ok_and(|m| m.file_type().is_symlink())
-    };
-    if let Some(link) = std::iter::once(Path::new("runs"))
-        .chain(runs)
-        .find(|dir| is_link(dir))
-    {
-        return Err(foreign(
-            link,
-            "it is a symbolic link, and a plan never writes through one: remove it or choose \
-             another study folder",
-        ));
-    }
-    let foreign = |file: &str, reason: &str| foreign(Path::new(file), reason);
     if !study.is_dir() {
         return Err(foreign("", "the study folder is a file"));
     }

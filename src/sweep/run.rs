@@ -57,19 +57,12 @@ fn read_summary(dir: &Path) -> Result<serde_json::Value> {
 /// A run's folder `dir` of `study` that is a symbolic link is an error: a sweep never writes
 /// through one.
 fn refuse_linked_run(study: &Path, dir: &Path) -> Result<()> {
-    if dir
-        .symlink_metadata()
-        .is_ok_and(|m| m.file_type().is_symlink())
-    {
-        return Err(Error::OutputForeign {
-            dir: study.to_path_buf(),
-            file: dir.to_path_buf(),
-            reason: "a run's folder is a symbolic link, and a sweep never writes through one: \
-                     remove it and plan the study again"
-                .into(),
-        });
-    }
-    Ok(())
+    crate::run::folder::refuse_linked_folder(
+        study,
+        dir,
+        "a run's folder is a symbolic link, and a sweep never writes through one: remove it \
+         and plan the study again",
+    )
 }
 
 /// Runs task `k` of `study` unless it is done; returns whether it ran. A run that fails still
