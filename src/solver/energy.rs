@@ -391,7 +391,9 @@ pub struct BodySums {
     /// Plastic work per body.
     bodies: Vec<f64>,
     /// The largest equivalent strain increment √(⅔ Δε:Δε) of any point (0 without points;
-    /// NaN if a strain is not a number).
+    /// NaN if a strain is not a number) — for a linear bulk whose force is K·u, where it is
+    /// not above `[solver] max_strain_increment`, a bound on it
+    /// ([`crate::solver::strain_bound`]).
     pub strain_increment: f64,
 }
 
@@ -404,6 +406,29 @@ impl BodySums {
             thermal: 0.0,
             bodies: vec![0.0; model.bodies.len()],
             strain_increment: 0.0,
+        }
+    }
+
+    /// The pass of a converged increment of a linear bulk whose force is K_c u, made
+    /// without its point states: the bodies' stored energy ½ u·K_c u from the continuum's
+    /// internal force `continuum_force` = K_c u (all dofs, reactions included) — the states'
+    /// Σ ½ σ:ε dV to rounding, K_c being Σ Bᵀ D B dV over the same points — no plastic,
+    /// numerical or thermal terms (elastic bodies, no temperature), and the
+    /// `strain_increment` found for it.
+    pub fn of_linear_bulk(
+        model: &Model,
+        u: &[f64],
+        continuum_force: &[f64],
+        strain_increment: f64,
+    ) -> Self {
+        Self {
+            elastic: 0.5
+                * u.iter()
+                    .zip(continuum_force)
+                    .map(|(a, f)| a * f)
+                    .sum::<f64>(),
+            strain_increment,
+            ..Self::new(model)
         }
     }
 
@@ -421,7 +446,7 @@ impl BodySums {
 }
 
 /// The larger of `a` and `b`, NaN if either is (f64::max would drop a NaN).
-fn largest(a: f64, b: f64) -> f64 {
+pub(crate) fn largest(a: f64, b: f64) -> f64 {
     if a.is_nan() || a > b { a } else { b }
 }
 

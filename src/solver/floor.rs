@@ -64,8 +64,13 @@ pub struct SolverWork {
     /// of its record).
     pub force_assemblies: Tally,
     /// Linear bulk without a temperature field, whose force is K·u: the loops that evaluate
-    /// the point states of a converged state alone (no force, no matrix).
+    /// point states alone (no force, no matrix) other than a frame's — the exact strain
+    /// increment of an increment whose bound exceeds the plausibility limit.
     pub state_evaluations: Tally,
+    /// The same loops making the point states of a converged state that a frame's fields
+    /// read (its increments evaluate none: their force is K·u). Part of the frame's output
+    /// time ([`Work::frames`]).
+    pub frame_states: Tally,
     /// Condensed path: the interface elements' loops with their tangent, and for the
     /// internal force alone.
     pub interface_tangent_assemblies: Tally,
@@ -101,7 +106,8 @@ pub struct Work {
     /// wear jump included).
     pub increments: usize,
     /// Frames written and the seconds spent writing (the last wait for the writer thread
-    /// included, with no frame).
+    /// included, with no frame; a linear bulk's point states made for a frame's fields,
+    /// [`SolverWork::frame_states`], included).
     pub frames: Tally,
 }
 
@@ -132,7 +138,8 @@ pub struct FloorParts {
     pub factorisation: f64,
     /// One mean solve per converged increment (at most as many as the run did).
     pub solves: f64,
-    /// Writing the frames: all of the run's output time.
+    /// Writing the frames: all of the run's output time, the point states a frame's fields
+    /// need included.
     pub output: f64,
 }
 
@@ -144,6 +151,7 @@ pub struct FloorCounts {
     pub assemblies: usize,
     pub force_assemblies: usize,
     pub state_evaluations: usize,
+    pub frame_states: usize,
     pub interface_assemblies: usize,
     pub interface_force_assemblies: usize,
     pub products: usize,
@@ -185,6 +193,7 @@ impl Floor {
                 assemblies: s.tangent_assemblies.calls,
                 force_assemblies: s.force_assemblies.calls,
                 state_evaluations: s.state_evaluations.calls,
+                frame_states: s.frame_states.calls,
                 interface_assemblies: s.interface_tangent_assemblies.calls,
                 interface_force_assemblies: s.interface_force_assemblies.calls,
                 products: s.products.calls,
@@ -209,6 +218,7 @@ pub struct WorkSeconds {
     pub assemblies: f64,
     pub force_assemblies: f64,
     pub state_evaluations: f64,
+    pub frame_states: f64,
     pub interface_assemblies: f64,
     pub interface_force_assemblies: f64,
     pub products: f64,
@@ -227,6 +237,7 @@ impl WorkSeconds {
             assemblies: s.tangent_assemblies.seconds,
             force_assemblies: s.force_assemblies.seconds,
             state_evaluations: s.state_evaluations.seconds,
+            frame_states: s.frame_states.seconds,
             interface_assemblies: s.interface_tangent_assemblies.seconds,
             interface_force_assemblies: s.interface_force_assemblies.seconds,
             products: s.products.seconds,

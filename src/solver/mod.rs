@@ -18,4 +18,5 @@ pub mod newton;
 pub mod shakedown;
 pub mod state;
 pub mod stepping;
+pub mod strain_bound;
 pub mod tree_cholesky;

@@ -238,12 +238,15 @@ struct Condensed {
     extrapolated: bool,
     /// Linear bulk whose force at fixed displacements never changes (no temperature field):
     /// f_c(u) = K_c u exactly (u_ref = 0, f_c(0) = 0), so every evaluation after the one
-    /// that made K_c is a product, and a converged state's point states come from a loop
-    /// that evaluates the states alone ([`Problem::bulk_states`]).
+    /// that made K_c is a product, and a converged increment evaluates no element: its
+    /// point states are made only when something reads them ([`Newton::complete_states`]).
     by_product: bool,
     /// Whether the bulk's trial states are not those of the last evaluation's displacements
     /// (it took its force from a product with K_c and evaluated no element).
     states_stale: bool,
+    /// `by_product`: the continuum's internal force K_c u of the last evaluation, over all
+    /// dofs (empty otherwise): the bodies' elastic energy ½ u·K_c u of a converged state.
+    continuum_force: Vec<f64>,
     /// The workspaces of the interface iterations.
     iterations: InterfaceIterations,
 }
@@ -407,6 +410,63 @@ impl<'a> Newton<'a> {
         &self.system
     }
 
+    /// Whether the bulk's point states of the last evaluation were left out: a linear bulk
+    /// whose force is K_c u (no temperature field) evaluates no element in an
+    /// increment. The trial states are then not those of the converged state, and a
+    /// [`Solution`](crate::solver::state::Solution) committed from them holds stale point
+    /// states until [`Self::complete_states`] makes them.
+    pub fn states_pending(&self) -> bool {
+        self.condensed
+            .as_ref()
+            .is_some_and(|c| c.by_product && c.states_stale)
+    }
+
+    /// The continuum's internal force K_c u over all dofs at the last evaluation, for a
+    /// linear bulk whose force is that product (`None` otherwise).
+    pub fn linear_bulk_force(&self) -> Option<&[f64]> {
+        (self.condensed.as_ref())
+            .filter(|c| c.by_product && c.bulk_ready)
+            .map(|c| c.continuum_force.as_slice())
+    }
+
+    /// Makes the bulk's trial point states those of `u`, the last evaluation's displacements,
+    /// if they were left out ([`Self::states_pending`]): one element loop for the states
+    /// alone. Returns its seconds (0 when nothing was pending), tallied as
+    /// [`SolverWork::frame_states`]: states are completed for what reads them, a frame's
+    /// fields.
+    pub fn complete_states(&mut self, problem: &mut impl Problem, u: &[f64]) -> f64 {
+        if !self.states_pending() {
+            return 0.0;
+        }
+        let t = Instant::now();
+        self.bulk_states_at(problem, u);
+        if let Some(c) = self.condensed.as_mut() {
+            c.states_stale = false;
+        }
+        self.work.frame_states.since(t);
+        t.elapsed().as_secs_f64()
+    }
+
+    /// Evaluates the bulk's trial point states at the displacements `v` (all dofs), which
+    /// need not be a state of the run — a linear bulk's strain increment is its strain at
+    /// v = Δu — leaving [`Self::states_pending`] as it was. Tallied as a state evaluation;
+    /// returns its seconds.
+    pub fn states_at(&mut self, problem: &mut impl Problem, v: &[f64]) -> f64 {
+        let t = Instant::now();
+        self.bulk_states_at(problem, v);
+        self.work.state_evaluations.since(t);
+        t.elapsed().as_secs_f64()
+    }
+
+    fn bulk_states_at(&self, problem: &mut impl Problem, u: &[f64]) {
+        problem.bulk_states(&AssemblyInput {
+            dofs: self.dofs,
+            u,
+            tangent: false,
+            algorithm: self.settings.contact_algorithm,
+        });
+    }
+
     /// The work done since the solver was made, by kind.
     pub fn work(&self) -> &SolverWork {
         &self.work
@@ -523,6 +583,7 @@ impl<'a> Newton<'a> {
             extrapolated: false,
             by_product,
             states_stale: false,
+            continuum_force: vec![0.0; if by_product { n } else { 0 }],
             iterations,
         });
         let Some((couplings, assembly_seconds)) = couplings else {
@@ -627,6 +688,7 @@ impl<'a> Newton<'a> {
                 let f = &mut system.internal_force;
                 if c.by_product {
                     stiffness.multiply(&system.pattern, &system.values, self.dofs, u, f);
+                    c.continuum_force.copy_from_slice(f);
                 } else {
                     for ((d, a), b) in c.du.iter_mut().zip(u).zip(&c.u_ref) {
                         *d = a - b;
@@ -756,29 +818,18 @@ impl<'a> Newton<'a> {
                     last_correction.min(next_correction),
                 );
             if engineering && norms {
-                if let Some(c) = self.condensed.as_mut().filter(|c| c.extrapolated) {
-                    if !c.by_product {
-                        // Confirm with the continuum's elements (its states and reactions
-                        // too): their force is f_c(u_ref) + K_c Δu only while the bulk's
-                        // loads stand still.
-                        fresh = true;
-                        log.residuals.pop();
-                        continue;
-                    }
-                    if c.states_stale {
-                        // f_c = K_c u exactly: the states alone are missing.
-                        let t = Instant::now();
-                        let input = AssemblyInput {
-                            dofs,
-                            u,
-                            tangent: false,
-                            algorithm: settings.contact_algorithm,
-                        };
-                        problem.bulk_states(&input);
-                        c.states_stale = false;
-                        self.work.state_evaluations.since(t);
-                        log.assembly_seconds += t.elapsed().as_secs_f64();
-                    }
+                if self
+                    .condensed
+                    .as_ref()
+                    .is_some_and(|c| c.extrapolated && !c.by_product)
+                {
+                    // Confirm with the continuum's elements (its states and reactions too):
+                    // their force is f_c(u_ref) + K_c Δu only while the bulk's loads stand
+                    // still. (f_c = K_c u exactly leaves the states alone missing, made
+                    // when read: `complete_states`.)
+                    fresh = true;
+                    log.residuals.pop();
+                    continue;
                 }
                 if criteria.average_force.is_none() {
                     self.flux_history.record(flux, zero_flux);

@@ -12,13 +12,13 @@
 use crate::Result;
 use crate::assembly::filled_in_parallel;
 use crate::contact::InterfaceState;
-use crate::element::quadrature::MAX_CELL_POINTS;
+use crate::element::quadrature::{MAX_CELL_POINTS, cell_rule};
 use crate::element::set::{INTERFACE_POINTS, InternalLayout};
-use crate::material::PointState;
+use crate::material::{PointState, equivalent_strain};
 use crate::model::Model;
 use crate::model::timeline::Frame;
 use crate::solver::cycles;
-use crate::solver::energy::{BodySums, EnergyLedger, Increment};
+use crate::solver::energy::{BodySums, EnergyLedger, Increment, largest};
 use crate::solver::floor::Work;
 use crate::solver::mechanics::Mechanics;
 use crate::solver::newton::{ForceAverage, LastIncrement, NewtonLog};
@@ -78,6 +78,25 @@ impl Solution {
             jump_use: vec![0.0; model.interface.pairs.len()],
             thermal: ThermalState::default(),
         }
+    }
+
+    /// The largest equivalent strain √(⅔ ε:ε) of the bodies' trial point states (NaN if one
+    /// is not a number): a linear bulk's strain increment when they were evaluated at Δu.
+    pub fn largest_trial_strain(&self, model: &Model) -> f64 {
+        let cells = model.continuum.cells.iter();
+        cells
+            .zip(self.trial.chunks_exact(MAX_CELL_POINTS))
+            .flat_map(|(cell, states)| &states[..cell_rule(cell.kind).len()])
+            .map(|s| equivalent_strain(&s.strain))
+            .fold(0.0, largest)
+    }
+
+    /// Makes the bodies' trial point states the committed ones, leaving the rest as it is:
+    /// for point states made after the increment was committed
+    /// ([`crate::solver::newton::Newton::complete_states`]), whose trial array then holds
+    /// older states, which nothing reads before an element loop writes them again.
+    pub fn adopt_trial_point_states(&mut self) {
+        std::mem::swap(&mut self.committed, &mut self.trial);
     }
 
     /// Makes the trial states of a converged increment the committed ones. The bodies'
@@ -483,5 +502,11 @@ pub trait Observer {
     /// so that the state closest to the failure can be looked at.
     fn partial_step(&mut self, _step: &StepResult, _time: f64) -> Result<()> {
         Ok(())
+    }
+    /// Whether [`Self::step`] reads the bodies' point states of output step `step` (its
+    /// field output does). A linear bulk whose force is K·u evaluates none in its increments:
+    /// they are made for the steps that read them (all, unless the observer says otherwise).
+    fn reads_point_states(&self, _step: usize) -> bool {
+        true
     }
 }

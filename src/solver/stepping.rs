@@ -19,11 +19,13 @@ use crate::error::{Attempt, AttemptFailure, NoConvergence};
 use crate::model::Model;
 use crate::solver::coupling;
 use crate::solver::diagnosis::{diagnose, implausible_increment, step_failure};
+use crate::solver::energy::BodySums;
 use crate::solver::newton::Problem;
 use crate::solver::newton::{Newton, NewtonLog, NewtonSettings, distance, norm};
 use crate::solver::state::{
     LoopState, Observer, Progress, Resume, RunStatistics, Solution, StepResult,
 };
+use crate::solver::strain_bound::StrainBound;
 use crate::{Error, Result};
 
 /// An [`Observer`] of converged steps only.
@@ -88,6 +90,7 @@ pub fn run_steps_from(
     let constant_tangent = !model.control.plastic && model.interface.elements.is_empty();
     let schedule = &model.schedule;
     let mut warned_far_from_equilibrium = false;
+    let mut bound = None;
     while state.step <= schedule.steps() {
         let step = state.step;
         // Every log line of the step (Newton iterations, cut-backs, its output) names it.
@@ -138,7 +141,13 @@ pub fn run_steps_from(
             // A converged increment's point states are read once: for its strain
             // increment here, for the energy ledger if it is kept.
             let scan = match &attempt {
-                Ok(log) if log.converged => Some(solution.scan_increment(model)),
+                Ok(log) if log.converged => Some(increment_sums(
+                    model,
+                    &mut newton,
+                    &mut solution,
+                    &converged_u,
+                    &mut bound,
+                )),
                 _ => None,
             };
             let implausible = scan.as_ref().and_then(|scan| {
@@ -249,26 +258,24 @@ pub fn run_steps_from(
             Some(jump) => match solution.end_cycle(model, jump as f64) {
                 Ok(true) => {
                     let floor = state.force_floor;
-                    settle_after_jump(
-                        model,
-                        &mut newton,
-                        &mut solution,
-                        &mut converged_u,
-                        &f_ext,
-                        floor,
-                    )
-                    .map(|log| {
-                        stats.add(&log);
-                        stats.work.increments += 1;
-                        state.iterations += log.iterations;
-                        state.force_average = newton.force_average();
-                    })
-                    .map_err(|reason| Error::JumpSettling {
-                        step_index: None,
-                        jump_cycles: jump as f64,
-                        reason,
-                    })
-                    .and_then(|()| solution.check_jump_energy(model, jump as f64))
+                    let mut settling = Settling {
+                        newton: &mut newton,
+                        converged_u: &mut converged_u,
+                        bound: &mut bound,
+                    };
+                    settle_after_jump(model, &mut settling, &mut solution, &f_ext, floor)
+                        .map(|log| {
+                            stats.add(&log);
+                            stats.work.increments += 1;
+                            state.iterations += log.iterations;
+                            state.force_average = newton.force_average();
+                        })
+                        .map_err(|reason| Error::JumpSettling {
+                            step_index: None,
+                            jump_cycles: jump as f64,
+                            reason,
+                        })
+                        .and_then(|()| solution.check_jump_energy(model, jump as f64))
                 }
                 Ok(false) => Ok(()),
                 Err(e) => Err(e),
@@ -277,6 +284,13 @@ pub fn run_steps_from(
                 let analysis_step = schedule.timeline().frame(target).analysis_step;
                 e.in_analysis_step(analysis_step - 1)
             }),
+        };
+        // A failed jump's files come from `report_partial`, which evaluates its states.
+        let settled = !matches!(cycle_end, Err(Error::JumpSettling { .. }));
+        let frame_states = if settled && (cycle_end.is_err() || observer.reads_point_states(step)) {
+            complete_committed_states(model, &mut newton, &mut solution)
+        } else {
+            0.0
         };
         let internal_force = &newton.system().internal_force;
         state.force_floor = state.force_floor.max(1e-3 * norm(internal_force));
@@ -315,6 +329,7 @@ pub fn run_steps_from(
         if let Err(e) = cycle_end {
             // The increment converged: its files are kept, without a restart record (a
             // resumed run meets the same error instead of continuing past it).
+            stats.add_output(frame_states, false);
             observer.partial_step(&result, target)?;
             return Err(e);
         }
@@ -325,7 +340,7 @@ pub fn run_steps_from(
             solution: &solution,
             last_increment: newton.last_increment(),
         };
-        stats.add_output(observer.step(&result, &progress)?, true);
+        stats.add_output(frame_states + observer.step(&result, &progress)?, true);
     }
     // Read at the end: the symbolic analysis runs at the first factorisation.
     stats.symbolic_seconds = newton.symbolic_seconds();
@@ -352,6 +367,54 @@ pub(crate) fn start_newton(
     Ok(log)
 }
 
+/// The pass of a converged increment over its bodies: its largest strain increment and its
+/// energy terms ([`Solution::scan_increment`]). A linear bulk whose force is K·u evaluated no
+/// element in the increment: its stored energy is ½ u·K u and its strain increment is
+/// bounded from the nodal increments ([`StrainBound`], made at the first such increment),
+/// and found exactly — the point states at Δu = u − `u_old`, B being linear — only when the
+/// bound exceeds `[solver] max_strain_increment`, so the plausibility verdict is always the
+/// one the point states give.
+fn increment_sums(
+    model: &Model,
+    newton: &mut Newton,
+    solution: &mut Solution,
+    u_old: &[f64],
+    bound: &mut Option<StrainBound>,
+) -> BodySums {
+    let force = newton
+        .linear_bulk_force()
+        .filter(|_| newton.states_pending());
+    let Some(force) = force else {
+        return solution.scan_increment(model);
+    };
+    // Such a bulk's restart records leave its point states out (they follow from u).
+    debug_assert!(model.states_follow_displacements());
+    let mut sums = BodySums::of_linear_bulk(model, &solution.u, force, 0.0);
+    let bound = bound.get_or_insert_with(|| StrainBound::new(model));
+    sums.strain_increment = bound.of(model, &solution.u, u_old);
+    // A bound that is not a number (nor is Δu) is looked at exactly too.
+    let plausible = sums.strain_increment <= model.control.max_strain_increment;
+    if !plausible {
+        let du: Vec<f64> = solution.u.iter().zip(u_old).map(|(a, b)| a - b).collect();
+        let (_, mut problem) = solution.split(model);
+        newton.states_at(&mut problem, &du);
+        sums.strain_increment = solution.largest_trial_strain(model);
+    }
+    sums
+}
+
+/// Makes the committed point states those of the converged state where a linear bulk's
+/// increments left them out ([`Newton::states_pending`]); returns the seconds spent.
+fn complete_committed_states(model: &Model, newton: &mut Newton, solution: &mut Solution) -> f64 {
+    if !newton.states_pending() {
+        return 0.0;
+    }
+    let (u, mut problem) = solution.split(model);
+    let seconds = newton.complete_states(&mut problem, u);
+    solution.adopt_trial_point_states();
+    seconds
+}
+
 /// Re-equilibrates the bodies after a wear jump, under the loads of the converged state (one
 /// solve, no load change), and commits the result (`converged_u` follows). The jump deepened
 /// the gaps by the wear of the cycles it stands for; in reality the bodies follow that wear
@@ -363,23 +426,15 @@ pub(crate) fn start_newton(
 /// is left as it was before the solve and the solver's reason is returned.
 fn settle_after_jump(
     model: &Model,
-    newton: &mut Newton,
+    settling: &mut Settling<'_, '_>,
     solution: &mut Solution,
-    converged_u: &mut [f64],
     external_force: &[f64],
     force_floor: f64,
 ) -> std::result::Result<NewtonLog, String> {
     let mut solve = |solution: &mut Solution| {
-        let outcome = settle_once(
-            model,
-            newton,
-            solution,
-            converged_u,
-            external_force,
-            force_floor,
-        );
+        let outcome = settle_once(model, settling, solution, external_force, force_floor);
         if outcome.is_err() {
-            solution.u.copy_from_slice(converged_u);
+            solution.u.copy_from_slice(settling.converged_u);
             solution.reset_trial();
         }
         outcome
@@ -391,15 +446,28 @@ fn settle_after_jump(
     })
 }
 
+/// The stepping loop's state a re-equilibrium after a wear jump ([`settle_after_jump`])
+/// works on.
+struct Settling<'a, 'm> {
+    newton: &'a mut Newton<'m>,
+    /// The converged displacements, which a converged re-equilibrium replaces.
+    converged_u: &'a mut [f64],
+    bound: &'a mut Option<StrainBound>,
+}
+
 /// One re-equilibrium solve of [`settle_after_jump`]; commits it when it converges.
 fn settle_once(
     model: &Model,
-    newton: &mut Newton,
+    settling: &mut Settling<'_, '_>,
     solution: &mut Solution,
-    converged_u: &mut [f64],
     external_force: &[f64],
     force_floor: f64,
 ) -> std::result::Result<NewtonLog, String> {
+    let Settling {
+        newton,
+        converged_u,
+        bound,
+    } = settling;
     let (u, mut problem) = solution.split(model);
     let log = match newton.solve_increment(&mut problem, u, external_force, force_floor) {
         Ok(log) if log.converged => log,
@@ -412,8 +480,8 @@ fn settle_once(
         }
         Err(e) => return Err(e.to_string()),
     };
+    let scan = increment_sums(model, newton, solution, converged_u, bound);
     let internal_force = newton.system().internal_force.as_slice();
-    let scan = solution.scan_increment(model);
     solution.record_energy(model, converged_u, external_force, internal_force, scan);
     solution.commit();
     converged_u.copy_from_slice(&solution.u);
@@ -506,6 +574,10 @@ fn report_partial(
             algorithm: settings.contact_algorithm,
         },
     );
+    if model.states_follow_displacements() {
+        // A linear bulk's increments may have left its committed point states out.
+        solution.committed.copy_from_slice(&solution.trial);
+    }
     let mut external = vec![0.0; model.dofs.dof_count()];
     model.external_force(state.time, &mut external);
     let mut frame = model.schedule.timeline().frame(state.time);

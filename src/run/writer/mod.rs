@@ -224,9 +224,8 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         self.summary
             .shakedown
             .clone_from(&resume.solution.internal.cycles.verdicts);
-        let timeline = self.model.schedule.timeline();
         for step in 1..resume.state.step {
-            if self.vtu && (self.all_frames || timeline.is_end_frame(step)) {
+            if self.vtu && self.has_fields(step) {
                 self.out.series.push(frame_entry(step, step as f64));
             }
         }
@@ -280,7 +279,7 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
     /// failed step, `progress` `None`), then the restart record, then the indexes.
     pub(super) fn step(&mut self, step: &StepResult, progress: Option<&Progress>) -> Result<f64> {
         let start = Instant::now();
-        let fields = self.all_frames || self.model.schedule.timeline().is_end_frame(step.step);
+        let fields = self.has_fields(step.step);
         let row = self.write_step_files(step, step.step as f64, fields)?;
         self.push_history(row)?;
         // Before the restart record, which counts the marks for a resumed run's summary.
@@ -312,6 +311,13 @@ impl<'m, 's, F: FnMut(&Model, &StepResult) -> Result<()>> StepWriter<'m, 's, F> 
         self.bar.0.inc(1);
         self.bar.0.set_message(self.progress_message(step));
         Ok(start.elapsed().as_secs_f64() + std::mem::take(&mut self.increment_seconds))
+    }
+
+    /// Whether output step `step` gets field output (VTU, contact tables): every step, or in
+    /// a cyclic step with `cycle_frames = "ends"` those of its first and last cycle and the
+    /// last of every other cycle.
+    fn has_fields(&self, step: usize) -> bool {
+        self.all_frames || self.model.schedule.timeline().is_end_frame(step)
     }
 
     /// The error that stops the run after step `step` when a stop was asked for: its files
@@ -448,6 +454,13 @@ impl<F: FnMut(&Model, &StepResult) -> Result<()>> Observer for StepWriter<'_, '_
 
     fn increment(&mut self, progress: &Progress) -> Result<()> {
         self.write_record(progress)
+    }
+
+    /// The point states are read by the field output alone (the bodies' VTU grids, the F3
+    /// column of the contact tables); the history row, the summary and the restart record
+    /// do not read them.
+    fn reads_point_states(&self, step: usize) -> bool {
+        self.has_fields(step)
     }
 
     /// The last converged sub-increment of a failed step: its files and index entries at

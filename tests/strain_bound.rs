@@ -1,0 +1,221 @@
+//! The bound on a linear bulk's strain increment (`asperity::solver::strain_bound`), which
+//! spares a converged increment whose force is K·u its element loop, is never below the
+//! largest strain increment its point states give — on every analysis (plane strain, plane
+//! stress, axisymmetry with and without twist), formulation (full, B-bar) and cell kind
+//! (quad8, tri6) — is not needlessly loose on a smooth field, and sees no strain in a
+//! translation that strains nothing.
+
+mod common;
+
+use asperity::config::SolverSpec;
+use asperity::mesh::msh::read_msh;
+use asperity::model::Model;
+use asperity::run::newton_settings;
+use asperity::solver::newton::Newton;
+use asperity::solver::state::Solution;
+use asperity::solver::strain_bound::StrainBound;
+use common::{CaseBuilder, elastic, fixture, model};
+
+/// The meshes, their bodies and the curves that hold them: two quad8 blocks [0,2]×[0,1] and
+/// [0,2]×[1,2], and two tri6 bodies on a base.
+const MESHES: [(&str, [&str; 2], &[&str]); 2] = [
+    ("contact_pair.msh", ["lower", "upper"], &["base", "lid"]),
+    ("tri6.msh", ["left", "right"], &["base"]),
+];
+
+/// A case of an analysis, with nothing in it yet.
+type Analysis = fn() -> CaseBuilder;
+
+/// Every analysis, formulation and mesh, each with the case's name; ν = 0.45 (plane
+/// stress's out-of-plane strain grows with ν).
+fn models() -> Vec<(String, Model)> {
+    let analyses: [(&str, Analysis); 4] = [
+        ("plane strain", CaseBuilder::plane_strain),
+        ("plane stress", || CaseBuilder::plane_stress(1.0)),
+        ("axisymmetric", CaseBuilder::axisymmetric),
+        ("twist", || {
+            CaseBuilder::axisymmetric().set("analysis", "twist", true)
+        }),
+    ];
+    let mut out = Vec::new();
+    for (analysis, builder) in analyses {
+        for formulation in ["full", "bbar"] {
+            if analysis == "plane stress" && formulation == "bbar" {
+                continue;
+            }
+            for (mesh, bodies, held) in MESHES {
+                let mut case = builder().mesh_file(&fixture(mesh));
+                for body in bodies {
+                    case = case.body_with(body, elastic(1000.0, 0.45), formulation);
+                }
+                let components: &[(&str, f64)] = if analysis == "twist" {
+                    &[("ux", 0.0), ("uy", 0.0), ("utheta", 0.0)]
+                } else {
+                    &[("ux", 0.0), ("uy", 0.0)]
+                };
+                for group in held {
+                    case = case.support(group, components);
+                }
+                let case = case.case();
+                let built = model(read_msh(&fixture(mesh)).unwrap(), &case).unwrap();
+                out.push((format!("{analysis}, {formulation}, {mesh}"), built));
+            }
+        }
+    }
+    out
+}
+
+/// A small pseudo-random generator (the same numbers on every machine).
+struct Numbers(u64);
+
+impl Numbers {
+    /// The next number in [−1, 1).
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+}
+
+/// A displacement increment over all dofs: a translation, a smooth quadratic field and, if
+/// `noise`, a different random value at every node.
+fn increment(model: &Model, numbers: &mut Numbers, noise: bool) -> Vec<f64> {
+    let d = model.analysis.dofs_per_node();
+    let mut du = vec![0.0; model.dofs.dof_count()];
+    let coefficients: Vec<[f64; 6]> = (0..d)
+        .map(|_| std::array::from_fn(|_| numbers.next()))
+        .collect();
+    for (node, &[x, y]) in model.mesh.nodes.iter().enumerate() {
+        for (c, k) in coefficients.iter().enumerate() {
+            let smooth =
+                10.0 * k[0] + k[1] * x + k[2] * y + k[3] * x * x + k[4] * x * y + k[5] * y * y;
+            let rough = if noise { numbers.next() } else { 0.0 };
+            du[d * node + c] = 1e-4 * (smooth + rough);
+        }
+    }
+    du
+}
+
+/// The largest equivalent strain increment of the point states at `du`.
+fn exact(model: &Model, du: &[f64]) -> f64 {
+    let settings = newton_settings(&SolverSpec::default());
+    let mut newton = Newton::new(settings, &model.dofs, &model.pattern).unwrap();
+    let mut solution = Solution::new(model);
+    let (_, mut problem) = solution.split(model);
+    newton.states_at(&mut problem, du);
+    solution.largest_trial_strain(model)
+}
+
+#[test]
+fn the_bound_is_never_below_the_point_states_largest_strain_increment() {
+    let mut numbers = Numbers(29);
+    for (name, model) in models() {
+        let bound = StrainBound::new(&model);
+        let zero = vec![0.0; model.dofs.dof_count()];
+        for trial in 0..12 {
+            let du = increment(&model, &mut numbers, trial % 2 == 1);
+            let (exact, bound) = (exact(&model, &du), bound.of(&model, &du, &zero));
+            assert!(exact > 0.0, "{name}: trial {trial} strains nothing");
+            assert!(
+                bound >= exact,
+                "{name}, trial {trial}: bound {bound:e} < {exact:e}"
+            );
+            // Loose by the norms it uses, not by orders of magnitude: a filter that lets
+            // through every ordinary increment.
+            assert!(
+                bound <= 40.0 * exact,
+                "{name}, trial {trial}: bound {bound:e} against {exact:e}"
+            );
+        }
+        // Increments from a displaced state count only the change.
+        let (u_old, du) = (
+            increment(&model, &mut numbers, true),
+            increment(&model, &mut numbers, false),
+        );
+        let u: Vec<f64> = u_old.iter().zip(&du).map(|(a, b)| a + b).collect();
+        assert!(
+            bound.of(&model, &u, &u_old) >= exact(&model, &du),
+            "{name}: from a displaced state"
+        );
+    }
+}
+
+#[test]
+fn a_translation_that_strains_nothing_has_a_zero_bound() {
+    for (name, model) in models() {
+        let bound = StrainBound::new(&model);
+        let d = model.analysis.dofs_per_node();
+        let zero = vec![0.0; model.dofs.dof_count()];
+        // Along y (the axis of symmetry), and along x too in a plane analysis; in
+        // axisymmetry a radial translation is a hoop strain u_r / r, which the bound sees.
+        let components: &[usize] = if model.analysis.is_axisymmetric() {
+            &[1]
+        } else {
+            &[0, 1]
+        };
+        for &c in components {
+            let mut du = zero.clone();
+            du.iter_mut().skip(c).step_by(d).for_each(|v| *v = 0.5);
+            let b = bound.of(&model, &du, &zero);
+            assert!(b < 1e-12, "{name}: translation {c} bounded by {b:e}");
+        }
+        if model.analysis.is_axisymmetric() {
+            let mut du = zero.clone();
+            du.iter_mut().step_by(d).for_each(|v| *v = 1e-3);
+            let (b, e) = (bound.of(&model, &du, &zero), exact(&model, &du));
+            assert!(
+                b >= e && e > 0.0,
+                "{name}: radial translation {b:e} < {e:e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_displacement_that_is_not_a_number_has_no_bound() {
+    let (_, model) = models().swap_remove(0);
+    let mut du = vec![0.0; model.dofs.dof_count()];
+    du[7] = f64::NAN;
+    let zero = vec![0.0; model.dofs.dof_count()];
+    assert!(StrainBound::new(&model).of(&model, &du, &zero).is_nan());
+}
+
+/// Two elastic blocks on a frictional joint pressed together by moving the upper one's lid
+/// down, in two steps, with `max_strain_increment` below the strain of a whole step:
+/// increments are cut back until they pass. On the condensed path (contact) the bulk's force
+/// is K·u and its increments are judged by the bound, and exactly where the bound exceeds
+/// the limit; with the Krylov solver every iteration evaluates the elements. Both must cut
+/// back alike.
+#[test]
+fn a_linear_bulk_judges_its_increments_as_its_point_states_do() {
+    let run = |solver: &str| {
+        let case = common::two_blocks(0.3)
+            .support("lid", &[("ux", 0.0), ("uy", -0.01)])
+            .steps(2)
+            .set("solver", "max_strain_increment", 1.5e-3)
+            .set("solver", "linear_solver", solver)
+            .case();
+        let mesh = read_msh(&fixture("contact_pair.msh")).unwrap();
+        let built = model(mesh, &case).unwrap();
+        let settings = newton_settings(&case.solver);
+        asperity::solver::stepping::run_steps(&built, &settings, |_| Ok(0.0))
+            .unwrap()
+            .1
+    };
+    let (condensed, krylov) = (run("condensed"), run("krylov"));
+    assert!(krylov.cutbacks > 0, "the limit cuts back: {krylov:?}");
+    assert_eq!(
+        (condensed.cutbacks, condensed.increments),
+        (krylov.cutbacks, krylov.increments)
+    );
+    let work = condensed.work.solver;
+    // Each step's frame reads the states once; the increments whose bound exceeded the
+    // limit were judged from their states at Δu.
+    assert_eq!(work.frame_states.calls, 2);
+    assert!(
+        work.state_evaluations.calls >= condensed.cutbacks,
+        "{work:?}"
+    );
+}
