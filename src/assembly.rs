@@ -181,7 +181,8 @@ impl SparsityPattern {
         let d = dofs.dof_count() / node_count.max(1);
         // On all cores, by blocks of nodes: the nodes' neighbours and their columns' lengths,
         // then (once the columns' starts are known) their rows, written in place.
-        const NODES_PER_BLOCK: usize = 4096;
+        // Blocks small enough to share out evenly on small meshes too.
+        const NODES_PER_BLOCK: usize = 512;
         let blocks: Vec<NodeBlock> = (0..node_count.div_ceil(NODES_PER_BLOCK))
             .into_par_iter()
             .map(|b| {
@@ -373,10 +374,18 @@ impl NodeBlock {
             node_elements.neighbours(node, elements, &mut adjacent);
             block.neighbours.extend_from_slice(&adjacent);
             block.start.push(block.neighbours.len() as u32);
+            // The components of one block of a node have the same rows: counted once.
+            let mut last: Option<(bool, u32)> = None;
             for c in 0..d {
-                if let Some(column) = column_rows(dofs, d, node, c, &adjacent) {
-                    block.lengths.push(column.count() as u32);
-                }
+                let Some(column) = column_rows(dofs, d, node, c, &adjacent) else {
+                    continue;
+                };
+                let length = match last {
+                    Some((twist, length)) if twist == (c == 2) => length,
+                    _ => column.count() as u32,
+                };
+                block.lengths.push(length);
+                last = Some((c == 2, length));
             }
         }
         block
@@ -385,21 +394,35 @@ impl NodeBlock {
     /// Writes the rows of the block's columns, in order, into `rows` (as long as the
     /// lengths' sum).
     fn write_rows(&self, (dofs, d): (&DofMap, usize), rows: &mut [u32]) {
-        let mut slots = rows.iter_mut();
+        let mut at = 0;
         let mut from = 0;
         for (node, &to) in self.nodes.clone().zip(&self.start) {
             let adjacent = &self.neighbours[from..to as usize];
+            // The components of one block of a node have the same rows: written once, then
+            // copied.
+            let mut last: Option<(bool, std::ops::Range<usize>)> = None;
             for c in 0..d {
-                let column = column_rows(dofs, d, node, c, adjacent)
-                    .into_iter()
-                    .flatten();
-                for (eq, slot) in column.zip(&mut slots) {
-                    *slot = eq as u32;
+                let Some(column) = column_rows(dofs, d, node, c, adjacent) else {
+                    continue;
+                };
+                let start = at;
+                match &last {
+                    Some((twist, written)) if *twist == (c == 2) => {
+                        rows.copy_within(written.clone(), at);
+                        at += written.len();
+                    }
+                    _ => {
+                        for (eq, slot) in column.zip(&mut rows[at..]) {
+                            *slot = eq as u32;
+                            at += 1;
+                        }
+                    }
                 }
+                last = Some((c == 2, start..at));
             }
             from = to as usize;
         }
-        debug_assert!(slots.next().is_none(), "the rows fill the block's columns");
+        debug_assert_eq!(at, rows.len(), "the rows fill the block's columns");
     }
 }
 
