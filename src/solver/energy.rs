@@ -157,13 +157,11 @@ impl PartialEq for Weights {
 }
 
 impl Weights {
-    /// Builds the weights of `model` unless they are built already.
-    fn ensure(&mut self, model: &Model) {
+    /// Builds the continuum's point volumes of `model` unless they are built already (a
+    /// linear bulk whose increments evaluate no element never needs them).
+    fn ensure_volumes(&mut self, model: &Model) {
         let cells = &model.continuum.cells;
-        let elements = &model.interface.elements;
-        if self.volumes.len() == cells.len() * MAX_CELL_POINTS
-            && self.interface.len() == elements.len() * INTERFACE_POINTS
-        {
+        if self.volumes.len() == cells.len() * MAX_CELL_POINTS {
             return;
         }
         self.volumes = vec![0.0; cells.len() * MAX_CELL_POINTS];
@@ -176,6 +174,14 @@ impl Weights {
                     .expect("cell Jacobians are checked when the model is built")
                     .dvol;
             }
+        }
+    }
+
+    /// Builds the interface points' weights of `model` unless they are built already.
+    fn ensure_interface(&mut self, model: &Model) {
+        let elements = &model.interface.elements;
+        if self.interface.len() == elements.len() * INTERFACE_POINTS {
+            return;
         }
         let analysis = &model.interface.analysis;
         self.interface = elements
@@ -232,7 +238,7 @@ impl EnergyLedger {
         increment: &Increment,
         bodies: BodySums,
     ) -> Vec<f64> {
-        self.weights.ensure(model);
+        self.weights.ensure_interface(model);
         self.total.external_work += self.external_work(model, increment);
         let bodies = self.record_bodies(model, increment, bodies);
         let i = self.interface_work(model, increment);
@@ -256,7 +262,7 @@ impl EnergyLedger {
         state: &InterfaceState,
         added_depth: f64,
     ) {
-        self.weights.ensure(model);
+        self.weights.ensure_interface(model);
         let work = -state.stress[1] * added_depth * self.weights.interface[point].da;
         self.total.wear_work += work;
         self.total.interface_energy -= work;
@@ -302,7 +308,7 @@ impl EnergyLedger {
         trial: &[PointState],
     ) -> BodySums {
         use rayon::prelude::*;
-        self.weights.ensure(model);
+        self.weights.ensure_volumes(model);
         // Blocks of cells in parallel, their sums added in block order: the same bits on any
         // number of threads.
         let block = ENERGY_BLOCK * MAX_CELL_POINTS;
@@ -326,6 +332,9 @@ impl EnergyLedger {
     /// plastic dissipation per body.
     fn record_bodies(&mut self, model: &Model, increment: &Increment, sums: BodySums) -> Vec<f64> {
         let mut bodies = sums.bodies;
+        if !increment.internal_layout.is_empty() {
+            self.weights.ensure_volumes(model);
+        }
         let (stored, released) =
             hardening_energy(model, increment, &self.weights.volumes, &mut bodies);
         let t = &mut self.total;
