@@ -17,8 +17,9 @@
 //! hoop strain u_r / r), so a body moving as a whole is not mistaken for a strained one. The
 //! equivalent strain √(⅔ Δε:Δε) (engineering shears halved) is at most √(⅔) ‖Δε‖₂, and in
 //! plane stress the out-of-plane strain −ν/(1−ν)(Δε_xx + Δε_yy) the material adds is at
-//! most √2 times the in-plane norm (ν < ½), a factor √3 in all. Each cell keeps the largest
-//! ‖B_p‖_F and ‖C_p,c‖₂ (c: each displacement component) over its points.
+//! most √2 times the in-plane norm (|ν/(1−ν)| < 1 for −1 < ν < ½), a factor √3 in all.
+//! Each cell keeps the largest ‖B_p‖_F and ‖C_p,c‖₂ (c: each displacement component) over
+//! its points: 32 bytes per cell.
 //!
 //! The bound is only a filter: an increment whose bound exceeds the limit gets the exact
 //! largest strain increment from its point states, so every verdict is the one the point
