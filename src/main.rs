@@ -530,7 +530,8 @@ fn execute(command: Command, log_file: &LogFile) -> asperity::Result<()> {
         Command::Fit { .. } | Command::Sweep { .. } => unreachable!("handled by fit_or_sweep"),
         Command::MeshInfo { file } => {
             let mesh = msh::read_msh(&file)?;
-            say!("{}", msh::describe(&mesh));
+            let distorted = asperity::element::kinematics::distorted_cells(&mesh);
+            say!("{}", msh::describe(&mesh, &distorted));
         }
         Command::Check { case } => say!("{}", check(&case)?),
         Command::Init { dir } => {

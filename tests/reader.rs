@@ -304,7 +304,7 @@ fn bad_files_give_clear_errors() {
 
 #[test]
 fn describe_reports_counts_groups_and_no_problems() {
-    let report = describe(&read("two_bodies_bin.msh"));
+    let report = describe(&read("two_bodies_bin.msh"), &[]);
     for expected in [
         "nodes: 92",
         "cells: 22 (quad8: 22, tri6: 0)",
@@ -322,7 +322,7 @@ fn describe_reports_counts_groups_and_no_problems() {
         );
     }
     let mesh = read("clockwise.msh");
-    let report = describe(&mesh);
+    let report = describe(&mesh, &[]);
     let line = format!("counter-clockwise: {}", mesh.cells.len());
     assert!(report.contains(&line), "missing `{line}` in:\n{report}");
 }
@@ -342,7 +342,7 @@ fn describe_reports_problems() {
     let c = &mut mesh.cells[0];
     c.nodes[1] = c.nodes[0];
     c.nodes[2] = c.nodes[0];
-    let report = describe(&mesh);
+    let report = describe(&mesh, &[]);
     for expected in [
         "1 nodes are used by no element (tags 1000)",
         "\"nowhere\"",
@@ -372,7 +372,7 @@ fn print_error_messages() {
     ] {
         println!("{}", read_msh(&fixture(name)).unwrap_err());
     }
-    println!("{}", describe(&read("crack.msh")));
+    println!("{}", describe(&read("crack.msh"), &[]));
 }
 
 /// Timing of a large mesh (e.g. 500k nodes, 170k quad8): set `ASPERITY_BIG_MSH` to its path and

@@ -143,6 +143,22 @@ fn mapping(s: &ShapeValues, coords: &[[f64; 2]]) -> Mapping {
     }
 }
 
+/// The tags of the cells of `mesh` whose isoparametric map is not positive everywhere
+/// ([`min_jacobian`] not above 0, or not a number): inverted, degenerate, or folded by a
+/// mid-side node too far from its edge's middle. A model refuses them
+/// ([`crate::Error::DistortedElement`]); `asperity mesh-info` lists them.
+pub fn distorted_cells(mesh: &crate::mesh::Mesh) -> Vec<u64> {
+    let folded = |cell: &&crate::mesh::Cell| {
+        let mut coords = [[0.0; 2]; 8];
+        for (k, &n) in cell.nodes().iter().enumerate() {
+            coords[k] = mesh.nodes[n as usize];
+        }
+        let det = min_jacobian(cell.kind, &coords);
+        det.is_nan() || det <= 0.0
+    };
+    mesh.cells.iter().filter(folded).map(|c| c.tag).collect()
+}
+
 /// Smallest Jacobian determinant of a cell over its integration points and nodes; a
 /// non-positive value means the cell is inverted or degenerate.
 pub fn min_jacobian(kind: CellKind, coords: &[[f64; 2]; 8]) -> f64 {

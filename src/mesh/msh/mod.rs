@@ -966,7 +966,7 @@ mod tests {
         let mut nodes = quad_nodes();
         nodes.push((200, [5.0, 5.0, 0.0]));
         let mesh = parse_str(&msh(&nodes, &[(2, 16, vec![(1, (101..=108).collect())])])).unwrap();
-        let report = describe(&mesh);
+        let report = describe(&mesh, &[]);
         assert!(report.contains("nodes: 9"), "{report}");
         assert!(report.contains("cells: 1 (quad8: 1, tri6: 0)"), "{report}");
         assert!(report.contains("my body"), "{report}");
@@ -978,6 +978,26 @@ mod tests {
             report.contains("physical group \"edge\" (dim 1, tag 2) has no lines"),
             "{report}"
         );
+    }
+
+    /// A cell whose corners are in order but whose mid-side node lies far from its edge's
+    /// middle (the bottom one at 0.15 of the edge, nearer the corner than the quarter point)
+    /// folds its map: a run refuses it, and `mesh-info` says so instead of "problems: none".
+    #[test]
+    fn describe_names_a_distorted_cell() {
+        let mut nodes = quad_nodes();
+        nodes[4].1 = [0.3, 0.0, 0.0];
+        let mesh = parse_str(&msh(&nodes, &[(2, 16, vec![(1, (101..=108).collect())])])).unwrap();
+        let distorted = crate::element::kinematics::distorted_cells(&mesh);
+        assert_eq!(distorted, [1]);
+        let report = describe(&mesh, &distorted);
+        assert!(report.contains("1 distorted cells"), "{report}");
+        assert!(report.contains("elements 1"), "{report}");
+        let plain = parse_str(&msh(
+            &quad_nodes(),
+            &[(2, 16, vec![(1, (101..=108).collect())])],
+        ));
+        assert!(crate::element::kinematics::distorted_cells(&plain.unwrap()).is_empty());
     }
 
     /// A stream (here a FIFO fed without end) is read no further than the limit, then

@@ -8,9 +8,10 @@ use crate::mesh::{CellKind, Mesh};
 
 /// A human-readable report of `mesh` for `asperity mesh-info`: sizes, element counts, the
 /// physical groups with their element counts, and problems that would make a model fail or
-/// behave unexpectedly (unused nodes, empty groups, degenerate or clockwise cells, cells in no
-/// physical surface, ambiguous group names).
-pub fn describe(mesh: &Mesh) -> String {
+/// behave unexpectedly (unused nodes, empty groups, degenerate, clockwise or `distorted`
+/// cells — the tags of those whose isoparametric map folds, which a model refuses — cells in
+/// no physical surface, ambiguous group names).
+pub fn describe(mesh: &Mesh, distorted: &[u64]) -> String {
     let mut out = String::new();
     let quads = mesh
         .cells
@@ -142,6 +143,20 @@ pub fn describe(mesh: &Mesh) -> String {
             "{} clockwise cells: elements {}",
             clockwise.len(),
             list_some(&clockwise)
+        ));
+    }
+    // Degenerate and clockwise cells fold too: listed once, above.
+    let listed: HashSet<&u64> = degenerate.iter().chain(&clockwise).collect();
+    let folded: Vec<u64> = (distorted.iter())
+        .filter(|tag| !listed.contains(tag))
+        .copied()
+        .collect();
+    if !folded.is_empty() {
+        problems.push(format!(
+            "{} distorted cells (the element's map folds: a mid-side node too far from the \
+             middle of its edge; a run refuses them): elements {}",
+            folded.len(),
+            list_some(&folded)
         ));
     }
 
