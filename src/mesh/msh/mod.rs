@@ -21,7 +21,7 @@
 //! Errors are [`Error::Mesh`] values naming the file, the problem and the node, element or
 //! section concerned, and saying how to fix the input.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write as _;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
@@ -38,7 +38,9 @@ use super::topology::model_size;
 use super::{Cell, CellKind, Line3, Mesh, PhysicalGroup, PointElement};
 use crate::error::{MeshEntity, MeshProblem};
 use crate::{Error, Result};
-use scan::{NodeTags, TagIndex, find_line, looks_truncated, read_header, read_physical_names};
+use scan::{
+    Header, NodeTags, TagIndex, find_line, looks_truncated, read_header, read_physical_names,
+};
 use structure::check_structure;
 
 /// Advice appended to every "wrong element order" error.
@@ -134,90 +136,118 @@ fn read_bounded(path: &Path, limit: u64) -> Result<Vec<u8>> {
 /// Parses the content of an MSH file; `path` is only used in error messages and stored in the
 /// mesh. Split from [`read_msh`] so that tests and fuzz targets can feed byte strings.
 pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<Mesh> {
-    let fail = |problem: MeshProblem, message: String| Error::mesh(path, problem, None, message);
-    let at = |fault: Fault| fault.at(path);
-    let section = |name: &'static str, problem: MeshProblem, message: &str| {
-        Error::mesh(path, problem, Some(MeshEntity::Section(name)), message)
-    };
-
     if bytes.iter().all(u8::is_ascii_whitespace) {
-        return Err(fail(MeshProblem::Empty, "the mesh file is empty".into()));
+        return Err(file_error(
+            path,
+            MeshProblem::Empty,
+            "the mesh file is empty".into(),
+        ));
     }
+    let at = |fault: Fault| fault.at(path);
     let header = read_header(bytes).map_err(at)?;
     let structure = check_structure(bytes, &header)
         .map_err(|fault| fault.truncated_if(looks_truncated(bytes)))
         .map_err(at)?;
+    let msh = parse_with_mshio(path, bytes, &header)?;
+    let (entities, nodes, elements) = sections(path, &msh)?;
+    let mut mesh = read_nodes(path, nodes, &structure.node_tags)?;
+    let size = model_size(&mesh.nodes);
+    let index = TagIndex::new(&mesh.node_tags).map_err(at)?;
+    read_elements(path, elements, &index, &mut mesh)?;
+    orient_cells(&mut mesh, size)?;
+    let names = read_physical_names(bytes, header.body_start).map_err(at)?;
+    mesh.groups = physical_groups(entities, &names);
+    let has_names = find_line(bytes, header.body_start, b"$PhysicalNames").is_some();
+    warn_about_names(path, has_names, &mesh.groups);
+    Ok(mesh)
+}
 
-    // Last resort only: the checks above avoid the panics of mshio 0.4.2 that we know of.
+/// An error about the file `path` as a whole.
+fn file_error(path: &Path, problem: MeshProblem, message: String) -> Error {
+    Error::mesh(path, problem, None, message)
+}
+
+/// An error about section `name` of the file `path`.
+fn section_error(path: &Path, name: &'static str, problem: MeshProblem, message: &str) -> Error {
+    Error::mesh(path, problem, Some(MeshEntity::Section(name)), message)
+}
+
+/// An error about element `tag` of the file `path`.
+fn element_error(path: &Path, tag: u64, problem: MeshProblem, message: String) -> Error {
+    Error::mesh(path, problem, Some(MeshEntity::Element(tag)), message)
+}
+
+/// The file parsed by mshio, once the checks of `header` passed; its errors (and, as a last
+/// resort, its panics: the checks avoid those of mshio 0.4.2 that we know of) said as ours.
+fn parse_with_mshio(path: &Path, bytes: &[u8], header: &Header) -> Result<MshFile<u64, i32, f64>> {
     let parsed = catch_unwind(AssertUnwindSafe(|| {
         mshio::parse_msh_bytes(bytes)
             .map_err(|e| parse_error_message(bytes, header.binary.is_some(), &e))
     }));
-    let msh: MshFile<u64, i32, f64> = match parsed {
-        Ok(Ok(msh)) => msh,
-        Ok(Err(reason)) if looks_truncated(bytes) => {
-            return Err(fail(
-                MeshProblem::Truncated,
-                format!(
-                    "cannot parse the mesh: the file is truncated (it does not end with a $End... \
+    let (problem, message) = match parsed {
+        Ok(Ok(msh)) => return Ok(msh),
+        Ok(Err(reason)) if looks_truncated(bytes) => (
+            MeshProblem::Truncated,
+            format!(
+                "cannot parse the mesh: the file is truncated (it does not end with a $End... \
                  line); re-export it from gmsh. Parser error: {reason}"
-                ),
-            ));
-        }
-        Ok(Err(reason)) if reason.contains("parametric") => {
-            return Err(fail(
-                MeshProblem::Parametric,
-                format!(
-                    "cannot parse the mesh: it contains parametric node coordinates, which are not \
+            ),
+        ),
+        Ok(Err(reason)) if reason.contains("parametric") => (
+            MeshProblem::Parametric,
+            format!(
+                "cannot parse the mesh: it contains parametric node coordinates, which are not \
                  supported; save it with `Mesh.SaveParametric = 0` (the default). Parser error: \
                  {reason}"
-                ),
-            ));
-        }
-        Ok(Err(reason)) => {
-            return Err(fail(
-                MeshProblem::Corrupt,
-                format!("cannot parse the mesh (corrupt or unsupported MSH 4.1 content): {reason}"),
-            ));
-        }
-        Err(_) => {
-            return Err(fail(
-                MeshProblem::ParserPanic,
-                "cannot parse the mesh: the MSH parser (mshio) crashed on this file, which is \
-                 probably truncated or corrupt; re-export it from gmsh"
-                    .into(),
-            ));
-        }
+            ),
+        ),
+        Ok(Err(reason)) => (
+            MeshProblem::Corrupt,
+            format!("cannot parse the mesh (corrupt or unsupported MSH 4.1 content): {reason}"),
+        ),
+        Err(_) => (
+            MeshProblem::ParserPanic,
+            "cannot parse the mesh: the MSH parser (mshio) crashed on this file, which is \
+             probably truncated or corrupt; re-export it from gmsh"
+                .into(),
+        ),
     };
+    Err(file_error(path, problem, message))
+}
 
-    let missing = MeshProblem::MissingSection;
-    let entities = msh.data.entities.as_ref().ok_or_else(|| {
-        section(
-            "$Entities",
-            missing,
-            "the file has no $Entities section (physical groups cannot be read)",
-        )
-    })?;
-    let nodes = msh
-        .data
-        .nodes
-        .as_ref()
-        .ok_or_else(|| section("$Nodes", missing, "the file has no $Nodes section"))?;
-    let elements = msh
-        .data
-        .elements
-        .as_ref()
-        .ok_or_else(|| section("$Elements", missing, "the file has no $Elements section"))?;
+type Sections<'a> = (
+    &'a mshio::Entities<i32, f64>,
+    &'a mshio::Nodes<u64, i32, f64>,
+    &'a mshio::Elements<u64, i32>,
+);
 
-    // --- nodes ---------------------------------------------------------------------------
-    let tags = structure.node_tags;
-    // Our reading of the tags must describe the same blocks as mshio's.
+/// The `$Entities`, `$Nodes` and `$Elements` sections, which every mesh needs.
+fn sections<'a>(path: &Path, msh: &'a MshFile<u64, i32, f64>) -> Result<Sections<'a>> {
+    let missing = |name, message| section_error(path, name, MeshProblem::MissingSection, message);
+    let data = &msh.data;
+    Ok((
+        data.entities.as_ref().ok_or_else(|| {
+            missing(
+                "$Entities",
+                "the file has no $Entities section (physical groups cannot be read)",
+            )
+        })?,
+        (data.nodes.as_ref()).ok_or_else(|| missing("$Nodes", "the file has no $Nodes section"))?,
+        (data.elements.as_ref())
+            .ok_or_else(|| missing("$Elements", "the file has no $Elements section"))?,
+    ))
+}
+
+/// A mesh of the nodes of `nodes`, tagged by `tags` (our own reading of the `$Nodes`
+/// section, which must describe the same blocks as mshio's): finite and in the x-y plane.
+fn read_nodes(path: &Path, nodes: &mshio::Nodes<u64, i32, f64>, tags: &[NodeTags]) -> Result<Mesh> {
     if tags.len() != nodes.node_blocks.len()
         || tags.iter().zip(&nodes.node_blocks).any(|(t, b)| {
             t.len() != b.nodes.len() || (t.dim, t.entity) != (b.entity_dim, b.entity_tag)
         })
     {
-        return Err(section(
+        return Err(section_error(
+            path,
             "$Nodes",
             MeshProblem::Corrupt,
             "the $Nodes section is inconsistent (node tag lists do not match the node blocks)",
@@ -225,7 +255,8 @@ pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<Mesh> {
     }
     let node_count: usize = tags.iter().map(NodeTags::len).sum();
     if node_count >= u32::MAX as usize {
-        return Err(fail(
+        return Err(file_error(
+            path,
             MeshProblem::TooManyNodes,
             format!("too many nodes ({node_count})"),
         ));
@@ -237,7 +268,7 @@ pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<Mesh> {
         ..Mesh::default()
     };
     let mut zs = Vec::with_capacity(node_count);
-    for (block, block_tags) in nodes.node_blocks.iter().zip(&tags) {
+    for (block, block_tags) in nodes.node_blocks.iter().zip(tags) {
         for (node, &tag) in block.nodes.iter().zip(&block_tags.tags) {
             mesh.nodes.push([node.x, node.y]);
             mesh.node_tags.push(tag);
@@ -276,12 +307,18 @@ pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<Mesh> {
             ),
         ));
     }
-    let index = TagIndex::new(&mesh.node_tags).map_err(at)?;
-    let element_fault = |tag: u64, problem: MeshProblem, message: String| {
-        Error::mesh(path, problem, Some(MeshEntity::Element(tag)), message)
-    };
+    Ok(mesh)
+}
 
-    // --- elements ------------------------------------------------------------------------
+/// Adds the elements of `elements` to `mesh`: quadratic cells, 3-node lines and points, their
+/// nodes found by tag in `index`. Any other element type is refused, as is a mesh without
+/// cells.
+fn read_elements(
+    path: &Path,
+    elements: &mshio::Elements<u64, i32>,
+    index: &TagIndex,
+    mesh: &mut Mesh,
+) -> Result<()> {
     for block in &elements.element_blocks {
         let kind = match block.element_type {
             ElementType::Qua8 => Some(CellKind::Quad8),
@@ -290,13 +327,14 @@ pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<Mesh> {
             other => {
                 let tag = block.elements.first().map_or(0, |e| e.element_tag);
                 let (problem, message) = unsupported_element(other, tag);
-                return Err(element_fault(tag, problem, message));
+                return Err(element_error(path, tag, problem, message));
             }
         };
         let entity = block.entity_tag;
         let lookup = |element_tag: u64, node_tag: u64| {
             index.get(node_tag).ok_or_else(|| {
-                element_fault(
+                element_error(
+                    path,
                     element_tag,
                     MeshProblem::UnknownNode,
                     format!(
@@ -349,7 +387,8 @@ pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<Mesh> {
         }
     }
     if mesh.cells.is_empty() {
-        return Err(fail(
+        return Err(file_error(
+            path,
             MeshProblem::NoCells,
             "the mesh has no surface cells (8-node quads or 6-node triangles): mesh in 2D \
              (`gmsh -2`) and, if the .geo defines physical groups, put the surfaces in a \
@@ -357,8 +396,12 @@ pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<Mesh> {
                 .into(),
         ));
     }
+    Ok(())
+}
 
-    // --- orientation ---------------------------------------------------------------------
+/// Makes every cell of `mesh` (whose bounding-box diagonal is `size`) counter-clockwise;
+/// refuses a cell whose corners enclose no area.
+fn orient_cells(mesh: &mut Mesh, size: f64) -> Result<()> {
     let tolerance = 1e-12 * size * size;
     for i in 0..mesh.cells.len() {
         let area = mesh.corner_area(&mesh.cells[i]);
@@ -371,7 +414,8 @@ pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<Mesh> {
                     format!("({}, {})", p[0], p[1])
                 })
                 .collect();
-            return Err(element_fault(
+            return Err(element_error(
+                &mesh.path,
                 cell.tag,
                 MeshProblem::Degenerate,
                 format!(
@@ -389,14 +433,22 @@ pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<Mesh> {
     if mesh.reoriented_cells > 0 {
         tracing::warn!(
             "{}: {} of {} cells were clockwise and have been reoriented counter-clockwise",
-            path.display(),
+            mesh.path.display(),
             mesh.reoriented_cells,
             mesh.cells.len()
         );
     }
+    Ok(())
+}
 
-    // --- physical groups -----------------------------------------------------------------
-    let names = read_physical_names(bytes, header.body_start).map_err(at)?;
+/// The physical groups of `entities`, named from `$PhysicalNames` (`names`; `dim:tag` where
+/// a group has no name). Named groups whose entities were not saved still exist (with no
+/// entities), so that a missing group is reported by `describe` rather than looking like a
+/// typo in the case file.
+fn physical_groups(
+    entities: &mshio::Entities<i32, f64>,
+    names: &HashMap<(u8, i32), String>,
+) -> Vec<PhysicalGroup> {
     let mut groups: BTreeMap<(u8, i32), Vec<i32>> = BTreeMap::new();
     let mut add = |dim: u8, entity: i32, physical_tags: &[i32]| {
         for &p in physical_tags {
@@ -415,12 +467,10 @@ pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<Mesh> {
     for v in &entities.volumes {
         add(3, v.tag, &v.physical_tags);
     }
-    // Named groups whose entities were not saved still exist (with no entities), so that a
-    // missing group is reported by `describe` rather than looking like a typo in the case file.
     for &key in names.keys() {
         groups.entry(key).or_default();
     }
-    mesh.groups = groups
+    groups
         .into_iter()
         .map(|((dim, tag), mut entities)| {
             entities.sort_unstable();
@@ -436,11 +486,7 @@ pub fn parse_msh(path: &Path, bytes: &[u8]) -> Result<Mesh> {
                 entities,
             }
         })
-        .collect();
-
-    let has_names = find_line(bytes, header.body_start, b"$PhysicalNames").is_some();
-    warn_about_names(path, has_names, &mesh.groups);
-    Ok(mesh)
+        .collect()
 }
 
 /// Physical-name problems that need not stop a run but may surprise, one warning each with a
