@@ -448,14 +448,22 @@ impl<'a> Newton<'a> {
     }
 
     /// Evaluates the bulk's trial point states at the displacements `v` (all dofs), which
-    /// need not be a state of the run — a linear bulk's strain increment is its strain at
-    /// v = Δu — leaving [`Self::states_pending`] as it was. Tallied as a state evaluation;
-    /// returns its seconds.
+    /// need not be the last evaluation's (a linear bulk's exact strain increment needs those
+    /// of the increment's start too), leaving [`Self::states_pending`] as it was. Tallied as
+    /// a state evaluation; returns its seconds.
     pub fn states_at(&mut self, problem: &mut impl Problem, v: &[f64]) -> f64 {
         let t = Instant::now();
         self.bulk_states_at(problem, v);
         self.work.state_evaluations.since(t);
         t.elapsed().as_secs_f64()
+    }
+
+    /// Records that the bulk's trial point states are those of the last evaluation's
+    /// displacements, made by [`Self::states_at`] with them: nothing is pending.
+    pub fn states_made(&mut self) {
+        if let Some(c) = self.condensed.as_mut() {
+            c.states_stale = false;
+        }
     }
 
     fn bulk_states_at(&self, problem: &mut impl Problem, u: &[f64]) {

@@ -80,14 +80,20 @@ impl Solution {
         }
     }
 
-    /// The largest equivalent strain √(⅔ ε:ε) of the bodies' trial point states (NaN if one
-    /// is not a number): a linear bulk's strain increment when they were evaluated at Δu.
-    pub fn largest_trial_strain(&self, model: &Model) -> f64 {
+    /// The largest equivalent strain increment √(⅔ Δε:Δε) from the bodies' committed to
+    /// their trial point states (NaN if one is not a number): the same arithmetic, point by
+    /// point, as the pass over the states ([`Self::scan_increment`]).
+    pub fn largest_strain_increment(&self, model: &Model) -> f64 {
         let cells = model.continuum.cells.iter();
+        let slots = (self.trial.chunks_exact(MAX_CELL_POINTS))
+            .zip(self.committed.chunks_exact(MAX_CELL_POINTS));
         cells
-            .zip(self.trial.chunks_exact(MAX_CELL_POINTS))
-            .flat_map(|(cell, states)| &states[..cell_rule(cell.kind).len()])
-            .map(|s| equivalent_strain(&s.strain))
+            .zip(slots)
+            .flat_map(|(cell, (trial, committed))| {
+                let points = cell_rule(cell.kind).len();
+                trial[..points].iter().zip(&committed[..points])
+            })
+            .map(|(t, c)| equivalent_strain(&(t.strain - c.strain)))
             .fold(0.0, largest)
     }
 

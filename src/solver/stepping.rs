@@ -371,9 +371,11 @@ pub(crate) fn start_newton(
 /// energy terms ([`Solution::scan_increment`]). A linear bulk whose force is K·u evaluated no
 /// element in the increment: its stored energy is ½ u·K u and its strain increment is
 /// bounded from the nodal increments ([`StrainBound`], made at the first such increment),
-/// and found exactly — the point states at Δu = u − `u_old`, B being linear — only when the
-/// bound exceeds `[solver] max_strain_increment`, so the plausibility verdict is always the
-/// one the point states give.
+/// and found exactly only when the bound exceeds `[solver] max_strain_increment`: from the
+/// point states at `u_old` (committed) and at u (trial), the arithmetic of a pass over the
+/// states, so that the plausibility verdict is the states' own to the last bit (ε(Δu) would
+/// round differently, and a limit within rounding of an increment's strain would then cut
+/// back differently). The states at u are then the converged state's.
 fn increment_sums(
     model: &Model,
     newton: &mut Newton,
@@ -395,10 +397,13 @@ fn increment_sums(
     // A bound that is not a number (nor is Δu) is looked at exactly too.
     let plausible = sums.strain_increment <= model.control.max_strain_increment;
     if !plausible {
-        let du: Vec<f64> = solution.u.iter().zip(u_old).map(|(a, b)| a - b).collect();
         let (_, mut problem) = solution.split(model);
-        newton.states_at(&mut problem, &du);
-        sums.strain_increment = solution.largest_trial_strain(model);
+        newton.states_at(&mut problem, u_old);
+        solution.adopt_trial_point_states();
+        let (u, mut problem) = solution.split(model);
+        newton.states_at(&mut problem, u);
+        newton.states_made();
+        sums.strain_increment = solution.largest_strain_increment(model);
     }
     sums
 }
