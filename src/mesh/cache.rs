@@ -14,7 +14,7 @@
 //! Size: the cache holds at most its limit ([`DEFAULT_LIMIT_MB`] MiB unless
 //! `ASPERITY_MESH_CACHE_MB` says otherwise); after each store the least recently used
 //! entries are removed until it fits, and a mesh larger than the limit is not stored. The
-//! folder is `ASPERITY_MESH_CACHE` if set (`off` turns the cache off), else
+//! folder is `ASPERITY_MESH_CACHE` if set and not empty (`off` turns the cache off), else
 //! `$XDG_CACHE_HOME/asperity/meshes` or `~/.cache/asperity/meshes`. Only files named like
 //! entries are ever removed there.
 //!
