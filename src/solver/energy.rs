@@ -419,23 +419,12 @@ impl BodySums {
     }
 
     /// The pass of a converged increment of a linear bulk whose force is K_c u, made
-    /// without its point states: the bodies' stored energy ½ u·K_c u from the continuum's
-    /// internal force `continuum_force` = K_c u (all dofs, reactions included) — the states'
-    /// Σ ½ σ:ε dV to rounding, K_c being Σ Bᵀ D B dV over the same points — no plastic,
-    /// numerical or thermal terms (elastic bodies, no temperature), and the
-    /// `strain_increment` found for it.
-    pub fn of_linear_bulk(
-        model: &Model,
-        u: &[f64],
-        continuum_force: &[f64],
-        strain_increment: f64,
-    ) -> Self {
+    /// without its point states: the bodies' stored energy `elastic`, ½ u·K_c u from the
+    /// product (the states' Σ ½ σ:ε dV to rounding), no plastic, numerical or thermal terms
+    /// (elastic bodies, no temperature), and the `strain_increment` found for it.
+    pub fn of_linear_bulk(model: &Model, elastic: f64, strain_increment: f64) -> Self {
         Self {
-            elastic: 0.5
-                * u.iter()
-                    .zip(continuum_force)
-                    .map(|(a, f)| a * f)
-                    .sum::<f64>(),
+            elastic,
             strain_increment,
             ..Self::new(model)
         }

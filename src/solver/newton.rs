@@ -244,9 +244,9 @@ struct Condensed {
     /// Whether the bulk's trial states are not those of the last evaluation's displacements
     /// (it took its force from a product with K_c and evaluated no element).
     states_stale: bool,
-    /// `by_product`: the continuum's internal force K_c u of the last evaluation, over all
-    /// dofs (empty otherwise): the bodies' elastic energy ½ u·K_c u of a converged state.
-    continuum_force: Vec<f64>,
+    /// `by_product`: the bodies' elastic energy ½ u·K_c u at the last evaluation (over all
+    /// dofs, reactions included), taken from its product: that of a converged state.
+    continuum_energy: f64,
     /// The workspaces of the interface iterations.
     iterations: InterfaceIterations,
 }
@@ -421,12 +421,13 @@ impl<'a> Newton<'a> {
             .is_some_and(|c| c.by_product && c.states_stale)
     }
 
-    /// The continuum's internal force K_c u over all dofs at the last evaluation, for a
-    /// linear bulk whose force is that product (`None` otherwise).
-    pub fn linear_bulk_force(&self) -> Option<&[f64]> {
+    /// The bodies' elastic energy ½ u·K_c u at the last evaluation, for a linear bulk whose
+    /// force is that product (`None` otherwise): the states' Σ ½ σ:ε dV to rounding, K_c
+    /// being Σ Bᵀ D B dV over the same points.
+    pub fn linear_bulk_energy(&self) -> Option<f64> {
         (self.condensed.as_ref())
             .filter(|c| c.by_product && c.bulk_ready)
-            .map(|c| c.continuum_force.as_slice())
+            .map(|c| c.continuum_energy)
     }
 
     /// Makes the bulk's trial point states those of `u`, the last evaluation's displacements,
@@ -591,7 +592,7 @@ impl<'a> Newton<'a> {
             extrapolated: false,
             by_product,
             states_stale: false,
-            continuum_force: vec![0.0; if by_product { n } else { 0 }],
+            continuum_energy: 0.0,
             iterations,
         });
         let Some((couplings, assembly_seconds)) = couplings else {
@@ -696,7 +697,8 @@ impl<'a> Newton<'a> {
                 let f = &mut system.internal_force;
                 if c.by_product {
                     stiffness.multiply(&system.pattern, &system.values, self.dofs, u, f);
-                    c.continuum_force.copy_from_slice(f);
+                    c.continuum_energy =
+                        0.5 * u.iter().zip(f.iter()).map(|(a, b)| a * b).sum::<f64>();
                 } else {
                     for ((d, a), b) in c.du.iter_mut().zip(u).zip(&c.u_ref) {
                         *d = a - b;

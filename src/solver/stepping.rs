@@ -383,15 +383,15 @@ fn increment_sums(
     u_old: &[f64],
     bound: &mut Option<StrainBound>,
 ) -> BodySums {
-    let force = newton
-        .linear_bulk_force()
+    let energy = newton
+        .linear_bulk_energy()
         .filter(|_| newton.states_pending());
-    let Some(force) = force else {
+    let Some(energy) = energy else {
         return solution.scan_increment(model);
     };
     // Such a bulk's restart records leave its point states out (they follow from u).
     debug_assert!(model.states_follow_displacements());
-    let mut sums = BodySums::of_linear_bulk(model, &solution.u, force, 0.0);
+    let mut sums = BodySums::of_linear_bulk(model, energy, 0.0);
     let bound = bound.get_or_insert_with(|| StrainBound::new(model));
     sums.strain_increment = bound.of(model, &solution.u, u_old);
     // A bound that is not a number (nor is Δu) is looked at exactly too.
