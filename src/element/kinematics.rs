@@ -149,11 +149,7 @@ fn mapping(s: &ShapeValues, coords: &[[f64; 2]]) -> Mapping {
 /// ([`crate::Error::DistortedElement`]); `asperity mesh-info` lists them.
 pub fn distorted_cells(mesh: &crate::mesh::Mesh) -> Vec<u64> {
     let folded = |cell: &&crate::mesh::Cell| {
-        let mut coords = [[0.0; 2]; 8];
-        for (k, &n) in cell.nodes().iter().enumerate() {
-            coords[k] = mesh.nodes[n as usize];
-        }
-        let det = min_jacobian(cell.kind, &coords);
+        let det = min_jacobian(cell.kind, &mesh.cell_coords(cell));
         det.is_nan() || det <= 0.0
     };
     mesh.cells.iter().filter(folded).map(|c| c.tag).collect()

@@ -135,6 +135,15 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// The coordinates of `cell`'s nodes, in its node order (zero beyond its node count).
+    pub fn cell_coords(&self, cell: &Cell) -> [[f64; 2]; 8] {
+        let mut coords = [[0.0; 2]; 8];
+        for (c, &n) in coords.iter_mut().zip(cell.nodes()) {
+            *c = self.nodes[n as usize];
+        }
+        coords
+    }
+
     /// The physical group of dimension `dim` called `name`.
     pub fn group(&self, dim: u8, name: &str) -> Option<&PhysicalGroup> {
         self.groups.iter().find(|g| g.dim == dim && g.name == name)

@@ -499,10 +499,7 @@ fn build_continuum(
                 });
             }
             owner[i] = Some(b as u32);
-            let mut coords = [[0.0; 2]; 8];
-            for (k, &n) in cell.nodes().iter().enumerate() {
-                coords[k] = mesh.nodes[n as usize];
-            }
+            let coords = mesh.cell_coords(cell);
             let det = min_jacobian(cell.kind, &coords);
             if det.is_nan() || det <= 0.0 {
                 return Err(Error::DistortedElement {

@@ -581,7 +581,7 @@ fn report_partial(
     );
     if model.states_follow_displacements() {
         // A linear bulk's increments may have left its committed point states out.
-        solution.committed.copy_from_slice(&solution.trial);
+        solution.adopt_trial_point_states();
     }
     let mut external = vec![0.0; model.dofs.dof_count()];
     model.external_force(state.time, &mut external);
