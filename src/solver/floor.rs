@@ -178,7 +178,13 @@ impl Floor {
             mesh: mesh_seconds,
             assembly: s.tangent_assemblies.first + s.interface_tangent_assemblies.first,
             factorisation: s.factorisations.mean() + s.interface_factorisations.mean(),
-            solves: solves as f64 * s.solves.mean(),
+            // All of them when the run solved no more than once per increment: their sum
+            // itself, not n × (sum / n), which can round above it.
+            solves: if solves == s.solves.calls {
+                s.solves.seconds
+            } else {
+                solves as f64 * s.solves.mean()
+            },
             output: work.frames.seconds,
         };
         let seconds =
