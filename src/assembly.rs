@@ -17,7 +17,8 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use rayon::prelude::*;
 
 use crate::contact::ContactAlgorithm;
-use crate::element::set::ElementSet;
+use crate::element::quadrature::MAX_CELL_POINTS;
+use crate::element::set::{ElementSet, INTERFACE_POINTS};
 use crate::element::{
     ElementInput, ElementMatrix, ElementOutput, ElementVector, MAX_ELEMENT_DOFS, MAX_ELEMENT_NODES,
 };
@@ -1031,7 +1032,7 @@ fn scatter<S: ElementSet>(
     let ppe = set.points_per_element();
     let d = set.dofs_per_node();
     assert_eq!(trial.len(), set.len() * ppe);
-    assert_eq!(committed.len(), trial.len());
+    let committed = CommittedStates::new(committed, trial.len(), ppe);
     let states = SharedMut(trial.as_mut_ptr());
     // The leading block an element of this set can write (8 nodes × D): zeroed per element,
     // the rest of the scratch matrix is never touched.
@@ -1046,7 +1047,7 @@ fn scatter<S: ElementSet>(
         let was_frozen = frozen.as_deref().copied().unwrap_or(false);
         let element_input = ElementInput {
             u: &ue,
-            committed: &committed[e * ppe..(e + 1) * ppe],
+            committed: committed.of(e),
             algorithm,
         };
         let (ke, fe): (&mut ElementMatrix, _) = (&mut scratch.ke, &mut scratch.fe);
@@ -1162,17 +1163,16 @@ pub fn evaluate_states<S: ElementSet>(
     let ppe = set.points_per_element();
     let d = set.dofs_per_node();
     assert_eq!(trial.len(), set.len() * ppe);
-    assert_eq!(committed.len(), trial.len());
+    let committed = CommittedStates::new(committed, trial.len(), ppe);
     trial
         .par_chunks_mut(ppe)
-        .zip(committed.par_chunks(ppe))
         .enumerate()
         .with_min_len(64)
-        .for_each(|(e, (trial, committed))| {
+        .for_each(|(e, trial)| {
             let ue = element_displacements(set.nodes(e), d, input.u);
             let element_input = ElementInput {
                 u: &ue,
-                committed,
+                committed: committed.of(e),
                 algorithm: input.algorithm,
             };
             let output = ElementOutput {
@@ -1182,6 +1182,88 @@ pub fn evaluate_states<S: ElementSet>(
             };
             set.evaluate(e, &element_input, output);
         });
+}
+
+/// The most points an element of any set has (a continuum cell's rule, an interface
+/// element's).
+const MAX_ELEMENT_POINTS: usize = if MAX_CELL_POINTS > INTERFACE_POINTS {
+    MAX_CELL_POINTS
+} else {
+    INTERFACE_POINTS
+};
+
+/// The committed states an element loop starts its points from: each element's slots of
+/// the set's committed states or, for states that follow the displacements alone and keep
+/// none (an empty slice: linear elastic bodies, whose update does not read them), the
+/// default states — so such a set holds one array of states, not two.
+struct CommittedStates<'c, T> {
+    states: &'c [T],
+    virgin: [T; MAX_ELEMENT_POINTS],
+    points: usize,
+}
+
+impl<'c, T: Copy + Default> CommittedStates<'c, T> {
+    fn new(states: &'c [T], trial_len: usize, points: usize) -> Self {
+        assert!(states.is_empty() || states.len() == trial_len);
+        assert!(points <= MAX_ELEMENT_POINTS);
+        Self {
+            states,
+            virgin: [T::default(); MAX_ELEMENT_POINTS],
+            points,
+        }
+    }
+
+    fn of(&self, e: usize) -> &[T] {
+        if self.states.is_empty() {
+            &self.virgin[..self.points]
+        } else {
+            &self.states[e * self.points..(e + 1) * self.points]
+        }
+    }
+}
+
+/// `change(e, start, end)` over the elements `e` of `set`, combined by `combine` from 0,
+/// `start` and `end` being the element's trial states at the displacements `start_u` and
+/// `input.u` (all dofs) from `committed` ones (empty: the default states), made element by
+/// element on the stack and stored nowhere. For the plausibility check of an increment of
+/// states that follow the displacements, without a second array of them; `combine` must
+/// not depend on the order (the largest change: any number of threads, the same bits).
+pub fn combine_state_changes<S: ElementSet>(
+    input: &AssemblyInput,
+    start_u: &[f64],
+    set: &S,
+    committed: &[S::State],
+    change: impl Fn(usize, &[S::State], &[S::State]) -> f64 + Sync,
+    combine: impl Fn(f64, f64) -> f64 + Sync + Send,
+) -> f64 {
+    let ppe = set.points_per_element();
+    let d = set.dofs_per_node();
+    let committed = CommittedStates::new(committed, set.len() * ppe, ppe);
+    let states_at = |e: usize, u: &[f64], out: &mut [S::State]| {
+        let ue = element_displacements(set.nodes(e), d, u);
+        let element_input = ElementInput {
+            u: &ue,
+            committed: committed.of(e),
+            algorithm: input.algorithm,
+        };
+        let output = ElementOutput {
+            trial: out,
+            k: None,
+            f: None,
+        };
+        set.evaluate(e, &element_input, output);
+    };
+    (0..set.len())
+        .into_par_iter()
+        .with_min_len(64)
+        .map(|e| {
+            let mut start = [S::State::default(); MAX_ELEMENT_POINTS];
+            let mut end = [S::State::default(); MAX_ELEMENT_POINTS];
+            states_at(e, start_u, &mut start[..ppe]);
+            states_at(e, input.u, &mut end[..ppe]);
+            change(e, &start[..ppe], &end[..ppe])
+        })
+        .reduce(|| 0.0, combine)
 }
 
 /// Runs `element(e, scratch)` for every element of `coloring`: colour by colour, in

@@ -169,6 +169,10 @@ impl Problem for Marked<'_> {
         self.inner.bulk_states(input);
     }
 
+    fn bulk_strain_increment(&mut self, input: &AssemblyInput, start_u: &[f64]) -> f64 {
+        self.inner.bulk_strain_increment(input, start_u)
+    }
+
     /// On the condensed path every evaluation ends with the interface: its tangent
     /// assemblies start the iterations (and the confirmation of a converged increment).
     fn assemble_interface(

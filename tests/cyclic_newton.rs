@@ -55,7 +55,7 @@ fn newton_is_quadratic_under_non_proportional_armstrong_frederick_flow() {
     let mut circle_steps = 0;
     run_steps(&model, &settings(&case), |step| {
         circle_steps += usize::from(step.step > RAMP);
-        let yielding = step.solution.committed.iter().any(|s| s.yielding);
+        let yielding = step.solution.point_states().iter().any(|s| s.yielding);
         let residuals = &step.newton.residuals;
         if step.step > RAMP
             && yielding

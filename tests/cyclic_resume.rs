@@ -99,7 +99,7 @@ impl Observer for Frames {
     fn step(&mut self, step: &StepResult, progress: &Progress) -> asperity::Result<f64> {
         let s = step.solution;
         let mut values = bits(s.u.iter().copied());
-        for p in &s.committed {
+        for p in s.point_states() {
             values.extend(bits(p.stress.iter().chain(&p.plastic_strain).copied()));
         }
         values.extend(bits(s.internal.committed.iter().copied()));

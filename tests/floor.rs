@@ -111,7 +111,7 @@ fn check_floor(summary: &Value) {
 /// the free equations' matrix is its restriction, and K·u uses both) and factored once; its
 /// force is K·u throughout, and its elements are evaluated again only for point states: a
 /// frame's, and the two ends of an increment whose strain-increment bound exceeds the
-/// plausibility limit (which leave the frame's made); every Newton iteration factors the interface
+/// plausibility limit; every Newton iteration factors the interface
 /// system by LU or keeps the last LU (an unchanged interface tangent), and every interface
 /// iteration within one factors it again.
 #[test]
@@ -124,17 +124,15 @@ fn the_condensed_floor_counts_what_its_log_says() {
     assert_eq!(count(&summary, "factorisations"), 1);
     assert_eq!(count(&summary, "kept_factorisations"), 0);
     // A linear bulk without a temperature field: its force is K·u throughout, and every
-    // increment here is a frame with fields, whose point states are made once: by the frame
-    // (`frame_states`), or by the exact check of the strain increment (two loops, at the
-    // increment's start and end) where the bound exceeded the limit.
+    // increment here is a frame with fields, whose point states the frame makes
+    // (`frame_states`); the exact check of the strain increment where the bound exceeded
+    // the limit evaluates the states at the increment's start and end (two loops, storing
+    // nothing).
     let increments = summary["totals"]["increments"].as_u64().unwrap();
     let exact = count(&summary, "state_evaluations");
     assert_eq!(exact % 2, 0, "{summary}");
-    assert_eq!(
-        count(&summary, "frame_states") + exact / 2,
-        increments,
-        "{summary}"
-    );
+    assert!(exact / 2 <= increments, "{summary}");
+    assert_eq!(count(&summary, "frame_states"), increments, "{summary}");
     assert_eq!(count(&summary, "force_assemblies"), 0, "{summary}");
     let interface_lus = count(&summary, "interface_factorisations");
     let kept = count(&summary, "kept_interface_factorisations");

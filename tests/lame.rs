@@ -67,7 +67,7 @@ fn errors(mesh: Mesh, axisymmetric: bool) -> (f64, f64) {
             let x = point_kinematics(&model.analysis, c.kind, &c.coords, q)
                 .unwrap()
                 .x;
-            let s = solution.committed[e * 9 + g].stress;
+            let s = solution.point_states()[e * 9 + g].stress;
             let hoop = if axisymmetric {
                 s[3]
             } else {

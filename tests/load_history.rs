@@ -119,7 +119,7 @@ fn observe(model: &Model, step: &StepResult) -> Seen {
         step_time: step.frame.step_time,
         cycle_end: step.frame.cycle_end,
         corner: [u[2 * node], u[2 * node + 1]],
-        stress_yy: step.solution.committed[0].stress[1],
+        stress_yy: step.solution.point_states()[0].stress[1],
         increments: step.increments,
         cutbacks: step.cutbacks,
     }

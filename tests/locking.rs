@@ -203,7 +203,7 @@ fn plastic_cylinder(
     let _ = run_steps(&model, &settings(&case), |step| {
         steps.push(CylinderStep {
             load: step.load_factor,
-            c: boundary_radius(&model, &step.solution.committed),
+            c: boundary_radius(&model, step.solution.point_states()),
             u: cylinder.bore_displacement(&model, &step.solution.u),
         });
         Ok(0.0)

@@ -863,7 +863,7 @@ mod step_grids {
         // Names of the indices in the cell data.
         let names = |grid: &Grid, key: &str| field(&grid.field_data, key).values.clone();
         let state = asperity::solver::state::Solution::new(&model);
-        let bodies = asperity::post::body_grid(&model, &points, &state.u, &state.committed);
+        let bodies = asperity::post::body_grid(&model, &points, &state.u, state.point_states());
         assert_eq!(
             names(&bodies, "body_names"),
             FieldValues::Str(vec!["base".into(), "block".into()])

@@ -54,7 +54,7 @@ fn traction_patch(analysis: CaseBuilder, triangles: bool, formulation: &str) {
         }
     }
     for s in solution
-        .committed
+        .point_states()
         .iter()
         .filter(|s| s.stress != Voigt::zeros())
     {
@@ -144,7 +144,7 @@ fn axisymmetric_patch(mesh: Mesh, formulation: &str) {
         .stiffness(OutOfPlane::StrainGiven)
         * voigt(c, d, 0.0, c);
     for s in solution
-        .committed
+        .point_states()
         .iter()
         .filter(|s| s.stress != Voigt::zeros())
     {

@@ -58,7 +58,7 @@ fn thick_cylinder_yields_at_the_closed_form_pressure_and_collapses_at_p_l() {
     run_steps(&model, &settings(&case), |step| {
         let r = reactions(&model, step.internal_force, &external)[1];
         let p = r[0] / (2.0 * std::f64::consts::PI * B * H);
-        let yielding = step.solution.committed.iter().any(|s| s.yielding);
+        let yielding = step.solution.point_states().iter().any(|s| s.yielding);
         curve.push((step.load_factor, p, yielding));
         let res = &step.newton.residuals;
         // Order of the last iteration that is still above the round-off floor (a relative

@@ -98,14 +98,15 @@ fn increment(model: &Model, numbers: &mut Numbers, noise: bool) -> Vec<f64> {
     du
 }
 
-/// The largest equivalent strain increment of the point states at `du`.
+/// The largest equivalent strain increment of the point states from zero displacements to
+/// `du`.
 fn exact(model: &Model, du: &[f64]) -> f64 {
     let settings = newton_settings(&SolverSpec::default());
     let mut newton = Newton::new(settings, &model.dofs, &model.pattern).unwrap();
     let mut solution = Solution::new(model);
     let (_, mut problem) = solution.split(model);
-    newton.states_at(&mut problem, du);
-    solution.largest_strain_increment(model)
+    let start = vec![0.0; du.len()];
+    newton.strain_increment(&mut problem, &start, du)
 }
 
 #[test]
@@ -184,14 +185,21 @@ fn a_displacement_that_is_not_a_number_has_no_bound() {
 
 /// Two elastic blocks on a frictional joint pressed together by moving the upper one's lid
 /// down, in two steps, with `max_strain_increment` below the strain of a whole step:
-/// increments are cut back until they pass. On the condensed path (contact) the bulk's force
-/// is K·u and its increments are judged by the bound, and exactly where the bound exceeds
-/// the limit; with the Krylov solver every iteration evaluates the elements. Both must cut
-/// back alike.
+/// increments are cut back until they pass. Elastic states follow the displacements and are
+/// kept once, so their increments are judged by the bound, and exactly — from the states at
+/// the increment's start and end, made cell by cell — where the bound exceeds the limit: on
+/// the condensed path (contact, the bulk's force K·u) and with the Krylov solver (every
+/// iteration evaluates the elements). The reference keeps committed and trial states and
+/// compares them point by point: the same blocks, the lower one of a J2 material that never
+/// yields (yield stress 1e12 MPa). All three must cut back alike.
 #[test]
 fn a_linear_bulk_judges_its_increments_as_its_point_states_do() {
-    let run = |solver: &str| {
-        let case = common::two_blocks(0.3)
+    let run = |solver: &str, yield_stress: Option<f64>| {
+        let material = match yield_stress {
+            Some(s) => common::with_keys(common::elastic(1000.0, 0.3), &[("yield_stress", s)]),
+            None => common::elastic(1000.0, 0.3),
+        };
+        let case = common::two_blocks_on(material, 0.3)
             .support("lid", &[("ux", 0.0), ("uy", -0.01)])
             .steps(2)
             .set("solver", "max_strain_increment", 1.5e-3)
@@ -199,25 +207,51 @@ fn a_linear_bulk_judges_its_increments_as_its_point_states_do() {
             .case();
         let mesh = read_msh(&fixture("contact_pair.msh")).unwrap();
         let built = model(mesh, &case).unwrap();
+        assert_eq!(built.states_follow_displacements(), yield_stress.is_none());
         let settings = newton_settings(&case.solver);
         asperity::solver::stepping::run_steps(&built, &settings, |_| Ok(0.0))
             .unwrap()
             .1
     };
-    let (condensed, krylov) = (run("condensed"), run("krylov"));
-    assert!(krylov.cutbacks > 0, "the limit cuts back: {krylov:?}");
-    assert_eq!(
-        (condensed.cutbacks, condensed.increments),
-        (krylov.cutbacks, krylov.increments)
-    );
+    let (condensed, krylov) = (run("condensed", None), run("krylov", None));
+    let stored = run("krylov", Some(1e12));
+    assert!(stored.cutbacks > 0, "the limit cuts back: {stored:?}");
+    for stats in [&condensed, &krylov] {
+        assert_eq!(
+            (stats.cutbacks, stats.increments),
+            (stored.cutbacks, stored.increments)
+        );
+    }
     let work = condensed.work.solver;
     // The increments whose bound exceeded the limit were judged from their point states at
-    // their start and end (two loops each, which leave the converged state's states made);
-    // a step's frame makes them only if its last increment did not.
+    // their start and end (two loops each, storing nothing); each step's frame made the
+    // converged state's.
     assert!(
         work.state_evaluations.calls >= 2 * condensed.cutbacks,
         "{work:?}"
     );
     assert_eq!(work.state_evaluations.calls % 2, 0, "{work:?}");
     assert!(work.frame_states.calls <= 2, "{work:?}");
+}
+
+/// Elastic states follow the displacements: a solution keeps them once (no committed
+/// array), a plastic body's twice.
+#[test]
+fn states_that_follow_the_displacements_are_kept_once() {
+    for (name, built) in models() {
+        let solution = Solution::new(&built);
+        assert!(solution.states_follow_displacements, "{name}");
+        assert!(solution.committed.is_empty(), "{name}");
+        assert_eq!(
+            solution.point_states().len(),
+            built.continuum.cells.len() * 9,
+            "{name}"
+        );
+    }
+    let plastic = common::with_keys(common::elastic(1000.0, 0.3), &[("yield_stress", 50.0)]);
+    let case = common::two_blocks_on(plastic, 0.3).case();
+    let built = model(read_msh(&fixture("contact_pair.msh")).unwrap(), &case).unwrap();
+    let solution = Solution::new(&built);
+    assert!(!solution.states_follow_displacements);
+    assert_eq!(solution.committed.len(), solution.trial.len());
 }

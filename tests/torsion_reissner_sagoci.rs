@@ -75,7 +75,7 @@ fn a_bonded_punch_turned_by_phi_carries_reissner_sagoci_torque_and_shear() {
     );
 
     let points = BodyPoints::new(&model);
-    let nodal = nodal_values(&model, &points, &solution.committed);
+    let nodal = nodal_values(&model, &points, solution.point_states());
     let scale = 4.0 * g * PHI / std::f64::consts::PI;
     let mut checked = 0;
     for (&(_, n), v) in points.points.iter().zip(&nodal) {

@@ -71,7 +71,7 @@ fn solve_twisted(case: CaseBuilder) -> Result {
     })
     .expect("the tube solves");
     let points = BodyPoints::new(&model);
-    let nodal = nodal_values(&model, &points, &solution.committed);
+    let nodal = nodal_values(&model, &points, solution.point_states());
     let shear = points
         .points
         .iter()

@@ -538,7 +538,7 @@ fn gross_slip_everywhere_gives_the_ruiz_parameters_of_the_cycle() {
     d.ramp(0.0, DELTA, 3);
     d.cycle(DELTA, 4, 1.0).unwrap();
     // A uniform stress in the bodies, σ_xx = 50 MPa along the contact (t = +x): σ_T = 50.
-    for s in &mut d.solution.committed {
+    for s in d.solution.point_states_mut() {
         s.stress[0] = 50.0;
     }
     let slip = DELTA - MU * P / KT;
@@ -557,7 +557,7 @@ fn gross_slip_everywhere_gives_the_ruiz_parameters_of_the_cycle() {
         ));
     }
     // A compressive surface stress gives no F3.
-    for s in &mut d.solution.committed {
+    for s in d.solution.point_states_mut() {
         s.stress[0] = -50.0;
     }
     assert!(

@@ -249,7 +249,7 @@ pub(super) fn encode_record(
         stats: Cow::Borrowed(stats),
         u: Cow::Borrowed(&solution.u),
         committed: Cow::Borrowed(match states {
-            ContinuumStates::Stored => &solution.committed,
+            ContinuumStates::Stored => solution.point_states(),
             ContinuumStates::FromDisplacements => &[],
         }),
         interface_committed: Cow::Borrowed(&solution.interface_committed),
@@ -362,7 +362,7 @@ pub fn read_record(
             "integration points",
             body.committed.len(),
             match states {
-                ContinuumStates::Stored => template.committed.len(),
+                ContinuumStates::Stored => template.point_states().len(),
                 ContinuumStates::FromDisplacements => 0,
             },
         ),
@@ -402,12 +402,20 @@ impl Body<'_> {
         } else {
             self.committed.into_owned()
         };
+        // States that follow the displacements are kept once, in the trial array, which the
+        // resumed run evaluates at the record's displacements.
+        let trial = if template.states_follow_displacements {
+            template.trial.clone()
+        } else {
+            committed.clone()
+        };
         let interface_committed = self.interface_committed.into_owned();
         // Every field named, so that a new one cannot be forgotten here.
         let solution = Solution {
             u: self.u.into_owned(),
-            trial: committed.clone(),
+            trial,
             committed,
+            states_follow_displacements: template.states_follow_displacements,
             interface_trial: interface_committed.clone(),
             interface_committed,
             internal: InternalVariables {
@@ -444,6 +452,7 @@ mod tests {
             u: vec![1.0 / 3.0, -0.0],
             committed: vec![PointState::default(); 2],
             trial: vec![PointState::default(); 2],
+            states_follow_displacements: false,
             interface_committed: vec![InterfaceState::default()],
             interface_trial: vec![InterfaceState::default()],
             internal: Default::default(),

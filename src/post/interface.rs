@@ -538,7 +538,7 @@ impl InterfaceOutput {
         }
         // F3 needs the stress recovery only once a cycle has slipped somewhere.
         if out.iter().flatten().any(|v| v[F2] > 0.0) {
-            let states = &solution.committed;
+            let states = solution.point_states();
             for (pair, values) in self.pairs.iter().zip(&mut out) {
                 for ((v, t), points) in values.iter_mut().zip(&pair.tangent).zip(&pair.body_points)
                 {

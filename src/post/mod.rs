@@ -327,7 +327,7 @@ pub fn step_grids(
     info: StepInfo,
 ) -> (Grid, Option<Grid>) {
     let solution = step.solution;
-    let mut bodies = body_grid(model, points, &solution.u, &solution.committed);
+    let mut bodies = body_grid(model, points, &solution.u, solution.point_states());
     let rf = nodal_reactions(model, step.internal_force, step.external_force);
     let dofs = model.analysis.dofs_per_node();
     let values = (points.points.par_iter().enumerate())

@@ -26,6 +26,8 @@ use crate::solver::newton::{
 use crate::solver::state::{
     ArcState, LoopState, Observer, Progress, Resume, RunStatistics, Solution, StepResult,
 };
+use crate::solver::stepping::increment_sums;
+use crate::solver::strain_bound::StrainBound;
 use crate::{Error, Result};
 
 /// Iterations per increment the arc length is adapted to.
@@ -73,6 +75,7 @@ pub fn run_arc_length(
     }
     let mut converged_u = solution.u.clone();
     let mut f_ext = vec![0.0; dofs.dof_count()];
+    let mut bound = None;
     let stop = loop {
         if path.load_factor >= arc.max_load_factor {
             break "max_load_factor reached";
@@ -91,7 +94,10 @@ pub fn run_arc_length(
             arc,
             &mut newton,
             &mut solution,
-            &converged_u,
+            Converged {
+                u: &converged_u,
+                bound: &mut bound,
+            },
             &mut path,
             &mut log,
         );
@@ -188,7 +194,14 @@ pub fn run_arc_length(
     Ok((solution, stats))
 }
 
-/// One attempt at the next increment from the converged displacements `converged_u` (also in
+/// The converged state an attempt starts from: its displacements, and the bound on the
+/// strain increment from them ([`increment_sums`]; made at the first increment).
+struct Converged<'a> {
+    u: &'a [f64],
+    bound: &'a mut Option<StrainBound>,
+}
+
+/// One attempt at the next increment from the converged displacements `start` (also in
 /// `solution.u`): the predictor's tangent, the arc (the first increment's is set from that
 /// tangent), the corrector, and the plausibility of the result. Returns the arc with the
 /// converged increment and its pass over the point states (for the energy ledger).
@@ -197,7 +210,7 @@ fn attempt(
     arc: &ArcLength,
     newton: &mut Newton,
     solution: &mut Solution,
-    converged_u: &[f64],
+    start: Converged,
     path: &mut ArcState,
     log: &mut NewtonLog,
 ) -> std::result::Result<(f64, ArcConverged, BodySums), ArcFailure> {
@@ -219,8 +232,8 @@ fn attempt(
         previous: &path.previous_increment,
     };
     let converged = newton.solve_arc_increment(&mut problem, u, &increment, log)?;
-    let scan = solution.scan_increment(model);
-    match implausible_increment(model, solution, converged_u, scan.strain_increment) {
+    let scan = increment_sums(model, newton, solution, start.u, start.bound);
+    match implausible_increment(model, solution, start.u, scan.strain_increment) {
         Some(reason) => Err(ArcFailure::Implausible(reason)),
         None => Ok((radius, converged, scan)),
     }

@@ -6,17 +6,19 @@ use faer::MatMut;
 
 use crate::assembly::{
     AssemblyInput, DenseBlock, DenseScatter, DofMap, ElementNodes, GlobalSystem,
-    PrescribedCouplings, evaluate_states,
+    PrescribedCouplings, combine_state_changes, evaluate_states,
 };
 use crate::contact::{ContactAlgorithm, InterfaceState};
 use crate::element::interface6::evaluate_interface;
+use crate::element::quadrature::cell_rule;
 use crate::element::set::{
     ContinuumInContext, ElementSet, INTERFACE_POINTS, InterfaceSet, InternalLayout,
     TemperatureField,
 };
 use crate::element::{ElementInput, ElementMatrix, ElementOutput};
-use crate::material::PointState;
+use crate::material::{PointState, equivalent_strain};
 use crate::model::{Model, continuum_connectivity};
+use crate::solver::energy::largest;
 use crate::solver::newton::Problem;
 
 /// The interface elements seen as the difference between their elastic-tangent matrix and
@@ -232,6 +234,20 @@ impl Problem for Mechanics<'_> {
     fn bulk_states(&mut self, input: &AssemblyInput) {
         let (bodies, committed, trial) = self.bodies();
         evaluate_states(input, &bodies, committed, trial);
+    }
+
+    fn bulk_strain_increment(&mut self, input: &AssemblyInput, start_u: &[f64]) -> f64 {
+        let cells = &self.model.continuum.cells;
+        let (bodies, committed, _) = self.bodies();
+        // The arithmetic of a pass over stored states ([`crate::solver::energy`]), point by
+        // point: ε at the end less ε at the start.
+        let change = |e: usize, start: &[PointState], end: &[PointState]| {
+            let points = cell_rule(cells[e].kind).len();
+            (end.iter().zip(start).take(points))
+                .map(|(t, c)| equivalent_strain(&(t.strain - c.strain)))
+                .fold(0.0, largest)
+        };
+        combine_state_changes(input, start_u, &bodies, committed, change, largest)
     }
 
     fn assemble_interface(

@@ -188,6 +188,12 @@ pub trait Problem: Send {
     /// a converged state of a linear bulk whose force is K·u.
     fn bulk_states(&mut self, input: &AssemblyInput);
 
+    /// The largest equivalent strain increment √(⅔ Δε:Δε) of the bulk's points from the
+    /// displacements `start_u` to `input.u` (NaN if one is not a number), from their states
+    /// at both, made cell by cell and stored nowhere: for a bulk whose states follow the
+    /// displacements, which keeps one array of them.
+    fn bulk_strain_increment(&mut self, input: &AssemblyInput, start_u: &[f64]) -> f64;
+
     /// Adds the interface's internal force into `system` and, if `input.tangent`, its
     /// tangent into the dense interface `block` through `map`. Returns whether that tangent
     /// is symmetric.
@@ -448,23 +454,30 @@ impl<'a> Newton<'a> {
         t.elapsed().as_secs_f64()
     }
 
-    /// Evaluates the bulk's trial point states at the displacements `v` (all dofs), which
-    /// need not be the last evaluation's (a linear bulk's exact strain increment needs those
-    /// of the increment's start too), leaving [`Self::states_pending`] as it was. Tallied as
-    /// a state evaluation; returns its seconds.
-    pub fn states_at(&mut self, problem: &mut impl Problem, v: &[f64]) -> f64 {
+    /// The largest equivalent strain increment of the bulk's points from the displacements
+    /// `start_u` to `u` (all dofs), from their states at both ([`Problem::bulk_strain_increment`]:
+    /// two element loops that store nothing, tallied as two state evaluations), leaving the
+    /// trial states and [`Self::states_pending`] as they were.
+    pub fn strain_increment(
+        &mut self,
+        problem: &mut impl Problem,
+        start_u: &[f64],
+        u: &[f64],
+    ) -> f64 {
         let t = Instant::now();
-        self.bulk_states_at(problem, v);
-        self.work.state_evaluations.since(t);
-        t.elapsed().as_secs_f64()
-    }
-
-    /// Records that the bulk's trial point states are those of the last evaluation's
-    /// displacements, made by [`Self::states_at`] with them: nothing is pending.
-    pub fn states_made(&mut self) {
-        if let Some(c) = self.condensed.as_mut() {
-            c.states_stale = false;
-        }
+        let increment = problem.bulk_strain_increment(
+            &AssemblyInput {
+                dofs: self.dofs,
+                u,
+                tangent: false,
+                algorithm: self.settings.contact_algorithm,
+            },
+            start_u,
+        );
+        let half = t.elapsed().as_secs_f64() / 2.0;
+        self.work.state_evaluations.add(half);
+        self.work.state_evaluations.add(half);
+        increment
     }
 
     fn bulk_states_at(&self, problem: &mut impl Problem, u: &[f64]) {

@@ -12,13 +12,13 @@
 use crate::Result;
 use crate::assembly::filled_in_parallel;
 use crate::contact::InterfaceState;
-use crate::element::quadrature::{MAX_CELL_POINTS, cell_rule};
+use crate::element::quadrature::MAX_CELL_POINTS;
 use crate::element::set::{INTERFACE_POINTS, InternalLayout};
-use crate::material::{PointState, equivalent_strain};
+use crate::material::PointState;
 use crate::model::Model;
 use crate::model::timeline::Frame;
 use crate::solver::cycles;
-use crate::solver::energy::{BodySums, EnergyLedger, Increment, largest};
+use crate::solver::energy::{BodySums, EnergyLedger, Increment};
 use crate::solver::floor::Work;
 use crate::solver::mechanics::Mechanics;
 use crate::solver::newton::{ForceAverage, LastIncrement, NewtonLog};
@@ -30,10 +30,18 @@ use crate::thermal::ThermalState;
 pub struct Solution {
     /// Displacements over all dofs (2 per node).
     pub u: Vec<f64>,
-    /// Continuum states committed at the last converged step.
+    /// Continuum states committed at the last converged step; empty where they follow the
+    /// displacements ([`Self::states_follow_displacements`]).
     pub committed: Vec<PointState>,
     /// Continuum states of the current iteration.
     pub trial: Vec<PointState>,
+    /// Whether the continuum's point states follow from the displacements alone
+    /// ([`Model::states_follow_displacements`]: linear elastic bodies, no temperature).
+    /// Such states are kept once: no committed array (an element loop starts every point
+    /// from the default state, which a linear elastic update does not read), the trial
+    /// array holding those of the last evaluation, which committing leaves in place — the
+    /// largest array of a model (930 MB at 3.84 M unknowns) is not kept twice.
+    pub states_follow_displacements: bool,
     /// Interface states committed at the last converged step.
     pub interface_committed: Vec<InterfaceState>,
     /// Interface states of the current iteration.
@@ -52,6 +60,16 @@ pub struct Solution {
     pub thermal: ThermalState,
 }
 
+/// The point states of the converged state ([`Solution::point_states`]) from the fields
+/// (borrowed apart from the rest of the solution).
+fn converged<'s>(
+    follow: bool,
+    committed: &'s [PointState],
+    trial: &'s [PointState],
+) -> &'s [PointState] {
+    if follow { trial } else { committed }
+}
+
 impl Solution {
     /// The unloaded state of `model`: zero displacements, virgin integration points.
     pub fn new(model: &Model) -> Self {
@@ -67,10 +85,12 @@ impl Solution {
 
     fn unloaded(model: &Model, states: usize) -> Self {
         let interface = model.interface.elements.len() * INTERFACE_POINTS;
+        let follow = model.states_follow_displacements();
         Self {
             u: vec![0.0; model.dofs.dof_count()],
-            committed: filled_in_parallel(PointState::default(), states),
+            committed: filled_in_parallel(PointState::default(), if follow { 0 } else { states }),
             trial: filled_in_parallel(PointState::default(), states),
+            states_follow_displacements: follow,
             interface_committed: vec![InterfaceState::default(); interface],
             interface_trial: vec![InterfaceState::default(); interface],
             internal: InternalVariables::new(model),
@@ -80,39 +100,37 @@ impl Solution {
         }
     }
 
-    /// The largest equivalent strain increment √(⅔ Δε:Δε) from the bodies' committed to
-    /// their trial point states (NaN if one is not a number): the same arithmetic, point by
-    /// point, as the pass over the states ([`Self::scan_increment`]).
-    pub fn largest_strain_increment(&self, model: &Model) -> f64 {
-        let cells = model.continuum.cells.iter();
-        let slots = (self.trial.chunks_exact(MAX_CELL_POINTS))
-            .zip(self.committed.chunks_exact(MAX_CELL_POINTS));
-        cells
-            .zip(slots)
-            .flat_map(|(cell, (trial, committed))| {
-                let points = cell_rule(cell.kind).len();
-                trial[..points].iter().zip(&committed[..points])
-            })
-            .map(|(t, c)| equivalent_strain(&(t.strain - c.strain)))
-            .fold(0.0, largest)
+    /// The point states of the converged state, for what reads them (frames, cycle ends,
+    /// restart records): the committed ones, or where the states follow the displacements
+    /// the only ones, those of the last evaluation (made for the converged state's
+    /// displacements where they are read: [`crate::solver::newton::Newton::complete_states`]).
+    pub fn point_states(&self) -> &[PointState] {
+        converged(
+            self.states_follow_displacements,
+            &self.committed,
+            &self.trial,
+        )
     }
 
-    /// Makes the bodies' trial point states the committed ones, leaving the rest as it is:
-    /// for point states made after the increment was committed
-    /// ([`crate::solver::newton::Newton::complete_states`]), whose trial array then holds
-    /// older states, which nothing reads before an element loop writes them again.
-    pub fn adopt_trial_point_states(&mut self) {
-        std::mem::swap(&mut self.committed, &mut self.trial);
+    /// [`Self::point_states`], to change (a test's prescribed stress field).
+    pub fn point_states_mut(&mut self) -> &mut [PointState] {
+        if self.states_follow_displacements {
+            &mut self.trial
+        } else {
+            &mut self.committed
+        }
     }
 
     /// Makes the trial states of a converged increment the committed ones. The bodies'
     /// point states are swapped, not copied (930 MB per increment at 3.84M unknowns): the
     /// trial array then holds older states, which nothing reads before an element loop
-    /// writes them again — every assembly evaluates every cell, a linear bulk's K·u
-    /// iterations read no state and its increment ends with an element loop, and a failed
-    /// attempt starts over from [`Self::reset_trial`].
+    /// writes them again — every assembly evaluates every cell, and a failed attempt starts
+    /// over from [`Self::reset_trial`]. States that follow the displacements stay where
+    /// they are ([`Self::states_follow_displacements`]).
     pub fn commit(&mut self) {
-        std::mem::swap(&mut self.committed, &mut self.trial);
+        if !self.states_follow_displacements {
+            std::mem::swap(&mut self.committed, &mut self.trial);
+        }
         self.interface_committed
             .copy_from_slice(&self.interface_trial);
         self.internal
@@ -123,7 +141,10 @@ impl Solution {
     /// Makes the trial states the committed ones again (after a failed attempt, or before
     /// the first increment of a resumed run).
     pub fn reset_trial(&mut self) {
-        self.trial.copy_from_slice(&self.committed);
+        // States that follow the displacements are made again by the next evaluation.
+        if !self.states_follow_displacements {
+            self.trial.copy_from_slice(&self.committed);
+        }
         self.interface_trial
             .copy_from_slice(&self.interface_committed);
         self.internal
@@ -181,15 +202,29 @@ impl Solution {
     /// One pass over the point states of the increment from the committed to the trial
     /// states ([`EnergyLedger::scan_bodies`]): its largest strain increment, which
     /// [`crate::solver::diagnosis::implausible_increment`] judges, and the bodies' energy
-    /// terms [`Self::record_energy`] takes.
+    /// terms [`Self::record_energy`] takes. Where the states follow the displacements there
+    /// are no committed ones: the pass sees the trial states at both ends (their stored
+    /// energy; no plastic or thermal term, as for elastic bodies without temperature) and
+    /// leaves the strain increment 0, for the caller to find
+    /// ([`crate::solver::newton::Newton::strain_increment`]).
     pub fn scan_increment(&mut self, model: &Model) -> BodySums {
-        self.energy.scan_bodies(model, &self.committed, &self.trial)
+        let committed = converged(
+            self.states_follow_displacements,
+            &self.committed,
+            &self.trial,
+        );
+        self.energy.scan_bodies(model, committed, &self.trial)
     }
 
     /// Starts a load cycle (or a step) at every interface point of the committed state
     /// ([`cycles::start_cycle`]); the trial states follow.
     pub fn start_cycle(&mut self) {
-        self.internal.cycles.start_cycle(&self.committed);
+        let states = converged(
+            self.states_follow_displacements,
+            &self.committed,
+            &self.trial,
+        );
+        self.internal.cycles.start_cycle(states);
         cycles::start_cycle(&mut self.interface_committed);
         self.interface_trial
             .copy_from_slice(&self.interface_committed);
@@ -222,7 +257,12 @@ impl Solution {
     /// cycle and, at the end of a cyclic step, their shakedown verdicts
     /// ([`BodyCycles::end_cycle`]).
     pub fn end_body_cycle(&mut self, model: &Model, step: usize) {
-        self.internal.cycles.end_cycle(model, step, &self.committed);
+        let states = converged(
+            self.states_follow_displacements,
+            &self.committed,
+            &self.trial,
+        );
+        self.internal.cycles.end_cycle(model, step, states);
     }
 
     /// Checks the energy balance after a wear jump and the re-equilibrium that followed it

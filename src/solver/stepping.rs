@@ -358,66 +358,59 @@ pub(crate) fn start_newton(
     solution: &mut Solution,
     resumed: bool,
 ) -> Result<NewtonLog> {
+    // States that follow the displacements are kept once, in the trial array, where
+    // `start_from` makes them.
     let rebuild_states = resumed && model.states_follow_displacements();
     let (u, mut problem) = solution.split(model);
-    let log = newton.start_from(&mut problem, u, rebuild_states)?;
-    if rebuild_states {
-        solution.committed.copy_from_slice(&solution.trial);
-    }
-    Ok(log)
+    newton.start_from(&mut problem, u, rebuild_states)
 }
 
 /// The pass of a converged increment over its bodies: its largest strain increment and its
-/// energy terms ([`Solution::scan_increment`]). A linear bulk whose force is K·u evaluated no
-/// element in the increment: its stored energy is ½ u·K u and its strain increment is
-/// bounded from the nodal increments ([`StrainBound`], made at the first such increment),
-/// and found exactly only when the bound exceeds `[solver] max_strain_increment`: from the
-/// point states at `u_old` (committed) and at u (trial), the arithmetic of a pass over the
-/// states, so that the plausibility verdict is the states' own to the last bit (ε(Δu) would
-/// round differently, and a limit within rounding of an increment's strain would then cut
-/// back differently). The states at u are then the converged state's.
-fn increment_sums(
+/// energy terms ([`Solution::scan_increment`]). Where the point states follow the
+/// displacements there are no committed states to compare: the strain increment is bounded
+/// from the nodal increments ([`StrainBound`], made at the first increment) and found
+/// exactly only when the bound exceeds `[solver] max_strain_increment`, from the point
+/// states at `u_old` and at u made cell by cell ([`Newton::strain_increment`]: the
+/// arithmetic of a pass over stored states, so that the plausibility verdict is the
+/// states' own to the last bit — ε(Δu) would round differently, and a limit within rounding
+/// of an increment's strain would then cut back differently). A linear bulk whose force is
+/// K·u evaluated no element in the increment: its stored energy is ½ u·K u.
+pub(crate) fn increment_sums(
     model: &Model,
     newton: &mut Newton,
     solution: &mut Solution,
     u_old: &[f64],
     bound: &mut Option<StrainBound>,
 ) -> BodySums {
+    if !solution.states_follow_displacements {
+        return solution.scan_increment(model);
+    }
     let energy = newton
         .linear_bulk_energy()
         .filter(|_| newton.states_pending());
-    let Some(energy) = energy else {
-        return solution.scan_increment(model);
+    let mut sums = match energy {
+        Some(energy) => BodySums::of_linear_bulk(model, energy, 0.0),
+        None => solution.scan_increment(model),
     };
-    // Such a bulk's restart records leave its point states out (they follow from u).
-    debug_assert!(model.states_follow_displacements());
-    let mut sums = BodySums::of_linear_bulk(model, energy, 0.0);
     let bound = bound.get_or_insert_with(|| StrainBound::new(model));
     sums.strain_increment = bound.of(model, &solution.u, u_old);
     // A bound that is not a number (nor is Δu) is looked at exactly too.
     let plausible = sums.strain_increment <= model.control.max_strain_increment;
     if !plausible {
-        let (_, mut problem) = solution.split(model);
-        newton.states_at(&mut problem, u_old);
-        solution.adopt_trial_point_states();
         let (u, mut problem) = solution.split(model);
-        newton.states_at(&mut problem, u);
-        newton.states_made();
-        sums.strain_increment = solution.largest_strain_increment(model);
+        sums.strain_increment = newton.strain_increment(&mut problem, u_old, u);
     }
     sums
 }
 
-/// Makes the committed point states those of the converged state where a linear bulk's
-/// increments left them out ([`Newton::states_pending`]); returns the seconds spent.
+/// Makes the point states those of the converged state where a linear bulk's increments
+/// left them out ([`Newton::states_pending`]); returns the seconds spent.
 fn complete_committed_states(model: &Model, newton: &mut Newton, solution: &mut Solution) -> f64 {
     if !newton.states_pending() {
         return 0.0;
     }
     let (u, mut problem) = solution.split(model);
-    let seconds = newton.complete_states(&mut problem, u);
-    solution.adopt_trial_point_states();
-    seconds
+    newton.complete_states(&mut problem, u)
 }
 
 /// Re-equilibrates the bodies after a wear jump, under the loads of the converged state (one
@@ -579,10 +572,6 @@ fn report_partial(
             algorithm: settings.contact_algorithm,
         },
     );
-    if model.states_follow_displacements() {
-        // A linear bulk's increments may have left its committed point states out.
-        solution.adopt_trial_point_states();
-    }
     let mut external = vec![0.0; model.dofs.dof_count()];
     model.external_force(state.time, &mut external);
     let mut frame = model.schedule.timeline().frame(state.time);
