@@ -56,6 +56,13 @@ pub fn write_vtu(path: &Path, grid: &Grid) -> Result<()> {
 /// first (cleared; kept for the next file by a caller writing many), then writing it with
 /// one call: no write buffer, no staging copy, and no fresh memory per file.
 pub fn write_vtu_with(path: &Path, view: GridView, buffer: &mut Vec<u8>) -> Result<()> {
+    encode_vtu(path, view, buffer)?;
+    write_bytes(path, buffer)
+}
+
+/// The whole file [`write_vtu_with`] writes to `path`, encoded into `buffer` (cleared), or
+/// why it cannot be written (naming `path`).
+pub(crate) fn encode_vtu(path: &Path, view: GridView, buffer: &mut Vec<u8>) -> Result<()> {
     validate(&view).map_err(|msg| invalid_data(path, msg))?;
     let head = head(&view);
     buffer.clear();
@@ -70,7 +77,7 @@ pub fn write_vtu_with(path: &Path, view: GridView, buffer: &mut Vec<u8>) -> Resu
         array.encode_data(&view, buffer);
     }
     buffer.extend_from_slice(b"\n</AppendedData>\n</VTKFile>\n");
-    write_bytes(path, buffer)
+    Ok(())
 }
 
 /// One `<DataArray>` of the file.

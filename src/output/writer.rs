@@ -6,12 +6,12 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, mpsc};
 
 use super::append::Append;
-use super::atomic::write_bytes;
+use super::atomic::{DropBehind, write_bytes, write_streamed};
 use super::csv::{Cell, CsvTable, write_csv};
 use super::pvd::{PvdEntry, write_pvd};
 use super::restart::{ContinuumStates, OutputState, encode_record};
 use super::vtm::{VtmBlock, write_vtm};
-use super::vtu::write_vtu_with;
+use super::vtu::encode_vtu;
 use super::{Grid, GridView, SplitPlan};
 use crate::solver::state::Progress;
 use crate::{Error, Result};
@@ -51,18 +51,22 @@ impl Content {
         }
     }
 
-    /// Writes the file, a VTU file through `buffer` (the writer thread's, reused).
-    fn write(&self, path: &Path, buffer: &mut Vec<u8>) -> Result<()> {
+    /// Writes the file, a VTU file through `buffer` (the writer thread's, reused); a large
+    /// VTU file or record is dropped from the page cache behind the writer (`behind`).
+    fn write(&self, path: &Path, buffer: &mut Vec<u8>, behind: &mut DropBehind) -> Result<()> {
+        let vtu = |view: GridView, buffer: &mut Vec<u8>, behind: &mut DropBehind| {
+            encode_vtu(path, view, buffer)?;
+            write_streamed(path, buffer, behind)
+        };
         match self {
-            Content::Vtu(grid) => write_vtu_with(path, GridView::whole(grid), buffer),
-            Content::VtuPart(grid, plan, k) => {
-                write_vtu_with(path, GridView::part(grid, plan, *k), buffer)
-            }
+            Content::Vtu(grid) => vtu(GridView::whole(grid), buffer, behind),
+            Content::VtuPart(grid, plan, k) => vtu(GridView::part(grid, plan, *k), buffer, behind),
             Content::Csv(table) => write_csv(path, table),
             Content::Table(table) => write_csv(path, table),
             Content::Pvd(entries) => write_pvd(path, entries),
             Content::Vtm(blocks) => write_vtm(path, blocks),
-            Content::Record(bytes) | Content::Text(bytes) => write_bytes(path, bytes),
+            Content::Record(bytes) => write_streamed(path, bytes, behind),
+            Content::Text(bytes) => write_bytes(path, bytes),
             Content::Append(append) => append.write(path),
         }
     }
@@ -148,11 +152,19 @@ impl Worker {
         let (outbox, outcomes) = mpsc::channel();
         let thread = std::thread::spawn(move || {
             let mut buffer = Vec::new();
+            let mut behind = DropBehind::default();
             for files in inbox {
-                if outbox.send(write_in_order(files, &mut buffer)).is_err() {
+                // The last commit's large files have had the time of an increment to reach
+                // the disk: their pages are dropped for this commit's to reuse.
+                behind.release();
+                if outbox
+                    .send(write_in_order(files, &mut buffer, &mut behind))
+                    .is_err()
+                {
                     break;
                 }
             }
+            behind.release();
         });
         Self {
             commits,
@@ -376,10 +388,14 @@ impl RecordWriter {
 }
 
 /// Writes `files` in order, stopping at the first error; returns the record's buffer.
-fn write_in_order(files: Vec<(PathBuf, Content)>, buffer: &mut Vec<u8>) -> Result<Vec<u8>> {
+fn write_in_order(
+    files: Vec<(PathBuf, Content)>,
+    buffer: &mut Vec<u8>,
+    behind: &mut DropBehind,
+) -> Result<Vec<u8>> {
     let mut spare = Vec::new();
     for (path, content) in files {
-        content.write(&path, buffer)?;
+        content.write(&path, buffer, behind)?;
         if let Content::Record(mut bytes) = content {
             bytes.clear();
             spare = bytes;
