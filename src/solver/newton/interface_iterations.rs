@@ -270,15 +270,12 @@ impl Evaluation<'_> {
     /// as they were. Returns whether the tangent is symmetric.
     fn interface(&mut self, problem: &mut impl Problem, c: &mut Condensed, tangent: bool) -> bool {
         let t = Instant::now();
+        if tangent {
+            c.clear_block();
+        }
         let it = &mut c.iterations;
         for ((&dof, &u), &d) in it.dofs.iter().zip(&it.u_start).zip(&it.trial_delta) {
             it.u[dof] = u + d;
-        }
-        if tangent {
-            let n = c.block.nrows();
-            for &k in &c.block_entries {
-                c.block[(k % n, k / n)] = 0.0;
-            }
         }
         let system = &mut *self.system;
         std::mem::swap(&mut system.internal_force, &mut it.force);
