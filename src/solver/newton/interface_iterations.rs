@@ -308,11 +308,11 @@ impl Evaluation<'_> {
 /// K_if Δ into `block_step`, over the block's element entries.
 fn block_product(c: &mut Condensed) {
     let it = &mut c.iterations;
-    let n = c.block.nrows();
+    let n = c.block.n;
     it.block_step.fill(0.0);
     for &k in &c.block_entries {
         let (i, j) = (k % n, k / n);
-        it.block_step[i] += c.block[(i, j)] * it.step[j];
+        it.block_step[i] += c.block.values[k] * it.step[j];
     }
 }
 
