@@ -85,8 +85,15 @@ pub(crate) struct DropBehind {
 }
 
 impl DropBehind {
-    /// Starts writing `file` back to the disk and keeps a handle on it.
+    /// The most files kept open at once (one descriptor each).
+    const MOST_KEPT: usize = 64;
+
+    /// Starts writing `file` back to the disk and keeps a handle on it (at most
+    /// [`Self::MOST_KEPT`]: a commit of more large files releases the earlier ones early).
     fn keep(&mut self, file: &std::fs::File) {
+        if self.files.len() >= Self::MOST_KEPT {
+            self.release();
+        }
         #[cfg(target_os = "linux")]
         {
             use std::os::fd::AsRawFd;
