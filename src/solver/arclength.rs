@@ -185,9 +185,15 @@ pub fn run_arc_length(
         path.largest_load_factor,
         path.load_factor
     );
-    // Leave the converged state (not a failed attempt's) in the solution.
+    // Leave the converged state (not a failed attempt's) in the solution; point states that
+    // follow the displacements are kept once, so a failed attempt's are made again.
+    let attempted = solution.u != converged_u;
     solution.u.copy_from_slice(&converged_u);
     solution.reset_trial();
+    if attempted && solution.states_follow_displacements {
+        let (u, mut problem) = solution.split(model);
+        newton.states_at(&mut problem, u);
+    }
     stats.symbolic_seconds = newton.symbolic_seconds();
     stats.factor_nnz = newton.linear().factor_nnz();
     stats.work.solver = *newton.work();

@@ -515,6 +515,15 @@ impl<'a> Newton<'a> {
         increment
     }
 
+    /// Evaluates the bulk's trial point states at the displacements `u` (all dofs): one
+    /// element loop, tallied as a state evaluation (a driver leaving a converged state after
+    /// a failed attempt, whose states follow the displacements).
+    pub fn states_at(&mut self, problem: &mut impl Problem, u: &[f64]) {
+        let t = Instant::now();
+        self.bulk_states_at(problem, u);
+        self.work.state_evaluations.since(t);
+    }
+
     fn bulk_states_at(&self, problem: &mut impl Problem, u: &[f64]) {
         problem.bulk_states(&AssemblyInput {
             dofs: self.dofs,
