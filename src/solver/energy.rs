@@ -421,11 +421,10 @@ impl BodySums {
     /// The pass of a converged increment of a linear bulk whose force is K_c u, made
     /// without its point states: the bodies' stored energy `elastic`, ½ u·K_c u from the
     /// product (the states' Σ ½ σ:ε dV to rounding), no plastic, numerical or thermal terms
-    /// (elastic bodies, no temperature), and the `strain_increment` found for it.
-    pub fn of_linear_bulk(model: &Model, elastic: f64, strain_increment: f64) -> Self {
+    /// (elastic bodies, no temperature); its strain increment is the caller's to find.
+    pub fn of_linear_bulk(model: &Model, elastic: f64) -> Self {
         Self {
             elastic,
-            strain_increment,
             ..Self::new(model)
         }
     }

@@ -389,7 +389,7 @@ pub(crate) fn increment_sums(
         .linear_bulk_energy()
         .filter(|_| newton.states_pending());
     let mut sums = match energy {
-        Some(energy) => BodySums::of_linear_bulk(model, energy, 0.0),
+        Some(energy) => BodySums::of_linear_bulk(model, energy),
         None => solution.scan_increment(model),
     };
     let bound = bound.get_or_insert_with(|| StrainBound::new(model));
