@@ -2,7 +2,7 @@
 //! kept once, that stops after a failed attempt (the arc halved below `min_arc_length`)
 //! leaves the converged state's point states in its solution, not the failed attempt's.
 
-mod common;
+use crate::common;
 
 use asperity::mesh::msh::read_msh;
 use asperity::run::newton_settings;

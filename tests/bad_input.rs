@@ -8,7 +8,7 @@
 //!
 //! The base case is checked to run, so that every error below is due to its one defect.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

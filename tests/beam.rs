@@ -1,6 +1,6 @@
 //! Bending in plane stress: a cantilever under a uniform shear end load against
 //! Timoshenko beam theory, δ = PL³/(3EI) + PL/(κGA), κ = 5/6.
-mod common;
+use crate::common;
 
 use common::*;
 

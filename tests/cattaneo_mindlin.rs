@@ -10,7 +10,7 @@
 //! `tests/data/cattaneo_mindlin.geo` and solved once for all the tests of this file; the loads,
 //! materials and friction coefficient are read from the case.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -497,7 +497,7 @@ fn worst_errors(run: &Run) -> [f64; 5] {
 /// Mesh refinement (docs/fretting.md, "Mesh convergence"): the shipped mesh (48 elements
 /// along the contact faces, h = 0.05 mm = a/20) against one twice as fine everywhere. The
 /// errors that the discretisation controls must not grow; run with
-/// `cargo test --release --test cattaneo_mindlin -- --ignored --nocapture refining`.
+/// `cargo test --release --test suite -- cattaneo_mindlin::refining --ignored --nocapture`.
 #[test]
 #[ignore = "a measurement for docs/fretting.md (about a minute)"]
 fn refining_the_mesh_does_not_increase_the_errors() {

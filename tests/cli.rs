@@ -1,6 +1,6 @@
 //! The command line as a user meets it: `mesh-info` on a real gmsh fixture, and clear errors
 //! (naming the file, the entity and the problem, with a non-zero exit status) for bad cases.
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::Command;

@@ -2,7 +2,7 @@
 //! (docs/theory.md, closed forms): shrink fit (both mesh recipes), frictionless flat
 //! punch (Sneddon), Newton-Cotes against Gauss, a block sticking and sliding, opening, and
 //! Newton's convergence.
-mod common;
+use crate::common;
 
 use asperity::config::Case;
 use asperity::mesh::Mesh;

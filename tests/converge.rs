@@ -3,7 +3,7 @@
 //! shrink fit against its closed form, the `--quantity` syntax, and the command's exit status
 //! for a converged study (thick cylinder against Lamé), a deliberately non-converged quantity
 //! (the singular edge pressure of a flat punch) and a case that cannot be refined.
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

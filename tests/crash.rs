@@ -9,7 +9,7 @@
 //! grow by appended rows may end in a partial line, which `--resume` cuts off), and after
 //! `--resume` every result file must be identical.
 
-mod common;
+use crate::common;
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};

@@ -5,7 +5,7 @@
 //! a linear problem takes one solve; steps with nothing loaded and steps unloaded to a
 //! stress-free state converge; the old keys still work and bad values are named.
 
-mod common;
+use crate::common;
 
 use asperity::Error;
 use asperity::config::Case;

@@ -4,7 +4,7 @@
 //! counted over the step, so that a load the model cannot carry is not crept up to by ever
 //! smaller increments that each pass the plausibility bounds (tests/locking.rs: the
 //! overloaded locking cylinder).
-mod common;
+use crate::common;
 
 use asperity::Error;
 use common::{CaseBuilder, elastic, model, rectangle, settings};

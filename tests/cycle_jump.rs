@@ -16,7 +16,7 @@
 //! Issue 23: under a stiff penalty and jumps at the stability limit, the two integration
 //! points at a shared corner node keep one depth (`coincident_corner_points_…`).
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

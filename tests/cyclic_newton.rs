@@ -5,7 +5,7 @@
 //! γ > 0 the exact tangent is unsymmetric there; the bodies' solver factors it by LU
 //! (src/solver/linear.rs), so Newton converges quadratically. Measured with the symmetric
 //! part of the tangent (before the LU path): median terminal order 1.02, i.e. linear.
-mod common;
+use crate::common;
 
 use asperity::solver::stepping::run_steps;
 use common::*;

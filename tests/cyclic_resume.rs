@@ -10,7 +10,7 @@
 //! four cycles of six increments; the lower block flows in every cycle (checked), so its
 //! backstresses change inside each cycle.
 
-mod common;
+use crate::common;
 
 use std::io::{BufRead, BufReader};
 use std::path::Path;

@@ -9,7 +9,7 @@
 //! `summary.json` is compared as JSON without its wall-clock `seconds` and case path, and
 //! `run.json`, `log.txt` and `restart.bin` (times, host, timestamps) are left out.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -1,7 +1,7 @@
 //! Why a step failed, in the user's terms: the mechanism (friction capacity, plastic
 //! collapse, a lost support), the `[[step]]` by name and the multiplier of its load reached.
 //! Each case has a limit known in closed form, which the reported multiplier must respect.
-mod common;
+use crate::common;
 
 use asperity::Error;
 use asperity::error::{LoadPoint, Mechanism};

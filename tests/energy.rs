@@ -3,7 +3,7 @@
 //! bodies, the plastic work of uniaxial stress with linear hardening, and the dissipation
 //! per cycle of an elastic–perfectly-sliding Coulomb interface, 4 μ p A (δ − μ p / k_T).
 
-mod common;
+use crate::common;
 
 use asperity::config::Case;
 use asperity::model::Model;

@@ -2,7 +2,7 @@
 //! never exceeds the run, and its counts are those of the run's own log. No timings are
 //! asserted, only relations that hold whatever the machine's speed.
 
-mod common;
+use crate::common;
 
 use common::{CaseBuilder, run_cli, two_blocks};
 use serde_json::Value;

@@ -4,7 +4,7 @@
 //! combined meridional and circumferential path, the rough law's slip hardening driven by the
 //! length of the slip path whatever its direction, the slip-path extent of the cycle
 //! trackers, and the torque a pair transmits.
-mod common;
+use crate::common;
 
 use asperity::contact::linear::LinearCoulomb;
 use asperity::contact::rough::RoughJoint;

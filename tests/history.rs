@@ -3,7 +3,7 @@
 //! equilibrium (the base carries the lid's pressure load at every step) and the factors the
 //! case gives.
 
-mod common;
+use crate::common;
 
 use std::collections::HashMap;
 use std::path::Path;

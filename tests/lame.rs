@@ -1,7 +1,7 @@
 //! Lamé thick cylinder under internal pressure (docs/theory.md, "Closed-form solutions used for verification"): axisymmetric
 //! slice with u_z = 0 on both ends (= plane strain) and a plane-strain quarter annulus,
 //! against the closed form; plus a mesh-refinement study of the displacement error.
-mod common;
+use crate::common;
 
 use asperity::element::kinematics::point_kinematics;
 use asperity::element::quadrature::cell_rule;

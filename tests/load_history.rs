@@ -8,7 +8,7 @@
 //! its top and right edges. Its stress is uniform, which the quadratic element represents
 //! exactly, so the corner (2, 1) moves by u_x = 2 (σ_xx − ν σ_yy)/E, u_y = (σ_yy − ν σ_xx)/E.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -5,7 +5,7 @@
 //! - Perfectly plastic thick cylinder (a = 10, b = 20, σ_Y = 100): the elastic–plastic
 //!   boundary c(p) against Hill's solution and the limit pressure p_L = (2/√3) σ_Y ln(b/a).
 //! - Prandtl's flat punch: collapse pressure (2 + π) k, k = σ_Y/√3.
-mod common;
+use crate::common;
 
 use asperity::mesh::Mesh;
 use asperity::model::Model;

@@ -1,7 +1,7 @@
 //! The mesh cache end to end: a second run of the same `.geo` case takes its mesh from the
 //! cache (no time in gmsh) and gives the same results; another size factor is meshed anew.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

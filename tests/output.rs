@@ -13,7 +13,7 @@ use asperity::output::pvd::{PvdEntry, write_pvd};
 use asperity::output::vtu::{read_vtu, write_vtu};
 use asperity::output::{Field, FieldValues, Grid};
 
-mod common;
+use crate::common;
 
 /// What a writer refused to write into `path`: the message of an [`Error::Io`] of invalid
 /// data about that file.
@@ -552,7 +552,7 @@ fn a_failed_run_writes_its_summary_with_the_converged_steps() {
 }
 
 /// Times writing a 500k-point grid of quad8 cells with the fields of a real run. Run with
-/// `cargo test --release --test output -- --ignored --nocapture vtu_timing`.
+/// `cargo test --release --test suite -- --ignored --nocapture output::vtu_timing`.
 #[test]
 #[ignore]
 fn vtu_timing_500k_points() {
@@ -642,7 +642,7 @@ fn vtu_timing_500k_points() {
 }
 
 /// Writes sample files for checking by hand in ParaView or pyvista (`pyvista.read`,
-/// `pyvista.get_reader`): `ASPERITY_SAMPLE_DIR=/tmp/samples cargo test --test output --
+/// `pyvista.get_reader`): `ASPERITY_SAMPLE_DIR=/tmp/samples cargo test --test suite --
 /// --ignored write_samples`.
 #[test]
 #[ignore]

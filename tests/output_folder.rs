@@ -2,7 +2,7 @@
 //! overwrites only what its manifest (`run_files.txt`) lists as written by asperity, never an
 //! input of the run, never writes through a symbolic link, resolves relative folders one way,
 //! and stops cleanly on Ctrl-C.
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};

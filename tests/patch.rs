@@ -1,7 +1,7 @@
 //! Patch tests: on distorted meshes of quad8 and tri6 a constant-strain field must be
 //! reproduced exactly (to round-off), in plane stress, plane strain and axisymmetry, with the
 //! full and (plane strain, axisymmetry) the B-bar formulation.
-mod common;
+use crate::common;
 
 use asperity::config::AnalysisSpec;
 use asperity::material::elastic::LinearElastic;

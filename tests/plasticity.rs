@@ -3,7 +3,7 @@
 //! bore displacement: onset of yield at the closed-form pressure, the pressure-displacement
 //! curve flattening at the collapse pressure p_L = (2/√3) σ_Y ln(c/b), and Newton's
 //! convergence on plastic steps.
-mod common;
+use crate::common;
 
 use asperity::Error;
 use asperity::model::ModelSpec;

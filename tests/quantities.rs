@@ -5,7 +5,7 @@
 //! `history.csv` and `summary.json`, all named by the user's names, and the parts of the
 //! model by name in `results.pvd`.
 
-mod common;
+use crate::common;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};

@@ -2,7 +2,7 @@
 //! bit it was given, and a record that does not belong to the case is refused with a clear
 //! error instead of continuing a different model. (Resuming killed runs is `tests/crash.rs`.)
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::Command;

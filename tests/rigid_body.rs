@@ -4,7 +4,7 @@
 //! point does not stop rotation about it, a support along a line holding only the
 //! direction of that line does not stop rotation either, a frictionless contact does not
 //! stop sliding along it, and in axisymmetry only the axial translation is a rigid motion.
-mod common;
+use crate::common;
 
 use asperity::Error;
 use asperity::error::FreeBody;

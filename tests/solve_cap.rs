@@ -1,7 +1,7 @@
 //! `[solver] max_solves` counts every increment solve: the sub-increments that amplitude
 //! breakpoints add (counted before solving, from the amplitudes) and the attempts that
 //! cut-backs retry (counted as the run goes).
-mod common;
+use crate::common;
 
 use asperity::Error;
 use common::{

@@ -8,7 +8,7 @@
 //! middle and slip towards the edges (Spence's partial slip under a rigid flat punch), and the
 //! answer does not depend on how tightly Newton converged.
 
-mod common;
+use crate::common;
 
 use asperity::config::Case;
 use asperity::contact::ContactStatus;

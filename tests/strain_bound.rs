@@ -5,7 +5,7 @@
 //! (quad8, tri6) — is not needlessly loose on a smooth field, and sees no strain in a
 //! translation that strains nothing.
 
-mod common;
+use crate::common;
 
 use asperity::config::SolverSpec;
 use asperity::mesh::msh::read_msh;

@@ -2,7 +2,7 @@
 //! (T(r), the heat flow and its thermal stresses, Timoshenko & Goodier §150), the heat
 //! balance with a source and a film, two concentric cylinders joined by a conductance h
 //! (jump = flux / h), and a two-block stack whose joint follows h0 (p/1 MPa)^n.
-mod common;
+use crate::common;
 
 use asperity::mesh::Mesh;
 use common::*;

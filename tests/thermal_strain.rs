@@ -3,7 +3,7 @@
 //! (stress −E α ΔT and the energy ledger), step histories, and a hub heated on a shaft with
 //! an interference (Lamé pressure of the interference left at temperature, contact lost
 //! exactly when α ΔT a exceeds it; (1 + ν) α ΔT a with ε_z = 0).
-mod common;
+use crate::common;
 
 use asperity::mesh::Mesh;
 use common::*;

@@ -22,7 +22,7 @@
 //! A return on a square (each direction limited to μ|p| on its own) would give F = F_s and
 //! T = T_s together, 2 on the left-hand side.
 
-mod common;
+use crate::common;
 
 use asperity::contact::ContactStatus;
 use asperity::element::interface6::interface_point;

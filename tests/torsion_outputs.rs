@@ -6,7 +6,7 @@
 //! twist of the top is T H / (G J) × the multiplier, to round-off (1e-8 relative, room for
 //! the linear solves).
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

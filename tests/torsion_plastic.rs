@@ -14,7 +14,7 @@
 //! boundary; 1e-3 is allowed. Above T_p it cannot go: every Gauss point's shear
 //! stress is at most k after the return mapping.
 
-mod common;
+use crate::common;
 
 use asperity::post::reaction_torques;
 use asperity::solver::stepping::run_steps;

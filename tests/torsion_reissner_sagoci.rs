@@ -15,7 +15,7 @@
 //! away from the edge, where the nodal values recovered from the Gauss points are within
 //! 0.35 % (measured): 1 % is allowed.
 
-mod common;
+use crate::common;
 
 use asperity::material::Z_THETA;
 use asperity::post::{BodyPoints, nodal_values, reaction_torques};

@@ -8,7 +8,7 @@
 //! the finite-element solution is exact up to round-off: the tolerances below (1e-8 relative)
 //! only leave room for the linear solve and the nodal recovery's arithmetic.
 
-mod common;
+use crate::common;
 
 use asperity::material::Z_THETA;
 use asperity::model::Model;

@@ -4,7 +4,7 @@
 //! cycle jumping, its stability limit, wear-through), a frictional run of the full model, and
 //! the `wear` keys' bad input.
 
-mod common;
+use crate::common;
 
 use asperity::Error;
 use asperity::config::Case;
