@@ -43,7 +43,7 @@ def run(size: float, work: Path, binary: Path, timeout: float) -> dict:
     spec = tomllib.loads(CASE.read_text())
     work.mkdir(parents=True, exist_ok=True)
     msh = work / "mesh.msh"
-    gmsh_s = bc.mesh_case(CASE, spec, size, msh)
+    gmsh_s = bc.mesh_case(CASE, spec, size, msh, binary=True)  # as `asperity run` meshes
     run_toml = work / "case.toml"
     bc.case_with_mesh(CASE, msh.resolve(), run_toml)
     adir = work / "asperity"

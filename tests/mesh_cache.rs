@@ -39,6 +39,12 @@ fn a_repeated_run_reads_its_mesh_from_the_cache() {
     let second = run(&case(0.5), &dir.path().join("b"), &cache);
     assert!(first["seconds"]["gmsh"].as_f64().unwrap() > 0.0);
     assert_eq!(second["seconds"]["gmsh"].as_f64(), Some(0.0));
+    // gmsh writes binary MSH 4.1 (faster to write and to read than its text).
+    let msh = std::fs::read(dir.path().join("a").join("mesh.msh")).unwrap();
+    assert!(
+        msh.starts_with(b"$MeshFormat\n4.1 1 8\n"),
+        "not binary MSH 4.1"
+    );
     for file in ["mesh.msh", "history.csv"] {
         assert_eq!(
             std::fs::read(dir.path().join("a").join(file)).unwrap(),

@@ -180,11 +180,15 @@ def measure(cmd: list[str], cwd: Path, env: dict | None = None, timeout: float |
 # --------------------------------------------------------------------------------------------
 # gmsh mesh (MSH 4.1 ascii)
 # --------------------------------------------------------------------------------------------
-def mesh_case(case_file: Path, spec: dict, size: float, out: Path) -> float:
-    """Meshes the case's .geo script with the options `asperity run` uses; returns gmsh's time."""
+def mesh_case(case_file: Path, spec: dict, size: float, out: Path, binary: bool = False) -> float:
+    """Meshes the case's .geo script with the options `asperity run` uses; returns gmsh's time.
+
+    ASCII unless `binary` (as `asperity run` meshes): `read_msh41` reads ASCII only."""
     geo = (case_file.parent / spec["mesh"]["geo"]).resolve()
     cmd = ["gmsh", str(geo), "-2", "-order", "2", "-format", "msh41", "-v", "2",
            "-setnumber", "Mesh.SecondOrderIncomplete", "1", "-clscale", repr(float(size))]
+    if binary:
+        cmd.append("-bin")
     for name, value in spec["mesh"].get("parameters", {}).items():
         cmd += ["-setnumber", name, repr(float(value))]
     cmd += ["-o", str(out)]

@@ -99,7 +99,7 @@ pub struct MeshSource {
     /// An MSH 4.1 file (ascii or binary, second order) of at most 1 GiB.
     pub file: Option<PathBuf>,
     /// A gmsh `.geo` script, meshed with `gmsh -2 -order 2` at run time into `mesh.msh` of
-    /// the output folder.
+    /// the output folder (MSH 4.1, binary).
     pub geo: Option<PathBuf>,
     /// Mesh size factor passed to gmsh (`-clscale`), > 0; smaller is finer. A mesh estimated
     /// above 1 000 000 elements is refused before gmsh makes it.

@@ -27,8 +27,9 @@ use std::time::SystemTime;
 /// Cache size limit (MiB) when `ASPERITY_MESH_CACHE_MB` is not set.
 pub const DEFAULT_LIMIT_MB: u64 = 2048;
 
-/// First line of every key: changes when what a key covers changes.
-const KEY_FORMAT: &str = "asperity mesh cache 1";
+/// First line of every key: changes when what a key covers changes (2: the meshes are binary
+/// MSH 4.1, so that the ASCII meshes of earlier versions are made anew and not read slowly).
+const KEY_FORMAT: &str = "asperity mesh cache 2";
 
 /// The mesh cache: its folder and size limit.
 #[derive(Clone, Debug)]
