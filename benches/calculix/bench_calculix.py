@@ -178,7 +178,7 @@ def measure(cmd: list[str], cwd: Path, env: dict | None = None, timeout: float |
 
 
 # --------------------------------------------------------------------------------------------
-# gmsh mesh (MSH 4.1 ascii)
+# gmsh mesh (MSH 4.1: ascii for read_msh41, binary as `asperity run` meshes)
 # --------------------------------------------------------------------------------------------
 def mesh_case(case_file: Path, spec: dict, size: float, out: Path, binary: bool = False) -> float:
     """Meshes the case's .geo script with the options `asperity run` uses; returns gmsh's time.
