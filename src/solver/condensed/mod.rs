@@ -60,16 +60,11 @@
 //! ```
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::perm::PermRef;
+use faer::sparse::linalg::SymbolicSupernodalParams;
 use faer::sparse::linalg::amd;
 use faer::sparse::linalg::cholesky::supernodal::{SupernodalLltRef, SymbolicSupernodalCholesky};
-use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
-    factorize_symbolic_cholesky,
-};
-use faer::sparse::linalg::{SupernodalThreshold, SymbolicSupernodalParams};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
-use faer::{Mat, MatMut, MatRef, Par, Side};
+use faer::{Mat, MatMut, MatRef, Par};
 use std::sync::Mutex;
 
 use crate::assembly::SparsityPattern;
@@ -78,6 +73,7 @@ use crate::solver::tree_cholesky::TreeCholesky;
 use crate::{Error, Result};
 
 mod supernodal;
+mod symbolic;
 mod unsymmetric;
 
 use supernodal::{
@@ -177,7 +173,7 @@ pub struct CondensedSolver {
     order: Vec<u32>,
     position: Vec<u32>,
     /// Symbolic supernodal Cholesky factorisation of the reordered matrix.
-    symbolic: SymbolicCholesky<u32>,
+    symbolic: SymbolicSupernodalCholesky<u32>,
     /// Lower triangle of the reordered continuum matrix (plus the interface shift) of the
     /// last factorisation; `source[k]` is the position in the original pattern's value
     /// array of its entry k.
@@ -385,50 +381,38 @@ impl CondensedSolver {
             position[old as usize] = new as u32;
         }
 
-        let symbolic = factorize_symbolic_cholesky(
-            global.as_ref(),
-            Side::Lower,
-            SymmetricOrdering::Custom(PermRef::new_checked(&order, &position, n)),
-            CholeskySymbolicParams {
-                supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
-                supernodal_params: match relax {
-                    Some(relax) => SymbolicSupernodalParams { relax: Some(relax) },
-                    None => Default::default(),
-                },
-                ..Default::default()
-            },
-        )
-        .map_err(|e| Error::Linear(format!("symbolic Cholesky factorisation failed: {e:?}")))?;
-        let SymbolicCholeskyRaw::Supernodal(supernodal) = symbolic.raw() else {
-            return Err(Error::Linear(
-                "expected a supernodal symbolic factorisation".into(),
-            ));
-        };
-
         // Lower triangle of the reordered matrix: count per column, then the row indices in
-        // the traversal order that `factor_bulk` repeats.
+        // the traversal order that `factor_bulk` repeats; and in the same passes its upper
+        // triangle (the transpose), which the symbolic analysis reads.
         let mut lower_col_ptr = vec![0u32; n + 1];
-        for_each_lower(global.as_ref(), &position, |col, _, _| {
-            lower_col_ptr[col + 1] += 1
+        let mut upper_col_ptr = vec![0u32; n + 1];
+        for_each_lower(global.as_ref(), &position, |col, row, _| {
+            lower_col_ptr[col + 1] += 1;
+            upper_col_ptr[row + 1] += 1;
         });
         for c in 0..n {
             lower_col_ptr[c + 1] += lower_col_ptr[c];
+            upper_col_ptr[c + 1] += upper_col_ptr[c];
         }
         let nnz_lower = lower_col_ptr[n] as usize;
         let mut lower_row_idx = vec![0u32; nnz_lower];
+        let mut upper_row_idx = vec![0u32; nnz_lower];
         let mut source = vec![0u32; nnz_lower];
         let mut fill: Vec<u32> = lower_col_ptr[..n].to_vec();
+        let mut upper_fill: Vec<u32> = upper_col_ptr[..n].to_vec();
         let mut diagonal = vec![u32::MAX; n];
         for_each_lower(global.as_ref(), &position, |col, row, p| {
             let slot = fill[col] as usize;
             lower_row_idx[slot] = row as u32;
             source[slot] = p as u32;
             fill[col] += 1;
+            upper_row_idx[upper_fill[row] as usize] = col as u32;
+            upper_fill[row] += 1;
             if row == col {
                 diagonal[col] = slot as u32;
             }
         });
-        drop(fill);
+        drop((fill, upper_fill));
         if diagonal.contains(&u32::MAX) {
             return Err(Error::Linear(
                 "the sparsity pattern lacks a diagonal entry".into(),
@@ -440,6 +424,17 @@ impl CondensedSolver {
             .collect();
         let lower =
             SymbolicSparseColMat::new_unsorted_checked(n, n, lower_col_ptr, None, lower_row_idx);
+        let upper =
+            SymbolicSparseColMat::new_unsorted_checked(n, n, upper_col_ptr, None, upper_row_idx);
+        let supernodal = symbolic::supernodal_symbolic(
+            lower.as_ref(),
+            upper.as_ref(),
+            match relax {
+                Some(relax) => SymbolicSupernodalParams { relax: Some(relax) },
+                None => Default::default(),
+            },
+        )?;
+        drop(upper);
 
         // One thread for the bulk factorisation: see `BULK_FACTOR_PARALLELISM`.
         let par = BULK_FACTOR_PARALLELISM;
@@ -448,8 +443,8 @@ impl CondensedSolver {
             .max()
             .unwrap_or(0);
         let factor = vec![0.0; supernodal.len_val()];
-        let tree = TreeCholesky::new(supernodal, rayon::current_num_threads());
-        let schur_in_factor = trailing_supernode(supernodal, n_bulk)
+        let tree = TreeCholesky::new(&supernodal, rayon::current_num_threads());
+        let schur_in_factor = trailing_supernode(&supernodal, n_bulk)
             .map(|s| supernodal.col_ptr_for_val()[s] as usize);
         tracing::debug!(
             unknowns = n,
@@ -506,7 +501,7 @@ impl CondensedSolver {
             backward_gathers: Mutex::new(Vec::new()),
             par,
             tree,
-            symbolic,
+            symbolic: supernodal,
             factored: false,
             released: false,
             interface_factored: false,
@@ -738,7 +733,7 @@ impl CondensedSolver {
             };
             values[p] += *d;
         }
-        let symbolic = supernodal(&self.symbolic);
+        let symbolic = &self.symbolic;
         let n_bulk = self.n_bulk;
         // Only the supernodes whose values change, when the last factor's matrix is known to
         // differ from this one in some columns only (a plastic zone's).
@@ -927,7 +922,7 @@ impl CondensedSolver {
             let (x_b, x_i) = self.x.split_at_mut(n_bulk);
             u.eliminate_bulk(x_b, x_i);
         } else {
-            let llt = SupernodalLltRef::new(supernodal(&self.symbolic), &self.factor);
+            let llt = SupernodalLltRef::new(&self.symbolic, &self.factor);
             forward_bulk(llt, n_bulk, &mut self.x, &mut self.gather);
         }
     }
@@ -967,7 +962,7 @@ impl CondensedSolver {
             let (x_b, x_i) = self.x.split_at_mut(n_bulk);
             u.back_substitute(x_b, x_i);
         } else {
-            let llt = SupernodalLltRef::new(supernodal(&self.symbolic), &self.factor);
+            let llt = SupernodalLltRef::new(&self.symbolic, &self.factor);
             let gathers = &self.backward_gathers;
             backward_bulk(
                 llt,
@@ -1035,15 +1030,6 @@ fn for_each_lower(
             f(col, row, p);
         }
     }
-}
-
-/// The supernodal structure of the bulk's symbolic factorisation (`CondensedSolver::new`
-/// forces a supernodal one).
-fn supernodal(symbolic: &SymbolicCholesky<u32>) -> &SymbolicSupernodalCholesky<u32> {
-    let SymbolicCholeskyRaw::Supernodal(supernodal) = symbolic.raw() else {
-        unreachable!("forced supernodal in `new`");
-    };
-    supernodal
 }
 
 #[cfg(test)]

@@ -450,7 +450,7 @@ fn condensed_handles_supernodes_straddling_the_interface_border() {
     let t = test_system_with(6, 4, 1.5, &[], true);
     let solver =
         CondensedSolver::with_relaxation(&t.pattern, &t.interface_eqs, Some(relax)).unwrap();
-    let sn = supernodal(&solver.symbolic);
+    let sn = &solver.symbolic;
     let straddling = (0..sn.n_supernodes())
         .filter(|&s| {
             (sn.supernode_begin()[s] as usize) < solver.n_bulk
@@ -630,7 +630,10 @@ fn condensed_schur_complement_is_symmetric_and_singular_for_a_floating_body() {
     assert!(asym < 1e-13, "asymmetry {asym:e}");
     // Body A is held only through the interface: it can translate freely, so S_c (no
     // interface stiffness) has two zero eigenvalues; the rest are positive.
-    let mut eig = s.to_owned().self_adjoint_eigenvalues(Side::Lower).unwrap();
+    let mut eig = s
+        .to_owned()
+        .self_adjoint_eigenvalues(faer::Side::Lower)
+        .unwrap();
     eig.sort_by(f64::total_cmp);
     let scale = eig[eig.len() - 1];
     assert!(
