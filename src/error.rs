@@ -5,6 +5,8 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use crate::memory::{Limit, gigabytes};
+
 /// Errors of asperity. Messages are complete sentences meant for the user.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
@@ -127,6 +129,26 @@ pub enum Error {
     /// The linear solver failed (e.g. the stiffness matrix is singular: a body without supports).
     #[error("linear solver: {0}")]
     Linear(String),
+
+    /// The solver's storage for the model exceeds the memory this process may still take
+    /// ([`crate::memory`]): refused before it is allocated, instead of a failed allocation
+    /// or the kernel's out-of-memory kill part way through the run.
+    #[error(
+        "model: {what} ({unknowns} unknowns) needs {:.2} GB of memory, more than the {:.2} GB this \
+         run can still take ({}); a coarser mesh needs less (a larger `mesh.size`, or fewer \
+         elements where the .geo script sets their number): the factor grows somewhat faster than \
+         the unknowns",
+        gigabytes(*needed),
+        gigabytes(*available),
+        limit.describe()
+    )]
+    InsufficientMemory {
+        what: &'static str,
+        unknowns: usize,
+        needed: u64,
+        available: u64,
+        limit: Limit,
+    },
     /// The steady heat conduction cannot be solved in an increment (open joints cut a body
     /// off from every held temperature, a singular conductivity matrix).
     #[error("heat conduction: {0}")]
@@ -483,7 +505,8 @@ impl Error {
             | Error::Restart { .. }
             | Error::RigidBodyMotion { .. }
             | Error::UnfixedTemperature { .. }
-            | Error::ThermalModel(_) => 3,
+            | Error::ThermalModel(_)
+            | Error::InsufficientMemory { .. } => 3,
             Error::Io { .. } => 4,
             Error::Collapse { .. } => 5,
             Error::StudyLevel { source, .. } => source.exit_code(),

@@ -31,6 +31,7 @@ pub mod error;
 pub mod fit;
 pub mod init;
 pub mod material;
+pub mod memory;
 pub mod mesh;
 pub mod model;
 pub mod output;

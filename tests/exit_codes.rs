@@ -127,6 +127,16 @@ fn representatives() -> Vec<(Error, &'static str)> {
             },
             "a restart record",
         ),
+        (
+            Error::InsufficientMemory {
+                what: "the sparse factor",
+                unknowns: 4_000_000,
+                needed: 20_000_000_000,
+                available: 10_000_000_000,
+                limit: asperity::memory::Limit::Machine,
+            },
+            "a model too large for the memory",
+        ),
         (Error::io("case.toml", io()), "I/O"),
         (
             Error::OutputForeign {

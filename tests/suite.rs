@@ -44,6 +44,7 @@ mod load_history;
 mod locking;
 mod logging;
 mod material_j2;
+mod memory_limit;
 mod mesh_cache;
 mod mesh_limits;
 mod output;

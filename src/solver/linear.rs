@@ -89,6 +89,11 @@ impl Analysis {
             symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
             symbolic.solve_in_place_scratch::<f64>(1, par),
         ]);
+        super::ensure_memory(
+            "the sparse Cholesky factor",
+            pattern.nrows(),
+            8 * symbolic.len_val() as u64 + req.unaligned_bytes_required() as u64,
+        )?;
         let workspace = MemBuffer::try_new(req)
             .map_err(|_| Error::Linear("out of memory for the factorisation workspace".into()))?;
         let factor = vec![0.0; symbolic.len_val()];

@@ -20,3 +20,24 @@ pub mod state;
 pub mod stepping;
 pub mod strain_bound;
 pub mod tree_cholesky;
+
+use crate::{Error, Result};
+
+/// Refuses storage of `bytes` for `what` (the solver's for a model of `unknowns` unknowns)
+/// when it exceeds the memory this process may still take ([`crate::memory`]), before it is
+/// allocated: a clear error instead of a failed allocation or the kernel's out-of-memory kill
+/// part way through the run. Nothing is refused where no limit can be read.
+pub(crate) fn ensure_memory(what: &'static str, unknowns: usize, bytes: u64) -> Result<()> {
+    let room = crate::memory::headroom();
+    tracing::debug!(what, bytes, ?room, "memory check");
+    match room {
+        Some(room) if bytes > room.bytes => Err(Error::InsufficientMemory {
+            what,
+            unknowns,
+            needed: bytes,
+            available: room.bytes,
+            limit: room.limit,
+        }),
+        _ => Ok(()),
+    }
+}

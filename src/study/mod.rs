@@ -38,9 +38,9 @@
 //! solver share). The calling thread meshes the levels one after another, finest first, and
 //! hands each to the pool once it fits: a level's memory is estimated as
 //! [`BYTES_PER_UNKNOWN`] × 2 × nodes (meshing first gives the exact size, so no extrapolation
-//! from a coarser level is needed) and reserved from a budget of half of `MemAvailable` in
-//! `/proc/meminfo` (unlimited where that cannot be read); a level whose estimate exceeds the
-//! whole budget runs alone. Only the calling thread waits for memory, never a pool thread,
+//! from a coarser level is needed) and reserved from a budget of half of the memory available
+//! ([`crate::memory`]: the machine's, the cgroup's or the address space's, unlimited where none
+//! can be read); a level whose estimate exceeds the whole budget runs alone. Only the calling thread waits for memory, never a pool thread,
 //! so a pool thread that picks up another level while it waits inside the solver cannot
 //! block the level it interrupted. After a level fails, no further level is started.
 
@@ -55,7 +55,7 @@ mod schedule;
 
 pub use analysis::{Convergence, Criteria, analyse};
 pub use report::{Level, Report};
-pub use schedule::{BYTES_PER_UNKNOWN, available_memory};
+pub use schedule::BYTES_PER_UNKNOWN;
 
 use crate::config::{Case, QuantitySpec};
 use crate::mesh::Mesh;
@@ -151,7 +151,7 @@ pub fn run(case: &Case, options: &Options) -> Result<Report> {
         .jobs
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
         .clamp(1, n);
-    let gate = Gate::new(available_memory().map_or(u64::MAX, |m| m / 2), jobs);
+    let gate = Gate::new(crate::memory::available().map_or(u64::MAX, |m| m / 2), jobs);
     let cancel = AtomicBool::new(false);
     let results: Mutex<Vec<Option<Result<Level>>>> = Mutex::new((0..n).map(|_| None).collect());
     let finish = |k: usize, result: Result<Level>| {

@@ -8,17 +8,6 @@ use std::sync::{Condvar, Mutex};
 /// margin for the slower-than-linear growth of the fill.
 pub const BYTES_PER_UNKNOWN: u64 = 4096;
 
-/// Memory available to new processes, in bytes (`MemAvailable` on Linux, its counterparts
-/// elsewhere, via `sysinfo`); `None` where the system does not tell.
-pub fn available_memory() -> Option<u64> {
-    use sysinfo::{MemoryRefreshKind, RefreshKind, System};
-    let system = System::new_with_specifics(
-        RefreshKind::nothing().with_memory(MemoryRefreshKind::nothing().with_ram()),
-    )
-    .ok()?;
-    Some(system.available_memory()).filter(|&m| m > 0)
-}
-
 /// The levels running at once: at most `jobs` of them, and their memory estimates within a
 /// budget. Levels acquire it one after another from the thread that schedules them (finest
 /// first), so the order is the caller's.
@@ -102,25 +91,6 @@ mod tests {
                 .recv_timeout(Duration::from_secs(5))
                 .expect("acquired once released");
         });
-    }
-
-    /// `sysinfo`'s figure is the kernel's `MemAvailable`, read here from /proc/meminfo, up to
-    /// what other processes allocate or free between the two reads (5 % on a quiet machine).
-    #[cfg(target_os = "linux")]
-    #[test]
-    fn available_memory_is_the_kernels_mem_available() {
-        let text = std::fs::read_to_string("/proc/meminfo").unwrap();
-        let line = text
-            .lines()
-            .find(|l| l.starts_with("MemAvailable:"))
-            .unwrap();
-        let kb: f64 = line.split_whitespace().nth(1).unwrap().parse().unwrap();
-        let ours = available_memory().expect("Linux tells the available memory") as f64;
-        let kernel = kb * 1024.0;
-        assert!(
-            (ours - kernel).abs() <= 0.05 * kernel,
-            "{ours} B vs MemAvailable {kernel} B"
-        );
     }
 
     #[test]

@@ -10,7 +10,6 @@ use crate::config::Case;
 use crate::output::csv::{Cell, CsvTable, write_csv};
 use crate::output::summary::Summary;
 use crate::run::folder::{OutputFolder, OutputMode, RunFile};
-use crate::study::available_memory;
 use crate::{Error, Result};
 use crate::{python, run};
 
@@ -125,9 +124,9 @@ fn peak_memory(pid: u32) -> Option<u64> {
 
 /// Runs every run of `study` that is not done, at most `jobs` at once, each as a child
 /// process `exe sweep run STUDY --task K` (so a crash stays in its run; output in the run's
-/// `log.txt`). Memory: another run starts only while `MemAvailable` exceeds twice the largest
-/// peak seen so far of a run (the runs of a sweep are of similar size), so runs whose memory
-/// is large wait instead of swapping. Returns (ran, failed) task ids.
+/// `log.txt`). Memory: another run starts only while the memory available
+/// ([`crate::memory`]) exceeds twice the largest peak seen so far of a run (the runs of a
+/// sweep are of similar size), so runs whose memory is large wait instead of swapping. Returns (ran, failed) task ids.
 pub fn run_local(
     study: &Path,
     jobs: usize,
@@ -148,7 +147,7 @@ pub fn run_local(
     let (mut ran, mut failed) = (Vec::new(), Vec::new());
     let mut peak = 0u64;
     while !pending.is_empty() || !running.is_empty() {
-        let fits = running.is_empty() || available_memory().is_none_or(|m| m > 2 * peak);
+        let fits = running.is_empty() || crate::memory::available().is_none_or(|m| m > 2 * peak);
         if running.len() < jobs.max(1)
             && fits
             && let Some(k) = pending.pop()

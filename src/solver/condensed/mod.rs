@@ -436,6 +436,16 @@ impl CondensedSolver {
         )?;
         drop(upper);
 
+        // The factor, the reordered matrix's values, S_c (when not in the factor) and the
+        // interface LU: what is allocated below, refused if it cannot fit.
+        let schur_in_factor = trailing_supernode(&supernodal, n_bulk)
+            .map(|s| supernodal.col_ptr_for_val()[s] as usize);
+        let dense_blocks = n_i * n_i * if schur_in_factor.is_some() { 1 } else { 2 };
+        crate::solver::ensure_memory(
+            "the sparse factor of the bodies' stiffness",
+            n,
+            8 * (supernodal.len_val() + nnz_lower + dense_blocks + 2 * n) as u64,
+        )?;
         // One thread for the bulk factorisation: see `BULK_FACTOR_PARALLELISM`.
         let par = BULK_FACTOR_PARALLELISM;
         let gather_len = (0..supernodal.n_supernodes())
@@ -444,8 +454,6 @@ impl CondensedSolver {
             .unwrap_or(0);
         let factor = vec![0.0; supernodal.len_val()];
         let tree = TreeCholesky::new(&supernodal, rayon::current_num_threads());
-        let schur_in_factor = trailing_supernode(&supernodal, n_bulk)
-            .map(|s| supernodal.col_ptr_for_val()[s] as usize);
         tracing::debug!(
             unknowns = n,
             interface = n_i,
