@@ -134,16 +134,17 @@ pub enum Error {
     /// ([`crate::memory`]): refused before it is allocated, instead of a failed allocation
     /// or the kernel's out-of-memory kill part way through the run.
     #[error(
-        "model: {what} ({unknowns} unknowns) needs {:.2} GB of memory, more than the {:.2} GB this \
-         run can still take ({}); a coarser mesh needs less (a larger `mesh.size`, or fewer \
-         elements where the .geo script sets their number): the factor grows somewhat faster than \
-         the unknowns",
+        "model: the linear solver needs {:.2} GB of memory for the {unknowns} unknowns ({what}), \
+         more than the {:.2} GB this run can still take ({}); a coarser mesh needs less (a larger \
+         `mesh.size`, or fewer elements where the .geo script sets their number): the factor \
+         grows somewhat faster than the unknowns",
         gigabytes(*needed),
         gigabytes(*available),
         limit.describe()
     )]
     InsufficientMemory {
-        what: &'static str,
+        /// What the bytes are for, with their parts.
+        what: String,
         unknowns: usize,
         needed: u64,
         available: u64,

@@ -129,7 +129,7 @@ fn representatives() -> Vec<(Error, &'static str)> {
         ),
         (
             Error::InsufficientMemory {
-                what: "the sparse factor",
+                what: "the sparse factor".into(),
                 unknowns: 4_000_000,
                 needed: 20_000_000_000,
                 available: 10_000_000_000,

@@ -90,7 +90,7 @@ impl Analysis {
             symbolic.solve_in_place_scratch::<f64>(1, par),
         ]);
         super::ensure_memory(
-            "the sparse Cholesky factor",
+            || "its sparse Cholesky factor".into(),
             pattern.nrows(),
             8 * symbolic.len_val() as u64 + req.unaligned_bytes_required() as u64,
         )?;

@@ -23,16 +23,21 @@ pub mod tree_cholesky;
 
 use crate::{Error, Result};
 
-/// Refuses storage of `bytes` for `what` (the solver's for a model of `unknowns` unknowns)
+/// Refuses storage of `bytes` (the solver's for a model of `unknowns` unknowns, `what` says
+/// for what)
 /// when it exceeds the memory this process may still take ([`crate::memory`]), before it is
 /// allocated: a clear error instead of a failed allocation or the kernel's out-of-memory kill
 /// part way through the run. Nothing is refused where no limit can be read.
-pub(crate) fn ensure_memory(what: &'static str, unknowns: usize, bytes: u64) -> Result<()> {
+pub(crate) fn ensure_memory(
+    what: impl FnOnce() -> String,
+    unknowns: usize,
+    bytes: u64,
+) -> Result<()> {
     let room = crate::memory::headroom();
-    tracing::debug!(what, bytes, ?room, "memory check");
+    tracing::debug!(bytes, ?room, "memory check");
     match room {
         Some(room) if bytes > room.bytes => Err(Error::InsufficientMemory {
-            what,
+            what: what(),
             unknowns,
             needed: bytes,
             available: room.bytes,

@@ -332,6 +332,24 @@ fn bulk_order(global: SymbolicSparseColMatRef<'_, u32>, bulk: &[u32]) -> Result<
         .collect())
 }
 
+/// The parts of the condensed solver's storage, for a message: the sparse factor's `sparse`
+/// bytes and the `dense` bytes of the interface system of `n_i` unknowns (which the Krylov
+/// path does without, named when it is the larger part).
+fn storage_parts(sparse: u64, dense: u64, n_i: usize) -> String {
+    let gb = crate::memory::gigabytes;
+    let parts = format!(
+        "the sparse factor of the bodies' stiffness {:.2} GB, the dense system of the {n_i} \
+         interface unknowns {:.2} GB",
+        gb(sparse),
+        gb(dense)
+    );
+    if dense > sparse {
+        format!("{parts}; `[solver] linear_solver = \"krylov\"` needs no dense interface system")
+    } else {
+        parts
+    }
+}
+
 impl CondensedSolver {
     /// Symbolic analysis, once per model: orders the bulk (AMD on K_BB) with the interface
     /// equations `interface` (free equation numbers of the interface nodes, any order,
@@ -440,12 +458,9 @@ impl CondensedSolver {
         // interface LU: what is allocated below, refused if it cannot fit.
         let schur_in_factor = trailing_supernode(&supernodal, n_bulk)
             .map(|s| supernodal.col_ptr_for_val()[s] as usize);
-        let dense_blocks = n_i * n_i * if schur_in_factor.is_some() { 1 } else { 2 };
-        crate::solver::ensure_memory(
-            "the sparse factor of the bodies' stiffness",
-            n,
-            8 * (supernodal.len_val() + nnz_lower + dense_blocks + 2 * n) as u64,
-        )?;
+        let sparse = 8 * (supernodal.len_val() + nnz_lower + 2 * n) as u64;
+        let dense = 8 * (n_i * n_i) as u64 * if schur_in_factor.is_some() { 1 } else { 2 };
+        crate::solver::ensure_memory(|| storage_parts(sparse, dense, n_i), n, sparse + dense)?;
         // One thread for the bulk factorisation: see `BULK_FACTOR_PARALLELISM`.
         let par = BULK_FACTOR_PARALLELISM;
         let gather_len = (0..supernodal.n_supernodes())

@@ -742,3 +742,24 @@ fn condensed_without_interface_is_a_cholesky_solve() {
     let rel = relative_residual(sym, &[&sum], &x, &b);
     assert!(rel < 1e-12, "residual {rel:e}");
 }
+
+/// The memory message names both parts, and the Krylov path only when the dense interface
+/// system is the larger one (a long, finely meshed joint).
+#[test]
+fn the_storage_message_points_to_krylov_when_the_interface_system_dominates() {
+    let factor_larger = storage_parts(2_000_000_000, 500_000_000, 6000);
+    assert_eq!(
+        factor_larger,
+        "the sparse factor of the bodies' stiffness 2.00 GB, the dense system of the 6000 \
+         interface unknowns 0.50 GB"
+    );
+    let dense_larger = storage_parts(500_000_000, 2_000_000_000, 12000);
+    assert!(
+        dense_larger.contains("12000 interface unknowns 2.00 GB"),
+        "{dense_larger}"
+    );
+    assert!(
+        dense_larger.contains("linear_solver = \"krylov\""),
+        "{dense_larger}"
+    );
+}
