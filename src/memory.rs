@@ -64,9 +64,9 @@ pub fn headroom() -> Option<Headroom> {
             limit: Limit::Cgroup,
         }),
         mapped
-            .and_then(|mapped| address_space_left(address_space_limit()?, mapped))
-            .map(|bytes| Headroom {
-                bytes,
+            .zip(address_space_limit())
+            .map(|(mapped, cap)| Headroom {
+                bytes: cap.saturating_sub(mapped),
                 limit: Limit::AddressSpace,
             }),
     ])
@@ -108,11 +108,6 @@ fn address_space_limit() -> Option<u64> {
     None
 }
 
-/// Address space left under `limit` with `mapped` bytes mapped.
-fn address_space_left(limit: u64, mapped: u64) -> Option<u64> {
-    Some(limit.saturating_sub(mapped))
-}
-
 /// The smallest of the known headrooms.
 fn least(candidates: impl IntoIterator<Item = Option<Headroom>>) -> Option<Headroom> {
     candidates.into_iter().flatten().min_by_key(|h| h.bytes)
@@ -141,12 +136,6 @@ mod tests {
         assert_eq!(
             least([room(8, Limit::Machine), room(3, Limit::Cgroup), None]),
             room(3, Limit::Cgroup)
-        );
-        assert_eq!(address_space_left(10, 4), Some(6));
-        assert_eq!(
-            address_space_left(4, 10),
-            Some(0),
-            "over the limit: nothing left"
         );
     }
 

@@ -23,11 +23,11 @@ pub mod tree_cholesky;
 
 use crate::{Error, Result};
 
-/// Refuses storage of `bytes` (the solver's for a model of `unknowns` unknowns, `what` says
-/// for what)
-/// when it exceeds the memory this process may still take ([`crate::memory`]), before it is
-/// allocated: a clear error instead of a failed allocation or the kernel's out-of-memory kill
-/// part way through the run. Nothing is refused where no limit can be read.
+/// Refuses storage of `bytes` (the solver's for a model of `unknowns` unknowns; `what` says
+/// for what) when it exceeds the memory this process may still take ([`crate::memory`]),
+/// before it is allocated: a clear error instead of a failed allocation or the kernel's
+/// out-of-memory kill part way through the run. Nothing is refused where no limit can be
+/// read.
 pub(crate) fn ensure_memory(
     what: impl FnOnce() -> String,
     unknowns: usize,
