@@ -150,6 +150,15 @@ pub enum Error {
         available: u64,
         limit: Limit,
     },
+    /// An allocation of the linear solver failed (the symbolic analysis's or a workspace's,
+    /// made before [`Error::InsufficientMemory`]'s check or too small for it): the model needs
+    /// more memory than the run can take, not a numerical failure.
+    #[error(
+        "model: the linear solver could not allocate memory for {what} ({unknowns} unknowns): the \
+         model needs more memory than this run can take (the machine's, a batch job's or \
+         container's limit, `ulimit -v`); a coarser mesh needs less (a larger `mesh.size`)"
+    )]
+    AllocationFailed { what: String, unknowns: usize },
     /// The steady heat conduction cannot be solved in an increment (open joints cut a body
     /// off from every held temperature, a singular conductivity matrix).
     #[error("heat conduction: {0}")]
@@ -507,7 +516,8 @@ impl Error {
             | Error::RigidBodyMotion { .. }
             | Error::UnfixedTemperature { .. }
             | Error::ThermalModel(_)
-            | Error::InsufficientMemory { .. } => 3,
+            | Error::InsufficientMemory { .. }
+            | Error::AllocationFailed { .. } => 3,
             Error::Io { .. } => 4,
             Error::Collapse { .. } => 5,
             Error::StudyLevel { source, .. } => source.exit_code(),

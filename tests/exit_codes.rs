@@ -137,6 +137,13 @@ fn representatives() -> Vec<(Error, &'static str)> {
             },
             "a model too large for the memory",
         ),
+        (
+            Error::AllocationFailed {
+                what: "the AMD ordering".into(),
+                unknowns: 4_000_000,
+            },
+            "a model too large for the memory",
+        ),
         (Error::io("case.toml", io()), "I/O"),
         (
             Error::OutputForeign {

@@ -84,7 +84,9 @@ impl Analysis {
             SymmetricOrdering::Amd,
             Default::default(),
         )
-        .map_err(|e| Error::Linear(format!("symbolic Cholesky factorisation failed: {e:?}")))?;
+        .map_err(|e| {
+            super::faer_error(e, "the symbolic Cholesky factorisation", pattern.nrows())
+        })?;
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
             symbolic.solve_in_place_scratch::<f64>(1, par),
@@ -94,8 +96,9 @@ impl Analysis {
             pattern.nrows(),
             8 * symbolic.len_val() as u64 + req.unaligned_bytes_required() as u64,
         )?;
-        let workspace = MemBuffer::try_new(req)
-            .map_err(|_| Error::Linear("out of memory for the factorisation workspace".into()))?;
+        let workspace = MemBuffer::try_new(req).map_err(|_| {
+            super::allocation_failed("the factorisation workspace", pattern.nrows())
+        })?;
         let factor = vec![0.0; symbolic.len_val()];
         Ok(Self {
             symbolic,
@@ -250,7 +253,7 @@ impl CholeskySolver {
             .is_none_or(|k| k.req != req || k.x.nrows() != n)
         {
             let buffer = MemBuffer::try_new(req)
-                .map_err(|_| Error::Linear("out of memory for the Krylov workspace".into()))?;
+                .map_err(|_| super::allocation_failed("the Krylov workspace", n))?;
             let x = Mat::<f64>::zeros(n, 1);
             self.krylov = Some(KrylovWorkspace { req, buffer, x });
         }
@@ -336,13 +339,13 @@ impl SparseLu {
         par: Par,
     ) -> Result<Self> {
         let symbolic = factorize_symbolic_lu(pattern, Default::default())
-            .map_err(|e| Error::Linear(format!("symbolic LU factorisation failed: {e:?}")))?;
+            .map_err(|e| super::faer_error(e, "the symbolic LU factorisation", pattern.nrows()))?;
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_lu_scratch::<f64>(par, Default::default()),
             symbolic.solve_in_place_scratch::<f64>(max_rhs, par),
         ]);
         let workspace = MemBuffer::try_new(req)
-            .map_err(|_| Error::Linear("out of memory for the LU workspace".into()))?;
+            .map_err(|_| super::allocation_failed("the LU workspace", pattern.nrows()))?;
         Ok(Self {
             symbolic,
             numeric: NumericLu::new(),

@@ -21,6 +21,8 @@ pub mod stepping;
 pub mod strain_bound;
 pub mod tree_cholesky;
 
+use faer::sparse::FaerError;
+
 use crate::{Error, Result};
 
 /// Refuses storage of `bytes` (the solver's for a model of `unknowns` unknowns; `what` says
@@ -44,5 +46,23 @@ pub(crate) fn ensure_memory(
             limit: room.limit,
         }),
         _ => Ok(()),
+    }
+}
+
+/// The error of a failed allocation for `what` in the solver of a model of `unknowns`
+/// unknowns: memory, not the numerics (exit code 3, like [`ensure_memory`]'s refusal).
+pub(crate) fn allocation_failed(what: &str, unknowns: usize) -> Error {
+    Error::AllocationFailed {
+        what: what.into(),
+        unknowns,
+    }
+}
+
+/// faer's error `e` of the step `what` (for a model of `unknowns` unknowns): a failed
+/// allocation as [`allocation_failed`], anything else as a linear-solver error.
+pub(crate) fn faer_error(e: FaerError, what: &str, unknowns: usize) -> Error {
+    match e {
+        FaerError::OutOfMemory => allocation_failed(what, unknowns),
+        other => Error::Linear(format!("{what} failed: {other:?}")),
     }
 }

@@ -316,7 +316,7 @@ fn bulk_order(global: SymbolicSparseColMatRef<'_, u32>, bulk: &[u32]) -> Result<
     let q_pattern =
         SymbolicSparseColMatRef::new_unsorted_checked(m, m, &q_col_ptr, None, &q_row_idx);
     let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<u32>(m, q_row_idx.len()))
-        .map_err(|_| Error::Linear("out of memory for the AMD ordering".into()))?;
+        .map_err(|_| crate::solver::allocation_failed("the AMD ordering", n))?;
     amd::order_maybe_unsorted(
         &mut amd_fwd,
         &mut amd_inv,
@@ -324,7 +324,7 @@ fn bulk_order(global: SymbolicSparseColMatRef<'_, u32>, bulk: &[u32]) -> Result<
         Default::default(),
         MemStack::new(&mut mem),
     )
-    .map_err(|e| Error::Linear(format!("AMD ordering failed: {e:?}")))?;
+    .map_err(|e| crate::solver::faer_error(e, "the AMD ordering", n))?;
     Ok(amd_fwd
         .iter()
         .flat_map(|&s| first[s as usize]..first[s as usize + 1])

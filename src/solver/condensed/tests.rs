@@ -763,3 +763,22 @@ fn the_storage_message_points_to_krylov_when_the_interface_system_dominates() {
         "{dense_larger}"
     );
 }
+
+/// A failed allocation in faer's symbolic steps is the model's size (exit code 3), any other
+/// error of theirs the linear solver's.
+#[test]
+fn a_failed_allocation_is_a_memory_error_not_a_numerical_one() {
+    let memory =
+        crate::solver::faer_error(faer::sparse::FaerError::OutOfMemory, "the AMD ordering", 9);
+    assert!(
+        matches!(memory, Error::AllocationFailed { unknowns: 9, .. }),
+        "{memory}"
+    );
+    assert_eq!(memory.exit_code(), 3);
+    let other = crate::solver::faer_error(
+        faer::sparse::FaerError::IndexOverflow,
+        "the AMD ordering",
+        9,
+    );
+    assert!(matches!(other, Error::Linear(_)), "{other}");
+}

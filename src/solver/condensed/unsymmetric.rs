@@ -230,9 +230,9 @@ impl CondensedSolver {
             ii,
             factored_values: vec![0.0; ri.len()],
             block: Mat::zeros(n_bulk, SCHUR_BLOCK.min(n_i).max(1)),
-            pattern: pattern
-                .to_owned()
-                .map_err(|e| Error::Linear(format!("out of memory for the pattern: {e:?}")))?,
+            pattern: pattern.to_owned().map_err(|e| {
+                crate::solver::faer_error(e, "a copy of the bulk pattern", n_bulk + n_i)
+            })?,
         })
     }
 }
