@@ -2,7 +2,8 @@
 //! the free ones, and the heat flows of the supports (reactions and films), sources and joints.
 
 use faer::linalg::solvers::Solve;
-use faer::sparse::{SparseColMat, Triplet};
+use faer::sparse::linalg::LltError;
+use faer::sparse::{FaerError, SparseColMat, Triplet};
 use faer::{Mat, Side};
 
 use super::assembly::System;
@@ -102,13 +103,9 @@ impl Conduction {
                 .map_err(|e| {
                     Error::Conduction(format!("cannot build the conductivity matrix: {e:?}"))
                 })?;
-        let llt = matrix.sp_cholesky(Side::Lower).map_err(|e| {
-            Error::Conduction(format!(
-                "the conductivity matrix is not positive definite ({e:?}): does every \
-                 conducting body have a temperature support or a film, directly or through a \
-                 closed joint?"
-            ))
-        })?;
+        let llt = matrix
+            .sp_cholesky(Side::Lower)
+            .map_err(|e| factor_error(e, self.free))?;
         let mut x = Mat::from_fn(self.free, 1, |i, _| rhs[i]);
         llt.solve_in_place(x.as_mut());
         for (i, e) in self.equation.iter().enumerate() {
@@ -122,5 +119,38 @@ impl Conduction {
             ));
         }
         Ok(())
+    }
+}
+
+/// The error of the conductivity matrix's Cholesky factorisation (`free` unknowns): a failed
+/// allocation is the model's size (exit code 3, as the mechanical solver's), anything else a
+/// matrix that is not positive definite.
+fn factor_error(e: LltError, free: usize) -> Error {
+    match e {
+        LltError::Generic(FaerError::OutOfMemory) => Error::AllocationFailed {
+            what: "the Cholesky factor of the heat conduction".into(),
+            unknowns: free,
+        },
+        e => Error::Conduction(format!(
+            "the conductivity matrix is not positive definite ({e:?}): does every conducting \
+             body have a temperature support or a film, directly or through a closed joint?"
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_failed_allocation_of_the_factor_is_memory_not_definiteness() {
+        let memory = factor_error(LltError::Generic(FaerError::OutOfMemory), 7);
+        assert!(
+            matches!(memory, Error::AllocationFailed { unknowns: 7, .. }),
+            "{memory}"
+        );
+        assert_eq!(memory.exit_code(), 3);
+        let other = factor_error(LltError::Generic(FaerError::IndexOverflow), 7);
+        assert!(matches!(other, Error::Conduction(_)), "{other}");
     }
 }
