@@ -556,6 +556,15 @@ impl Error {
         shorten_lines(&shorten_numbers(&self.to_string()))
     }
 
+    /// A failed allocation for `what` in a solver of `unknowns` unknowns: the model's size,
+    /// not the numerics (exit code 3, like [`Error::InsufficientMemory`]).
+    pub fn allocation_failed(what: &str, unknowns: usize) -> Self {
+        Error::AllocationFailed {
+            what: what.into(),
+            unknowns,
+        }
+    }
+
     /// Shorthand for an [`Error::Io`].
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {

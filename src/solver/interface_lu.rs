@@ -39,7 +39,7 @@ use faer::perm::PermRef;
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 
-use crate::Result;
+use crate::{Error, Result};
 
 /// A split is used only when its flops ([`cost`]) are below this fraction of the whole
 /// LU's: below it, the gain outweighs the gathering and the sparse products.
@@ -96,7 +96,7 @@ impl InterfaceLu {
             lu_inverse::inverse_scratch::<usize, f64>(n / 2, par),
         ]);
         let workspace = MemBuffer::try_new(req)
-            .map_err(|_| super::allocation_failed("the interface LU workspace", n))?;
+            .map_err(|_| Error::allocation_failed("the interface LU workspace", n))?;
         Ok(Self {
             n,
             lu: Mat::zeros(n, n),

@@ -97,7 +97,7 @@ impl Analysis {
             8 * symbolic.len_val() as u64 + req.unaligned_bytes_required() as u64,
         )?;
         let workspace = MemBuffer::try_new(req).map_err(|_| {
-            super::allocation_failed("the factorisation workspace", pattern.nrows())
+            Error::allocation_failed("the factorisation workspace", pattern.nrows())
         })?;
         let factor = vec![0.0; symbolic.len_val()];
         Ok(Self {
@@ -253,7 +253,7 @@ impl CholeskySolver {
             .is_none_or(|k| k.req != req || k.x.nrows() != n)
         {
             let buffer = MemBuffer::try_new(req)
-                .map_err(|_| super::allocation_failed("the Krylov workspace", n))?;
+                .map_err(|_| Error::allocation_failed("the Krylov workspace", n))?;
             let x = Mat::<f64>::zeros(n, 1);
             self.krylov = Some(KrylovWorkspace { req, buffer, x });
         }
@@ -345,7 +345,7 @@ impl SparseLu {
             symbolic.solve_in_place_scratch::<f64>(max_rhs, par),
         ]);
         let workspace = MemBuffer::try_new(req)
-            .map_err(|_| super::allocation_failed("the LU workspace", pattern.nrows()))?;
+            .map_err(|_| Error::allocation_failed("the LU workspace", pattern.nrows()))?;
         Ok(Self {
             symbolic,
             numeric: NumericLu::new(),

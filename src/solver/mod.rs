@@ -49,20 +49,11 @@ pub(crate) fn ensure_memory(
     }
 }
 
-/// The error of a failed allocation for `what` in the solver of a model of `unknowns`
-/// unknowns: memory, not the numerics (exit code 3, like [`ensure_memory`]'s refusal).
-pub(crate) fn allocation_failed(what: &str, unknowns: usize) -> Error {
-    Error::AllocationFailed {
-        what: what.into(),
-        unknowns,
-    }
-}
-
 /// faer's error `e` of the step `what` (for a model of `unknowns` unknowns): a failed
-/// allocation as [`allocation_failed`], anything else as a linear-solver error.
+/// allocation as [`Error::allocation_failed`], anything else as a linear-solver error.
 pub(crate) fn faer_error(e: FaerError, what: &str, unknowns: usize) -> Error {
     match e {
-        FaerError::OutOfMemory => allocation_failed(what, unknowns),
+        FaerError::OutOfMemory => Error::allocation_failed(what, unknowns),
         other => Error::Linear(format!("{what} failed: {other:?}")),
     }
 }

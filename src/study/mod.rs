@@ -40,9 +40,9 @@
 //! [`BYTES_PER_UNKNOWN`] × 2 × nodes (meshing first gives the exact size, so no extrapolation
 //! from a coarser level is needed) and reserved from a budget of half of the memory available
 //! ([`crate::memory`]: the machine's, the cgroup's or the address space's, unlimited where none
-//! can be read); a level whose estimate exceeds the whole budget runs alone. Only the calling thread waits for memory, never a pool thread,
-//! so a pool thread that picks up another level while it waits inside the solver cannot
-//! block the level it interrupted. After a level fails, no further level is started.
+//! can be read); a level whose estimate exceeds the whole budget runs alone. Only the calling
+//! thread waits for memory, never a pool thread, so a pool thread that picks up another level
+//! while it waits inside the solver cannot block the level it interrupted. After a level fails, no further level is started.
 
 use std::path::PathBuf;
 use std::sync::Mutex;

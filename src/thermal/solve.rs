@@ -127,10 +127,9 @@ impl Conduction {
 /// matrix that is not positive definite.
 fn factor_error(e: LltError, free: usize) -> Error {
     match e {
-        LltError::Generic(FaerError::OutOfMemory) => Error::AllocationFailed {
-            what: "the Cholesky factor of the heat conduction".into(),
-            unknowns: free,
-        },
+        LltError::Generic(FaerError::OutOfMemory) => {
+            Error::allocation_failed("the Cholesky factor of the heat conduction", free)
+        }
         e => Error::Conduction(format!(
             "the conductivity matrix is not positive definite ({e:?}): does every conducting \
              body have a temperature support or a film, directly or through a closed joint?"

@@ -316,7 +316,7 @@ fn bulk_order(global: SymbolicSparseColMatRef<'_, u32>, bulk: &[u32]) -> Result<
     let q_pattern =
         SymbolicSparseColMatRef::new_unsorted_checked(m, m, &q_col_ptr, None, &q_row_idx);
     let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<u32>(m, q_row_idx.len()))
-        .map_err(|_| crate::solver::allocation_failed("the AMD ordering", n))?;
+        .map_err(|_| Error::allocation_failed("the AMD ordering", n))?;
     amd::order_maybe_unsorted(
         &mut amd_fwd,
         &mut amd_inv,

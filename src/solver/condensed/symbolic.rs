@@ -46,7 +46,7 @@ pub(super) fn supernodal_symbolic(
     let col_counts = column_counts(lower, &parent, &post);
     drop(post);
     let mut mem = MemBuffer::try_new(factorize_supernodal_symbolic_cholesky_scratch::<u32>(n))
-        .map_err(|_| crate::solver::allocation_failed("the symbolic factorisation", n))?;
+        .map_err(|_| Error::allocation_failed("the symbolic factorisation", n))?;
     // SAFETY: `parent` is the elimination tree of `upper`'s matrix, each node's parent after
     // it and roots −1, as faer's `prefactorize_symbolic_cholesky` fills it (tests below).
     let etree = unsafe { EliminationTreeRef::<u32>::from_inner(&parent) };
