@@ -13,6 +13,10 @@ output; docs/guide/outputs.md). With --write the table is appended to
 BENCHMARKS.md with the machine, the date and the load average (a busy machine makes the
 wall times unrepresentative; the CPU time suffers less).
 
+--case runs another case on the same .geo script, e.g. benches/cases/tapered_press_fit_heated.toml
+(the same fit heated through the cone, thermal–mechanical coupling); the table's *conduction*
+is its heat conduction's time (summary.json `seconds.conduction`).
+
 The bar (issue 12): under 5 minutes and under 8 GB on a 2-core machine.
 """
 from __future__ import annotations
@@ -39,20 +43,20 @@ def commit() -> str:
     return done.stdout.strip() or "?"
 
 
-def run(size: float, work: Path, binary: Path, timeout: float) -> dict:
-    spec = tomllib.loads(CASE.read_text())
+def run(case: Path, size: float, work: Path, binary: Path, timeout: float) -> dict:
+    spec = tomllib.loads(case.read_text())
     work.mkdir(parents=True, exist_ok=True)
     msh = work / "mesh.msh"
-    gmsh_s = bc.mesh_case(CASE, spec, size, msh, binary=True)  # as `asperity run` meshes
+    gmsh_s = bc.mesh_case(case, spec, size, msh, binary=True)  # as `asperity run` meshes
     run_toml = work / "case.toml"
-    bc.case_with_mesh(CASE, msh.resolve(), run_toml)
+    bc.case_with_mesh(case, msh.resolve(), run_toml)
     adir = work / "asperity"
     adir.mkdir(exist_ok=True)
     m = bc.measure([str(binary), "run", str(run_toml), "--out", str(adir / "out")], adir, timeout=timeout)
     info = bc.parse_asperity_summary(m.stdout, adir / "out")
     if m.returncode != 0:
         sys.exit(f"asperity failed (exit status {m.returncode}):\n{m.stderr[-2000:]}")
-    info.update({"size": size, "gmsh_s": gmsh_s, "wall_s": m.wall, "cpu_s": m.cpu, "rss_mb": m.rss_mb})
+    info.update({"case": case, "size": size, "gmsh_s": gmsh_s, "wall_s": m.wall, "cpu_s": m.cpu, "rss_mb": m.rss_mb})
     return info
 
 
@@ -77,6 +81,8 @@ def beyond_floor(floor: dict | None, phases: dict) -> str:
         "factorisations beyond one": work["factorisations"] + work["kept_factorisations"]
         + work["interface_factorisations"] + work["kept_interface_factorisations"] - parts["factorisation"],
         "solves beyond one per increment": work["solves"] - parts["solves"],
+        "conduction solves beyond one per increment": work.get("conduction_solves", 0.0)
+        - (parts.get("conduction", 0.0) - work.get("conduction_factorisations", 0.0)),
         "the model build": phases.get("model", 0.0),
     }
     largest = sorted(((s, k) for k, s in beyond.items() if s > 0.0), reverse=True)[:4]
@@ -95,26 +101,29 @@ def table(r: dict, load: tuple[float, float]) -> str:
             else "")
     verdict = ("within" if r["wall_s"] < WALL_LIMIT_S and r["rss_mb"] < MEMORY_LIMIT_MB else "OUTSIDE")
     beyond = beyond_floor(floor, p)
+    case_name = Path(r["case"]).resolve().relative_to(bc.ROOT)
+    case_option = "" if Path(r["case"]).resolve() == CASE.resolve() else f" --case {case_name}"
+    heated = ", heated through the cone, thermal–mechanical coupling" if "conduction" in p else ""
     return "\n".join([
         f"### Scale: tapered press fit at {r.get('unknowns', 0) / 1e6:.2f} M unknowns, {now}, {bc.cpu_name()}, "
         f"{os.cpu_count()} cores",
         "",
-        f"`make bench` (`benches/bench_scale.py --size {r['size']}`, commit {commit()}): "
-        "benches/calculix/cases/tapered_press_fit.toml (axisymmetric, μ = 0.2, whole cone slipping, "
-        f"10 increments) on a finer mesh; asperity's defaults. Load average (1 min) before the run "
+        f"`make bench` (`benches/bench_scale.py --size {r['size']}{case_option}`, commit {commit()}): "
+        f"{case_name} (axisymmetric, μ = 0.2, whole cone slipping, "
+        f"10 increments{heated}) on a finer mesh; asperity's defaults. Load average (1 min) before the run "
         f"{load[0]:.2f}, after it {load[1]:.2f}{busy}. *gmsh* ran beforehand and is not in *wall*; "
         "*mesh* is reading the mesh file. *CPU* is user + system time over both cores. "
         "*floor* is the run's own floor and *run / floor* its ratio to it (summary.json `floor`). "
         f"Bar: < {WALL_LIMIT_S:.0f} s and < {MEMORY_LIMIT_MB / 1024:.0f} GB: {verdict}.",
         "",
         "| unknowns | elements | increments | Newton its (cut-backs) | gmsh [s] | mesh [s] | model [s] | assembly [s] "
-        "| factorisation [s] | solve [s] | output [s] | wall [s] | CPU [s] | peak RSS [MB] | floor [s] "
-        "| run / floor |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| factorisation [s] | solve [s] | output [s] | conduction [s] | wall [s] | CPU [s] | peak RSS [MB] "
+        "| floor [s] | run / floor |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
         f"| {r.get('unknowns', '?')} | {r.get('elements', '?')} | {r.get('increments', '?')} | "
         f"{r.get('iterations', '?')} ({r.get('cutbacks', '?')}) | {r['gmsh_s']:.2f} | {phase('mesh')} | "
         f"{phase('model')} | {phase('assembly')} | {phase('factorisation')} | {phase('solve')} | "
-        f"{phase('output')} | {r['wall_s']:.2f} | {r['cpu_s']:.2f} | {r['rss_mb']:.0f} | {floor_s} | {ratio} |",
+        f"{phase('output')} | {phase('conduction')} | {r['wall_s']:.2f} | {r['cpu_s']:.2f} | {r['rss_mb']:.0f} | {floor_s} | {ratio} |",
         "",
         *([beyond, ""] if beyond else []),
     ])
@@ -128,10 +137,12 @@ def main() -> int:
     ap.add_argument("--bin", default=None, help="asperity binary (default target/release/asperity)")
     ap.add_argument("--out", default=str(bc.ROOT / "build" / "bench_scale"), help="work folder")
     ap.add_argument("--timeout", type=float, default=3600.0, help="seconds allowed for the run")
+    ap.add_argument("--case", default=str(CASE), help="case file meshed from its .geo script "
+                    "(default benches/calculix/cases/tapered_press_fit.toml)")
     args = ap.parse_args()
     binary = bc.find_binary(args.bin)
     before = os.getloadavg()[0]
-    r = run(args.size, Path(args.out), binary, args.timeout)
+    r = run(Path(args.case), args.size, Path(args.out), binary, args.timeout)
     block = table(r, (before, os.getloadavg()[0]))
     print(block)
     if args.write:

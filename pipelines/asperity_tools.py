@@ -250,6 +250,8 @@ def solver_statistics(summary: dict) -> list[str]:
     times = (f"mesh {s['mesh']:.3f}, model {s['model']:.3f}, ordering+symbolic {s['symbolic']:.3f}, "
              f"assembly {s['assembly']:.3f}, factorisation {s['factorisation']:.3f}, solve {s['solve']:.3f}, "
              f"output {s['output']:.3f}")
+    if s.get("conduction"):  # only a run with conducting bodies has the conduction's phase
+        times += f", conduction {s['conduction']:.3f}"
     return [steps, times]
 
 

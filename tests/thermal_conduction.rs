@@ -5,6 +5,7 @@
 use crate::common;
 
 use asperity::mesh::Mesh;
+use asperity::solver::conduction::ConductionSolver;
 use common::*;
 use std::f64::consts::PI;
 
@@ -97,6 +98,34 @@ fn radial_conduction_through_a_hollow_cylinder_and_its_thermal_stresses() {
     // Pointwise stresses converge as h² (measured: 7.0e-3 at 8 cells through the wall,
     // 2.0e-3 at 16).
     assert!(worst < 3e-3 * scale, "stress error {worst} of {scale}");
+}
+
+/// A body whose every node a temperature support holds (one quad8 cell, held on its four
+/// sides) has no unknown temperature: the run solves nothing, keeps the prescribed values
+/// (a corner held by two supports takes the later one's) and the heat its supports let in
+/// sums to zero.
+#[test]
+fn a_body_held_at_every_node_keeps_its_prescribed_temperatures() {
+    let case = CaseBuilder::axisymmetric()
+        .push("body", conducting(elastic(E, NU)))
+        .support("t0", &[("uz", 0.0)])
+        .support("s0", &[("ur", 0.0)])
+        .push("thermal_support", fixed("s0", TA))
+        .push("thermal_support", fixed("t0", 0.0))
+        .push("thermal_support", fixed("t1", 0.0))
+        .push("thermal_support", fixed("s1", 0.0));
+    let cell = structured(1, 1, 0.0, false, |s, t| [A + s * (B - A), t * H]);
+    let (model, solution) = solve(cell, &case.case());
+    let heat = solution.thermal.heat.as_ref().expect("conduction solved");
+    assert_eq!(model.mesh.nodes.len(), 8);
+    for (n, x) in model.mesh.nodes.iter().enumerate() {
+        let held = x[0] == A && x[1] > 0.0 && x[1] < H;
+        let expected = if held { TA } else { 0.0 };
+        assert_eq!(heat.nodal[n], expected, "T at {x:?}");
+    }
+    let sum: f64 = heat.supports.iter().sum();
+    assert!(heat.supports[0] > 0.0, "{:?}", heat.supports);
+    assert!(sum.abs() < 1e-12 * heat.supports[0], "{:?}", heat.supports);
 }
 
 #[test]
@@ -294,29 +323,45 @@ fn summary_json_lists_the_heat_flows_by_name() {
 fn stack(p: f64, h0: f64, n: f64) -> (f64, f64, usize) {
     let (w, t) = (4.0, 2.0);
     let mesh = stack_mesh(w, t);
-    let conductance = table(&[("h0", h0.into()), ("exponent", n.into())]);
-    let case = CaseBuilder::plane_strain()
-        .push("body", body("base"))
-        .push("body", body("block"))
-        .support("base_t0", &[("uy", 0.0)])
-        .support("base_s0", &[("ux", 0.0)])
-        .support("block_s0", &[("ux", 0.0)])
-        .pressure("block_t1", p)
-        .contact(
-            &[
-                ("side_a", "base_t1".into()),
-                ("side_b", "block_t0".into()),
-                ("conductance", conductance.into()),
-            ],
-            linear_coulomb(1e6, 1e3, 0.0),
-        )
-        .push("thermal_support", fixed("base_t0", 0.0))
-        .push("thermal_support", fixed("block_t1", TA));
-    let (_, solution) = solve(mesh, &case.case());
+    let (_, solution) = solve(mesh, &stack_case(p, h0, n).case());
     let heat = solution.thermal.heat.as_ref().unwrap();
     // One-dimensional: q = T_a / (2t/k + 1/h) per area, the jump q / h.
     let flux = -heat.joints[0] / w;
     (TA - flux * 2.0 * t / K, flux, solution.thermal.exchanges)
+}
+
+/// The case of [`stack`].
+fn stack_case(p: f64, h0: f64, n: f64) -> CaseBuilder {
+    let conductance = table(&[("h0", h0.into()), ("exponent", n.into())]);
+    held_stack(conductance.into(), (1e6, 1e3))
+        .pressure("block_t1", p)
+        .push("thermal_support", fixed("base_t0", 0.0))
+        .push("thermal_support", fixed("block_t1", TA))
+}
+
+/// `summary.json` of a coupled run: the conduction's time is a phase of its own, and its
+/// floor counts one conduction factorisation (the part that changes with neither the time
+/// nor the contact, factored once per run) and one conduction solve per increment, of
+/// solves made at the run's start, at every increment's start and at every exchange.
+#[test]
+fn a_coupled_runs_floor_has_one_conduction_factorisation_and_its_solves() {
+    let case = stack_case(20.0, 1e-3, 0.8).step_factors(&[0.5, 1.0]);
+    let (_dir, summary) = run_to_summary(&case, stack_mesh(4.0, 2.0));
+    crate::floor::check_floor(&summary);
+    let count = |key| crate::floor::count(&summary, key);
+    let increments = count("increments");
+    assert_eq!(increments, 2, "{summary}");
+    assert_eq!(count("conduction_factorisations"), 1, "{summary}");
+    // The run's start, and per increment its start and at least one exchange.
+    assert!(count("conduction_solves") > 2 * increments, "{summary}");
+    let work = &summary["floor"]["work_seconds"];
+    let seconds = crate::floor::seconds;
+    assert_eq!(
+        seconds(&summary["seconds"]["conduction"]),
+        seconds(&work["conduction_factorisations"]) + seconds(&work["conduction_solves"]),
+        "{summary}"
+    );
+    assert!(seconds(&summary["floor"]["parts"]["conduction"]) > 0.0);
 }
 
 /// A block (w × t) on a base of the same size, their faces joined at y = t.
@@ -434,6 +479,104 @@ fn a_coupled_thermal_run_resumed_from_any_frame_is_bit_identical() {
     }
 }
 
+/// The conduction of `model` at time 1 with the joints in the contact `states`.
+fn solve_heat(
+    model: &asperity::model::Model,
+    states: &[asperity::contact::InterfaceState],
+) -> asperity::Result<asperity::thermal::HeatSolution> {
+    let mut solver = ConductionSolver::new(model)?.expect("a conducting model");
+    solver.solve(model, 1.0, states)
+}
+
+/// The two blocks of [`stack_mesh`] held mechanically (the base's bottom, both left
+/// sides), their frictionless pair with normal and tangential stiffness `stiffness`
+/// conducting with `conductance`.
+fn held_stack(conductance: toml::Value, stiffness: (f64, f64)) -> CaseBuilder {
+    CaseBuilder::plane_strain()
+        .push("body", body("base"))
+        .push("body", body("block"))
+        .support("base_t0", &[("uy", 0.0)])
+        .support("base_s0", &[("ux", 0.0)])
+        .support("block_s0", &[("ux", 0.0)])
+        .contact(
+            &[
+                ("side_a", "base_t1".into()),
+                ("side_b", "block_t0".into()),
+                ("conductance", conductance),
+            ],
+            linear_coulomb(stiffness.0, stiffness.1, 0.0),
+        )
+}
+
+/// The condensed conduction solve (the constant part factored once, the joints in a dense
+/// block) gives the temperatures and heat flows of a dense solve of the whole system
+/// K_ff T_f = f_f − K_fp T_p assembled from the same parts: a stack whose open joint conducts
+/// through its gap conductance, with a source in the block and a temperature support on the
+/// block's side, which holds one of the joint's nodes (the joint's entries in prescribed rows
+/// and columns).
+#[test]
+fn the_condensed_conduction_solve_equals_a_dense_solve_of_the_whole_system() {
+    let conductance = table(&[
+        ("h0", 1e-3.into()),
+        ("exponent", 0.0.into()),
+        ("gap", 4e-4.into()),
+    ]);
+    let source = table(&[("group", "block".into()), ("power", 2e-3.into())]);
+    let case = held_stack(conductance.into(), (1e5, 1e5))
+        .push("heat_source", source)
+        .push("thermal_support", fixed("base_t0", 10.0))
+        .push("thermal_support", fixed("block_s0", TA))
+        .step_factors(&[1.0])
+        .case();
+    let model = model(stack_mesh(4.0, 2.0), &case).unwrap();
+    let open =
+        vec![asperity::contact::InterfaceState::default(); model.interface.elements.len() * 3];
+    let solved = solve_heat(&model, &open).unwrap();
+
+    let c = model.thermal.conduction.as_ref().unwrap();
+    let n = c.size();
+    let mut k = nalgebra::DMatrix::<f64>::zeros(n, n);
+    c.constant_entries(&model.continuum, |i, j, v| k[(i as usize, j as usize)] += v);
+    c.joint_entries(&model.interface, &open, |i, j, v| {
+        k[(i as usize, j as usize)] += v
+    });
+    let multiplier = |a: usize| model.schedule.value(a, 1.0);
+    let load = c.load(&multiplier);
+    let mut t = vec![0.0; n];
+    c.set_prescribed(&multiplier, &mut t);
+    let held = c.prescribed();
+    let free: Vec<usize> = (0..n).filter(|&i| !held[i]).collect();
+    assert!(free.len() < n, "some temperatures are prescribed");
+    let k_ff = nalgebra::DMatrix::from_fn(free.len(), free.len(), |a, b| k[(free[a], free[b])]);
+    let rhs = nalgebra::DVector::from_fn(free.len(), |a, _| {
+        load.f[free[a]]
+            - (0..n)
+                .filter(|&j| held[j])
+                .map(|j| k[(free[a], j)] * t[j])
+                .sum::<f64>()
+    });
+    let t_f = k_ff.lu().solve(&rhs).expect("regular");
+    for (a, &i) in free.iter().enumerate() {
+        t[i] = t_f[a];
+    }
+    let reaction: Vec<f64> = (0..n)
+        .map(|i| (0..n).map(|j| k[(i, j)] * t[j]).sum::<f64>() - load.f[i])
+        .collect();
+    let dense = c.heat_solution(&model.interface, &open, &multiplier, &t, &reaction, load);
+
+    let close = |a: &[f64], b: &[f64], what: &str| {
+        let scale = b.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        for (x, y) in a.iter().zip(b) {
+            assert!((x - y).abs() <= 1e-11 * scale, "{what}: {x} vs {y}");
+        }
+    };
+    close(&solved.nodal, &dense.nodal, "temperatures");
+    close(&solved.supports, &dense.supports, "support heat");
+    close(&solved.joints, &dense.joints, "joint heat");
+    close(&solved.sources, &dense.sources, "source heat");
+    assert!(dense.joints[0].abs() > 0.0, "heat crosses the open joint");
+}
+
 /// A block held only across a joint that is open (before it is pressed) keeps the reference
 /// temperature while no heat enters it, and is refused once its source heats it.
 #[test]
@@ -444,20 +587,7 @@ fn a_block_cut_off_by_an_open_joint_keeps_the_reference_or_is_refused() {
             ("power", 1e-2.into()),
             ("factors", list(&[source_factor])),
         ]);
-        let case = CaseBuilder::plane_strain()
-            .push("body", body("base"))
-            .push("body", body("block"))
-            .support("base_t0", &[("uy", 0.0)])
-            .support("base_s0", &[("ux", 0.0)])
-            .support("block_s0", &[("ux", 0.0)])
-            .contact(
-                &[
-                    ("side_a", "base_t1".into()),
-                    ("side_b", "block_t0".into()),
-                    ("conductance", 1e-3.into()),
-                ],
-                linear_coulomb(1e5, 1e5, 0.0),
-            )
+        let case = held_stack(1e-3.into(), (1e5, 1e5))
             .push("heat_source", source)
             .push("thermal_support", fixed("base_t0", 10.0))
             .step_factors(&[1.0])
@@ -468,7 +598,7 @@ fn a_block_cut_off_by_an_open_joint_keeps_the_reference_or_is_refused() {
     let open =
         vec![asperity::contact::InterfaceState::default(); model.interface.elements.len() * 3];
     assert_eq!(open[0].status, asperity::contact::ContactStatus::Open);
-    let heat = model.heat(1.0, &open).unwrap().unwrap();
+    let heat = solve_heat(&model, &open).unwrap();
     let block = model.bodies.iter().position(|b| b == "block").unwrap() as u32;
     for c in model.continuum.cells.iter().filter(|c| c.body == block) {
         for &n in &c.nodes[..c.kind.node_count()] {
@@ -483,7 +613,7 @@ fn a_block_cut_off_by_an_open_joint_keeps_the_reference_or_is_refused() {
         (heat.nodal[0] - 10.0).abs() < 1e-12,
         "the base stays at its support's value"
     );
-    match stack(1.0).heat(1.0, &open) {
+    match solve_heat(&stack(1.0), &open) {
         Err(asperity::Error::Conduction(m)) => {
             assert!(m.contains("body 'block'") && m.contains("gap"), "{m}")
         }

@@ -5,7 +5,6 @@
 
 use super::thermal_spec::{BodyHeatSource, ThermalBoundary, ThermalSpec};
 use super::{Model, Schedule};
-use crate::contact::InterfaceState;
 use crate::element::set::{ContinuumSet, InterfaceSet, TemperatureField};
 use crate::error::{GroupKind, GroupProblem};
 use crate::mesh::Mesh;
@@ -173,17 +172,6 @@ impl Model {
             .conduction
             .as_ref()
             .is_some_and(Conduction::is_coupled)
-    }
-
-    /// The steady conduction at pseudo-time `time` with the joints in the interface
-    /// `states`, if some body conducts.
-    pub fn heat(&self, time: f64, states: &[InterfaceState]) -> Result<Option<HeatSolution>> {
-        let Some(c) = &self.thermal.conduction else {
-            return Ok(None);
-        };
-        let multiplier = |k: usize| self.schedule.value(k, time);
-        c.solve(&self.continuum, &self.interface, states, multiplier)
-            .map(Some)
     }
 
     /// The temperature field at pseudo-time `time`: the uniform changes of the bodies with a

@@ -204,6 +204,9 @@ pub struct Seconds {
     pub solve: Option<f64>,
     /// Writing the result files.
     pub output: Option<f64>,
+    /// Heat conduction (conducting bodies): the assembly, ordering and factorisation of its
+    /// constant part, and its solves (0 without conducting bodies).
+    pub conduction: Option<f64>,
     /// The whole run, from reading the mesh to the last file.
     pub total: f64,
 }

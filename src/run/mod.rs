@@ -87,6 +87,16 @@ pub struct RunSummary {
     pub reactions: Vec<(String, crate::output::summary::Force)>,
 }
 
+/// The conduction's part of the closing summary's times: only a run with conducting bodies
+/// has it.
+fn conduction_phase(work: &crate::solver::conduction::ConductionWork) -> String {
+    if work.factorisation.calls > 0 {
+        format!(", conduction {:.3}", work.seconds())
+    } else {
+        String::new()
+    }
+}
+
 impl std::fmt::Display for RunSummary {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let s = &self.stats;
@@ -109,7 +119,7 @@ impl std::fmt::Display for RunSummary {
         )?;
         writeln!(
             f,
-            "time [s]: mesh {:.3}{}, model {:.3}, ordering+symbolic {:.3}, assembly {:.3}, factorisation {:.3}, solve {:.3}, output {:.3}",
+            "time [s]: mesh {:.3}{}, model {:.3}, ordering+symbolic {:.3}, assembly {:.3}, factorisation {:.3}, solve {:.3}, output {:.3}{}",
             self.mesh_seconds,
             self.gmsh_seconds
                 .map_or(String::new(), |g| format!(" (gmsh {g:.3})")),
@@ -118,7 +128,8 @@ impl std::fmt::Display for RunSummary {
             s.assembly_seconds,
             s.factorization_seconds,
             s.solve_seconds,
-            s.output_seconds
+            s.output_seconds,
+            conduction_phase(&s.work.conduction)
         )?;
         for (name, r) in &self.reactions {
             write!(

@@ -46,6 +46,7 @@ pub(super) fn complete_summary(summary: &mut Summary, run: &RunSummary) {
     seconds.factorisation = Some(s.factorization_seconds);
     seconds.solve = Some(s.solve_seconds);
     seconds.output = Some(s.output_seconds);
+    seconds.conduction = Some(s.work.conduction.seconds());
     // gmsh is not the method's work: out of the floor and out of the run it is compared with.
     let gmsh = seconds.gmsh.unwrap_or(0.0);
     summary.floor = Some(Floor::new(

@@ -13,6 +13,8 @@
 
 use serde::Serialize;
 
+use crate::solver::conduction::ConductionWork;
+
 /// The calls of one kind of work: how many, their seconds in all, and the first call's.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Tally {
@@ -109,6 +111,8 @@ pub struct Work {
     /// included, with no frame; a linear bulk's point states made for a frame's fields,
     /// [`SolverWork::frame_states`], included).
     pub frames: Tally,
+    /// The heat conduction's factorisation and solves.
+    pub conduction: ConductionWork,
 }
 
 /// A run's floor and its ratio to it, as written to `summary.json` (`"floor"`).
@@ -141,6 +145,9 @@ pub struct FloorParts {
     /// Writing the frames: all of the run's output time, the point states a frame's fields
     /// need included.
     pub output: f64,
+    /// Heat conduction: its one factorisation and one mean solve per converged increment
+    /// (at most as many as the run did; 0 without conducting bodies).
+    pub conduction: f64,
 }
 
 /// The counts the floor is made from ([`SolverWork`], [`Work`]).
@@ -162,6 +169,8 @@ pub struct FloorCounts {
     pub kept_interface_factorisations: usize,
     pub interface_iterations: usize,
     pub solves: usize,
+    pub conduction_factorisations: usize,
+    pub conduction_solves: usize,
 }
 
 impl Floor {
@@ -173,22 +182,21 @@ impl Floor {
     /// never exceeds the run and the ratio is at least 1.
     pub fn new(work: &Work, mesh_seconds: f64, run_seconds: f64) -> Self {
         let s = &work.solver;
-        let solves = work.increments.min(s.solves.calls);
+        let c = &work.conduction;
         let parts = FloorParts {
             mesh: mesh_seconds,
             assembly: s.tangent_assemblies.first + s.interface_tangent_assemblies.first,
             factorisation: s.factorisations.mean() + s.interface_factorisations.mean(),
-            // All of them when the run solved no more than once per increment: their sum
-            // itself, not n × (sum / n), which can round above it.
-            solves: if solves == s.solves.calls {
-                s.solves.seconds
-            } else {
-                solves as f64 * s.solves.mean()
-            },
+            solves: per_increment(&s.solves, work.increments),
             output: work.frames.seconds,
+            conduction: c.factorisation.seconds + per_increment(&c.solves, work.increments),
         };
-        let seconds =
-            parts.mesh + parts.assembly + parts.factorisation + parts.solves + parts.output;
+        let seconds = parts.mesh
+            + parts.assembly
+            + parts.factorisation
+            + parts.solves
+            + parts.output
+            + parts.conduction;
         Self {
             seconds,
             ratio: (seconds > 0.0).then(|| run_seconds / seconds),
@@ -210,9 +218,23 @@ impl Floor {
                 kept_interface_factorisations: s.kept_interface_factorisations.calls,
                 interface_iterations: s.interface_iterations,
                 solves: s.solves.calls,
+                conduction_factorisations: c.factorisation.calls,
+                conduction_solves: c.solves.calls,
             },
             work_seconds: WorkSeconds::of(work),
         }
+    }
+}
+
+/// The seconds of one mean call of `tally` per increment of `increments`, at most all of its
+/// calls: their sum itself when there were no more calls than increments (not
+/// n × (sum / n), which can round above it).
+fn per_increment(tally: &Tally, increments: usize) -> f64 {
+    let calls = increments.min(tally.calls);
+    if calls == tally.calls {
+        tally.seconds
+    } else {
+        calls as f64 * tally.mean()
     }
 }
 
@@ -233,6 +255,8 @@ pub struct WorkSeconds {
     pub interface_factorisations: f64,
     pub kept_interface_factorisations: f64,
     pub solves: f64,
+    pub conduction_factorisations: f64,
+    pub conduction_solves: f64,
 }
 
 impl WorkSeconds {
@@ -252,6 +276,8 @@ impl WorkSeconds {
             interface_factorisations: s.interface_factorisations.seconds,
             kept_interface_factorisations: s.kept_interface_factorisations.seconds,
             solves: s.solves.seconds,
+            conduction_factorisations: work.conduction.factorisation.seconds,
+            conduction_solves: work.conduction.solves.seconds,
         }
     }
 }
@@ -279,14 +305,21 @@ mod tests {
             },
             increments: 2,
             frames: tally(&[0.5, 0.25]),
+            conduction: ConductionWork {
+                factorisation: tally(&[2.0]),
+                solves: tally(&[0.25, 0.25, 0.25]),
+            },
         };
         let floor = Floor::new(&work, 1.0, 16.0);
-        // 1 + (0.5 + 0.125) + (2 + 0.5) + 2 × 0.5 + 0.75
+        // 1 + (0.5 + 0.125) + (2 + 0.5) + 2 × 0.5 + 0.75 + (2 + 2 × 0.25)
         assert_eq!(floor.parts.assembly, 0.625);
         assert_eq!(floor.parts.factorisation, 2.5);
         assert_eq!(floor.parts.solves, 1.0);
-        assert_eq!(floor.seconds, 5.875);
-        assert_eq!(floor.ratio, Some(16.0 / 5.875));
+        assert_eq!(floor.parts.conduction, 2.5);
+        assert_eq!(floor.seconds, 8.375);
+        assert_eq!(floor.ratio, Some(16.0 / 8.375));
+        assert_eq!(floor.counts.conduction_solves, 3);
+        assert_eq!(floor.work_seconds.conduction_solves, 0.75);
         assert_eq!((floor.counts.assemblies, floor.counts.solves), (3, 3));
         assert_eq!(floor.work_seconds.assemblies, 1.0);
         assert_eq!(floor.work_seconds.interface_factorisations, 1.5);

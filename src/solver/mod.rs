@@ -6,6 +6,7 @@
 
 pub mod arclength;
 pub mod condensed;
+pub mod conduction;
 pub mod coupling;
 pub mod cycles;
 pub mod diagnosis;

@@ -354,6 +354,28 @@ impl NewtonLog {
             ..Self::default()
         }
     }
+
+    /// Adds the solves, iterations and seconds of `earlier`, a solve of the same increment
+    /// before this one (a coupled increment's earlier exchanges); the residuals, corrections,
+    /// predictor and convergence stay this solve's.
+    pub fn add_earlier(&mut self, earlier: &NewtonLog) {
+        self.iterations += earlier.iterations;
+        self.unsymmetric_solves += earlier.unsymmetric_solves;
+        self.krylov_iterations += earlier.krylov_iterations;
+        self.interface_iterations += earlier.interface_iterations;
+        self.assembly_seconds += earlier.assembly_seconds;
+        self.factorization_seconds += earlier.factorization_seconds;
+        self.solve_seconds += earlier.solve_seconds;
+    }
+
+    /// This log's solves, iterations and seconds alone (no residuals or corrections).
+    pub fn totals(&self) -> NewtonLog {
+        NewtonLog {
+            residuals: Vec::new(),
+            corrections: Vec::new(),
+            ..*self
+        }
+    }
 }
 
 /// Euclidean norm.

@@ -17,7 +17,7 @@ use crate::assembly::{AssemblyInput, GlobalSystem};
 use crate::contact::{ContactStatus, InterfaceState};
 use crate::error::{Attempt, AttemptFailure, NoConvergence};
 use crate::model::Model;
-use crate::solver::coupling;
+use crate::solver::coupling::Temperatures;
 use crate::solver::diagnosis::{diagnose, implausible_increment, step_failure};
 use crate::solver::energy::BodySums;
 use crate::solver::newton::Problem;
@@ -83,7 +83,8 @@ pub fn run_steps_from(
         newton.restore_last_increment(last);
     }
     solution.reset_trial();
-    coupling::start_temperatures(model, &mut solution, state.time)?;
+    let mut temperatures = Temperatures::new(model, settings)?;
+    temperatures.start(model, &mut solution, state.time)?;
     stats.add_work(&start_newton(model, &mut newton, &mut solution, resumed)?);
     let mut converged_u = solution.u.clone();
     let mut f_ext = vec![0.0; model.dofs.dof_count()];
@@ -129,9 +130,8 @@ pub fn run_steps_from(
             if schedule.leaves_direction(state.time, trial_time) {
                 release_slip(&mut solution.interface_committed);
             }
-            let attempt = coupling::solve_increment(
+            let attempt = temperatures.solve_increment(
                 model,
-                settings,
                 &mut newton,
                 &mut solution,
                 trial_time,
@@ -346,6 +346,7 @@ pub fn run_steps_from(
     stats.symbolic_seconds = newton.symbolic_seconds();
     stats.factor_nnz = newton.linear().factor_nnz();
     stats.work.solver = *newton.work();
+    stats.work.conduction = temperatures.work();
     Ok((solution, stats))
 }
 

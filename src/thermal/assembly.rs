@@ -1,118 +1,177 @@
-//! Assembly of the conduction system: the conductivity matrices and sources of the cells, the
-//! films and fluxes of the supports, the joints' conductance matrices, with the joints' points
-//! and the supports' line points they share with the heat flows.
+//! Assembly of the conduction system: its constant part (the cells' conductivity matrices,
+//! the films' h N Nᵀ), the load of the sources, fluxes and films, and the joints'
+//! conductance matrices, with the joints' points and the supports' line points they share
+//! with the heat flows.
 
 use super::{Conduction, JointConductance, JointPoint, ThermalCondition, ThermalSupport};
 use crate::contact::InterfaceState;
 use crate::element::interface6::interface_point;
 use crate::element::kinematics::point_kinematics;
 use crate::element::quadrature::{GAUSS3, cell_rule};
-use crate::element::set::{ContinuumSet, INTERFACE_POINTS, InterfaceSet};
+use crate::element::set::{ContinuumCell, ContinuumSet, INTERFACE_POINTS, InterfaceSet};
 use crate::element::shape::{cell_shape, line3};
 
 impl Conduction {
-    /// The conductivity matrices and source vectors of the conducting cells.
-    pub(super) fn add_cells(
-        &self,
-        continuum: &ContinuumSet,
-        multiplier: &impl Fn(usize) -> f64,
-        system: &mut System,
-    ) {
-        let mut power = vec![0.0; self.conductivity.len()];
-        for s in &self.sources {
-            power[s.body as usize] += s.power * multiplier(s.amplitude);
-        }
-        system.source_heat = vec![0.0; self.sources.len()];
+    /// Calls `add(i, j, value)` for the entries of the constant part of the conduction
+    /// matrix (conduction indices; an entry may come several times, to be summed): the
+    /// conducting cells' ∫ ∇Nᵀ k ∇N dV and the films' ∫ h N Nᵀ dA. Neither depends on the
+    /// time or the contact, so it is assembled once per model.
+    pub fn constant_entries(&self, continuum: &ContinuumSet, mut add: impl FnMut(u32, u32, f64)) {
         for c in &continuum.cells {
             let Some(k) = self.conductivity[c.body as usize] else {
                 continue;
             };
             let nn = c.kind.node_count();
-            let idx: Vec<usize> = c.nodes[..nn]
-                .iter()
-                .map(|&n| self.index[n as usize].expect("conducting node") as usize)
-                .collect();
+            let idx = self.cell_indices(c);
             let mut ke = [[0.0; 8]; 8];
-            let mut fe = [0.0; 8];
-            let mut volume = 0.0;
             for p in cell_rule(c.kind) {
                 let pk = point_kinematics(&self.analysis, c.kind, &c.coords, p)
                     .expect("cell Jacobians are checked when the model is built");
-                let s = cell_shape(c.kind, p.xi, p.eta);
                 let grad = |i: usize| [pk.b[(0, 2 * i)], pk.b[(1, 2 * i + 1)]];
-                for (a, (row, f)) in ke.iter_mut().zip(fe.iter_mut()).enumerate().take(nn) {
+                for (a, row) in ke.iter_mut().enumerate().take(nn) {
                     let ga = grad(a);
                     for (b, entry) in row.iter_mut().enumerate().take(nn) {
                         let gb = grad(b);
                         *entry += k * (ga[0] * gb[0] + ga[1] * gb[1]) * pk.dvol;
                     }
-                    *f += s.n[a] * power[c.body as usize] * pk.dvol;
-                }
-                volume += pk.dvol;
-            }
-            for (s, out) in self.sources.iter().zip(system.source_heat.iter_mut()) {
-                if s.body == c.body {
-                    *out += s.power * multiplier(s.amplitude) * volume;
                 }
             }
             for a in 0..nn {
-                system.f[idx[a]] += fe[a];
                 for b in 0..nn {
-                    system.add(idx[a], idx[b], ke[a][b]);
+                    add(idx[a], idx[b], ke[a][b]);
                 }
             }
         }
-    }
-
-    /// Films and fluxes of the supports (their heat is summed in `boundary_heat`: the flux
-    /// supports' here, the films' after the solve).
-    pub(super) fn add_supports(&self, multiplier: &impl Fn(usize) -> f64, system: &mut System) {
-        system.boundary_heat = vec![0.0; self.supports.len()];
-        for (s, support) in self.supports.iter().enumerate() {
-            let m = multiplier(support.amplitude);
-            let (h, q) = match support.condition {
-                ThermalCondition::Temperature(_) => continue,
-                ThermalCondition::Flux(q) => (0.0, q * m),
-                ThermalCondition::Film { h, ambient } => (h, h * ambient * m),
+        for support in &self.supports {
+            let ThermalCondition::Film { h, .. } = support.condition else {
+                continue;
             };
             for line in &support.lines {
-                let idx = line.map(|n| self.index[n as usize].expect("checked") as usize);
+                let idx = self.line_indices(line);
                 for (n, da) in self.line_points(line) {
                     for a in 0..3 {
-                        system.f[idx[a]] += n[a] * q * da;
                         for b in 0..3 {
-                            system.add(idx[a], idx[b], h * n[a] * n[b] * da);
+                            add(idx[a], idx[b], h * n[a] * n[b] * da);
                         }
-                    }
-                    if h == 0.0 {
-                        system.boundary_heat[s] += q * da;
                     }
                 }
             }
         }
     }
 
-    /// The joints' conductance matrices.
-    pub(super) fn add_joints(
+    /// The heat load with the supports' and sources' values scaled by
+    /// `multiplier(amplitude)`: f = ∫ N Q dV + ∫ N q dA + ∫ N h T_∞ dA over the conduction
+    /// indices, with the heat of each source and flux support.
+    pub fn load(&self, multiplier: &impl Fn(usize) -> f64) -> HeatLoad {
+        let mut f = vec![0.0; self.nodes.len()];
+        let source_heat = self
+            .sources
+            .iter()
+            .map(|s| {
+                let power = s.power * multiplier(s.amplitude);
+                let body = &self.source_bodies[s.body as usize];
+                let body = body.as_ref().expect("made for every body with a source");
+                for (fi, &w) in f.iter_mut().zip(&body.shape) {
+                    *fi += power * w;
+                }
+                power * body.volume
+            })
+            .collect();
+        let mut boundary_heat = vec![0.0; self.supports.len()];
+        for (s, support) in self.supports.iter().enumerate() {
+            let m = multiplier(support.amplitude);
+            let q = match support.condition {
+                ThermalCondition::Temperature(_) => continue,
+                ThermalCondition::Flux(q) => q * m,
+                ThermalCondition::Film { h, ambient } => h * ambient * m,
+            };
+            for line in &support.lines {
+                let idx = self.line_indices(line);
+                for (n, da) in self.line_points(line) {
+                    for a in 0..3 {
+                        f[idx[a] as usize] += n[a] * q * da;
+                    }
+                    if let ThermalCondition::Flux(_) = support.condition {
+                        boundary_heat[s] += q * da;
+                    }
+                }
+            }
+        }
+        HeatLoad {
+            f,
+            boundary_heat,
+            source_heat,
+        }
+    }
+
+    /// ∫ N dV over the conduction indices and the volume of every body that has a heat
+    /// source (`None` for the others): a source's load is its power times these.
+    pub(super) fn source_bodies(&self, continuum: &ContinuumSet) -> Vec<Option<SourceBody>> {
+        let mut bodies: Vec<Option<SourceBody>> = vec![None; self.conductivity.len()];
+        for s in &self.sources {
+            bodies[s.body as usize] = Some(SourceBody {
+                shape: vec![0.0; self.nodes.len()],
+                volume: 0.0,
+            });
+        }
+        for c in &continuum.cells {
+            let Some(body) = bodies[c.body as usize].as_mut() else {
+                continue;
+            };
+            let idx = self.cell_indices(c);
+            for p in cell_rule(c.kind) {
+                let pk = point_kinematics(&self.analysis, c.kind, &c.coords, p)
+                    .expect("cell Jacobians are checked when the model is built");
+                let s = cell_shape(c.kind, p.xi, p.eta);
+                for (a, &i) in idx.iter().enumerate().take(c.kind.node_count()) {
+                    body.shape[i as usize] += s.n[a] * pk.dvol;
+                }
+                body.volume += pk.dvol;
+            }
+        }
+        bodies
+    }
+
+    /// Calls `add(i, j, value)` for the entries of the joints' conductance matrices
+    /// ∫ h [N_A; −N_B][N_A; −N_B]ᵀ dA in the contact `states` (conduction indices; zero
+    /// entries left out, so that every entry is a link heat can cross).
+    pub fn joint_entries(
         &self,
         interface: &InterfaceSet,
         states: &[InterfaceState],
-        system: &mut System,
+        mut add: impl FnMut(u32, u32, f64),
     ) {
         let zero = vec![0.0; self.index.len()];
         self.for_joint_points(interface, states, &zero, |at| {
-            let idx = at
-                .nodes
-                .map(|n| self.index[n as usize].expect("checked") as usize);
+            if at.point.conductance == 0.0 {
+                return;
+            }
+            let idx = at.nodes.map(|n| self.index[n as usize].expect("checked"));
             let n = at.n;
             let v = [n[0], n[1], n[2], -n[0], -n[1], -n[2]];
             for a in 0..6 {
                 for b in 0..6 {
                     let value = at.point.conductance * v[a] * v[b] * at.da;
-                    system.add(idx[a], idx[b], value);
+                    if value != 0.0 {
+                        add(idx[a], idx[b], value);
+                    }
                 }
             }
         });
+    }
+
+    /// The conduction indices of a conducting cell's nodes (the first `node_count`).
+    fn cell_indices(&self, c: &ContinuumCell) -> [u32; 8] {
+        let mut idx = [0; 8];
+        for (i, &n) in idx.iter_mut().zip(&c.nodes[..c.kind.node_count()]) {
+            *i = self.index[n as usize].expect("conducting node");
+        }
+        idx
+    }
+
+    /// The conduction indices of a support line's nodes.
+    fn line_indices(&self, line: &[u32; 3]) -> [u32; 3] {
+        line.map(|n| self.index[n as usize].expect("checked"))
     }
 
     /// Calls `f` for every point of every conducting joint, with its conductance, jump and
@@ -154,9 +213,9 @@ impl Conduction {
     ) -> f64 {
         let mut heat = 0.0;
         for line in &support.lines {
-            let idx = line.map(|n| self.index[n as usize].expect("checked") as usize);
+            let idx = self.line_indices(line);
             for (n, da) in self.line_points(line) {
-                let temperature: f64 = (0..3).map(|a| n[a] * t[idx[a]]).sum();
+                let temperature: f64 = (0..3).map(|a| n[a] * t[idx[a] as usize]).sum();
                 heat += h * (ambient - temperature) * da;
             }
         }
@@ -214,28 +273,21 @@ pub struct JointAt {
     pub point: JointPoint,
 }
 
-/// The assembled conduction system over the conduction indices (entries summed by the
-/// solver's triplet conversion).
-pub(super) struct System {
-    pub(super) entries: Vec<(u32, u32, f64)>,
-    pub(super) f: Vec<f64>,
-    pub(super) boundary_heat: Vec<f64>,
-    pub(super) source_heat: Vec<f64>,
+/// The heat load of a solve ([`Conduction::load`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct HeatLoad {
+    /// f over the conduction indices.
+    pub f: Vec<f64>,
+    /// Heat entering through each thermal support's flux (0 for the others: a temperature
+    /// support's is its reaction, a film's follows from the temperatures).
+    pub boundary_heat: Vec<f64>,
+    /// Heat each source generates.
+    pub source_heat: Vec<f64>,
 }
 
-impl System {
-    pub(super) fn new(n: usize) -> Self {
-        Self {
-            entries: Vec::new(),
-            f: vec![0.0; n],
-            boundary_heat: Vec::new(),
-            source_heat: Vec::new(),
-        }
-    }
-
-    pub(super) fn add(&mut self, i: usize, j: usize, v: f64) {
-        if v != 0.0 {
-            self.entries.push((i as u32, j as u32, v));
-        }
-    }
+/// A body with a heat source: ∫ N dV over the conduction indices, and its volume.
+#[derive(Clone, Debug)]
+pub(super) struct SourceBody {
+    pub(super) shape: Vec<f64>,
+    pub(super) volume: f64,
 }

@@ -6,7 +6,6 @@
 //! across, so open joints may cut a region off (before a pressed joint has closed, say): it
 //! keeps the reference temperature if no heat enters it, and is refused otherwise.
 
-use super::assembly::System;
 use super::{Conduction, ThermalCondition};
 use crate::element::set::{ContinuumCell, ContinuumSet, InterfaceSet};
 use crate::{Error, Result};
@@ -33,39 +32,60 @@ impl Conduction {
         }
     }
 
-    /// Settles the regions of an assembled `system` that open contact pairs cut off from
-    /// every held body in this increment (with a model that passed [`Self::check_held`]):
-    /// one into which no heat flows has no steady temperature of its own and keeps the
-    /// reference (one node is tied to 0 by a conductance the size of the system's largest,
-    /// which carries no heat since none enters); one that receives heat has no steady state
-    /// and is refused ([`Error::Conduction`]).
-    pub(super) fn hold_cut_off_regions(
+    /// The regions the conducting cells alone form, and which of them a prescribed
+    /// temperature or a film holds: the part of [`Self::cut_off_ties`] that no solve
+    /// changes, made once per model.
+    pub fn cell_regions(&self, continuum: &ContinuumSet) -> CellRegions {
+        let (mut regions, held) = self.regions(self.cell_links(continuum));
+        let root: Vec<u32> = (0..self.nodes.len() as u32)
+            .map(|i| regions.root(i))
+            .collect();
+        CellRegions { root, held }
+    }
+
+    /// The regions that open contact pairs cut off from every held body in a solve whose
+    /// joints conduct along `links` (pairs of conduction indices) under the load `f`: one
+    /// into which no heat flows has no steady temperature of its own and keeps the
+    /// reference, and for each such region one of its nodes that `tieable` accepts is
+    /// returned, to be tied to 0 by a conductance that carries no heat since none enters;
+    /// one that receives heat has no steady state and is refused ([`Error::Conduction`]).
+    pub fn cut_off_ties(
         &self,
         continuum: &ContinuumSet,
-        system: &mut System,
-    ) -> Result<()> {
-        let links = system.entries.iter().map(|&(i, j, _)| (i, j));
-        let (mut regions, held) = self.regions(links);
-        let mut heat: Vec<(f64, f64)> = vec![(0.0, 0.0); self.nodes.len()];
-        for (i, f) in system.f.iter().enumerate() {
-            let h = &mut heat[regions.root(i as u32) as usize];
-            *h = (h.0 + f, h.1 + f.abs());
+        cells: &CellRegions,
+        links: impl Iterator<Item = (u32, u32)>,
+        f: &[f64],
+        tieable: impl Fn(u32) -> bool,
+    ) -> Result<Vec<u32>> {
+        let n = self.nodes.len();
+        let mut regions = Regions {
+            parent: cells.root.clone(),
+        };
+        for (i, j) in links {
+            regions.join(i, j);
         }
-        let largest = system.entries.iter().fold(0.0_f64, |m, e| m.max(e.2.abs()));
-        for i in 0..self.nodes.len() as u32 {
-            let root = regions.root(i);
-            if i != root || held[root as usize] {
+        let mut held = vec![false; n];
+        let mut heat = vec![(0.0, 0.0); n];
+        let mut tie = vec![None; n];
+        for i in 0..n as u32 {
+            let root = regions.root(i) as usize;
+            if cells.root[i as usize] == i && cells.held[i as usize] {
+                held[root] = true;
+            }
+            let fi = f[i as usize];
+            heat[root] = (heat[root].0 + fi, heat[root].1 + fi.abs());
+            if tie[root].is_none() && tieable(i) {
+                tie[root] = Some(i);
+            }
+        }
+        let mut ties = Vec::new();
+        for root in 0..n as u32 {
+            if regions.root(root) != root || held[root as usize] {
                 continue;
             }
             let (net, gross) = heat[root as usize];
+            let (body, near) = self.region_cell(continuum, &mut regions, root);
             if net.abs() > 1e-12 * gross.max(f64::MIN_POSITIVE) {
-                let c = continuum.cells.iter().find(|c| {
-                    self.conductivity[c.body as usize].is_some()
-                        && self.index[c.nodes[0] as usize].is_some_and(|n| regions.root(n) == root)
-                });
-                let (body, near) = c.map_or(("?", [0.0; 2]), |c| {
-                    (self.body_names[c.body as usize].as_str(), c.coords[0])
-                });
                 return Err(Error::Conduction(format!(
                     "{net:.4e} W flow into body '{body}' near ({:.4}, {:.4}), which the open \
                      contact pairs cut off from every held body in this increment: it has no \
@@ -74,9 +94,33 @@ impl Conduction {
                     near[0], near[1]
                 )));
             }
-            system.add(root as usize, root as usize, largest.max(1.0));
+            let Some(node) = tie[root as usize] else {
+                return Err(Error::Conduction(format!(
+                    "body '{body}' near ({:.4}, {:.4}) is cut off from every held body and \
+                     touches no conducting joint",
+                    near[0], near[1]
+                )));
+            };
+            ties.push(node);
         }
-        Ok(())
+        Ok(ties)
+    }
+
+    /// The name of the body of a conducting cell in the region of `root`, and the cell's
+    /// first corner, for messages.
+    fn region_cell(
+        &self,
+        continuum: &ContinuumSet,
+        regions: &mut Regions,
+        root: u32,
+    ) -> (String, [f64; 2]) {
+        let c = continuum.cells.iter().find(|c| {
+            self.conductivity[c.body as usize].is_some()
+                && self.index[c.nodes[0] as usize].is_some_and(|n| regions.root(n) == root)
+        });
+        c.map_or(("?".to_string(), [0.0; 2]), |c| {
+            (self.body_names[c.body as usize].clone(), c.coords[0])
+        })
     }
 
     /// The links (conduction indices) of every conducting cell's nodes to its first node.
@@ -131,6 +175,15 @@ impl Conduction {
         }
         (regions, held)
     }
+}
+
+/// The regions of the conducting cells alone ([`Conduction::cell_regions`]).
+#[derive(Clone, Debug)]
+pub struct CellRegions {
+    /// Per conduction index, the root of its region.
+    root: Vec<u32>,
+    /// Per root, whether a prescribed temperature or a film holds its region.
+    held: Vec<bool>,
 }
 
 /// Disjoint sets of conduction indices (union–find with path halving).

@@ -10,23 +10,28 @@
 //! and weights (lumped with the default Newton-Cotes rule) and each point's contact state:
 //! a closed point conducts with h(p), an open one with the gap conductance. Temperatures
 //! are changes from the stress-free reference; a node held by two temperature supports
-//! takes the later one's value. The system is solved by sparse Cholesky (faer).
-
+//! takes the later one's value. The system is solved by [`crate::solver::conduction`]: the
+//! cells' and films' part, which depends on neither the time nor the contact, factored once
+//! per run, the joints' part in a small dense system at every solve.
 //!
-//! `assembly` builds the system (cells, supports, joints), `solve` solves it and sums the
-//! heat flows, `fixed` checks that every conducting region's temperature is held, and `flux`
-//! recovers the nodal heat flux.
+//! `assembly` gives the system's parts (the constant matrix, the load, the joints' entries),
+//! `flows` sums the heat flows of solved temperatures, `fixed` checks that every conducting
+//! region's temperature is held (and finds the regions open joints cut off in a solve), and
+//! `flux` recovers the nodal heat flux.
 
 mod assembly;
 mod fixed;
+mod flows;
 mod flux;
-mod solve;
 
-pub use assembly::JointAt;
+pub use assembly::{HeatLoad, JointAt};
+pub use fixed::CellRegions;
+
+use assembly::SourceBody;
 
 use crate::contact::{ContactStatus, InterfaceState};
 use crate::element::Analysis;
-use crate::element::set::{ContinuumSet, TemperatureField};
+use crate::element::set::{ContinuumSet, InterfaceSet, TemperatureField};
 
 /// A boundary condition of the conduction on a curve (values at multiplier 1).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -106,9 +111,8 @@ pub struct Conduction {
     nodes: Vec<u32>,
     /// Per conduction index, the temperature support that holds it.
     fixed: Vec<Option<u32>>,
-    /// Per conduction index, its equation among the free ones.
-    equation: Vec<Option<u32>>,
-    free: usize,
+    /// ∫ N dV and the volume of each body with a heat source.
+    source_bodies: Vec<Option<SourceBody>>,
 }
 
 /// The steady temperature and the heat flows of one solve (W; totals over 2π in
@@ -181,17 +185,7 @@ impl Conduction {
                 }
             }
         }
-        let mut free = 0;
-        let equation = fixed
-            .iter()
-            .map(|f| {
-                f.is_none().then(|| {
-                    free += 1;
-                    (free - 1) as u32
-                })
-            })
-            .collect();
-        Self {
+        let mut conduction = Self {
             analysis: continuum.analysis,
             conductivity,
             supports,
@@ -202,9 +196,72 @@ impl Conduction {
             body_names: body_names.to_vec(),
             nodes,
             fixed,
-            equation,
-            free,
+            source_bodies: Vec::new(),
+        };
+        conduction.source_bodies = conduction.source_bodies(continuum);
+        conduction
+    }
+
+    /// Number of nodes carrying a temperature (the conduction indices 0..size).
+    pub fn size(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Per conduction index, whether a temperature support prescribes it.
+    pub fn prescribed(&self) -> Vec<bool> {
+        self.fixed.iter().map(Option::is_some).collect()
+    }
+
+    /// Sets the prescribed temperatures of `t` (conduction indices), the supports' values
+    /// scaled by `multiplier(amplitude)`; a node held by two supports takes the later one's.
+    pub fn set_prescribed(&self, multiplier: &impl Fn(usize) -> f64, t: &mut [f64]) {
+        for (ti, f) in t.iter_mut().zip(&self.fixed) {
+            if let Some(s) = f {
+                let support = &self.supports[*s as usize];
+                if let ThermalCondition::Temperature(v) = support.condition {
+                    *ti = v * multiplier(support.amplitude);
+                }
+            }
         }
+    }
+
+    /// The conduction indices of the nodes of every conducting cell and of every conducting
+    /// joint's interface element (each list its element's), the couplings of the
+    /// conduction matrix.
+    pub fn element_nodes(
+        &self,
+        continuum: &ContinuumSet,
+        interface: &InterfaceSet,
+    ) -> Vec<Vec<u32>> {
+        let cells = continuum
+            .cells
+            .iter()
+            .filter(|c| self.conductivity[c.body as usize].is_some())
+            .map(|c| c.nodes[..c.kind.node_count()].to_vec());
+        let joints = interface
+            .elements
+            .iter()
+            .filter(|e| self.joints[e.pair as usize].is_some())
+            .map(|e| e.nodes.to_vec());
+        cells
+            .chain(joints)
+            .map(|nodes| {
+                let index = |n: u32| self.index[n as usize].expect("conducting node");
+                nodes.into_iter().map(index).collect()
+            })
+            .collect()
+    }
+
+    /// The conduction indices of the nodes of the conducting joints' interface elements.
+    pub fn joint_indices(&self, interface: &InterfaceSet) -> Vec<u32> {
+        let conducting = interface
+            .elements
+            .iter()
+            .filter(|e| self.joints[e.pair as usize].is_some());
+        let nodes = conducting.flat_map(|e| e.nodes);
+        nodes
+            .map(|n| self.index[n as usize].expect("checked"))
+            .collect()
     }
 
     /// Whether the conduction depends on the contact states (some joint conducts).

@@ -247,6 +247,9 @@ pub struct CondensedSolver {
     interface_factored: bool,
     /// Whether the bulk part of the right-hand side of the last [`Self::condense`] was zero.
     balanced_bulk: bool,
+    /// Whether negligible bulk right-hand side entries are dropped (Newton's steps, the
+    /// default), or every right-hand side is solved as given ([`Self::solve_exactly`]).
+    inexact_rhs: bool,
     /// The LU path of an unsymmetric bulk, made by the first
     /// [`Self::factor_bulk_unsymmetric`], and whether the bulk factor is its LU.
     unsymmetric: Option<Box<UnsymmetricBulk>>,
@@ -529,6 +532,7 @@ impl CondensedSolver {
             released: false,
             interface_factored: false,
             balanced_bulk: false,
+            inexact_rhs: true,
             unsymmetric: None,
             lu_bulk: false,
         })
@@ -553,6 +557,14 @@ impl CondensedSolver {
     /// factorisation"). Default [`DEFAULT_REUSE_THRESHOLD`].
     pub fn set_reuse_threshold(&mut self, threshold: f64) {
         self.reuse_threshold = threshold.max(0.0);
+    }
+
+    /// Solves every right-hand side as given, dropping no negligible bulk entry (by default
+    /// a bulk part below 1e-6 of the interface part, and entries below 1e-9 of the largest,
+    /// are dropped: an inexact Newton step): for a linear problem solved once, not iterated
+    /// to a residual tolerance.
+    pub fn solve_exactly(&mut self) {
+        self.inexact_rhs = false;
     }
 
     /// Marks the start of a load increment: the next [`Self::factor_bulk`] keeps the last
@@ -935,7 +947,8 @@ impl CondensedSolver {
         for (x, &old) in self.x.iter_mut().zip(&self.order) {
             *x = rhs[old as usize];
         }
-        self.balanced_bulk = drop_negligible_bulk_entries(&mut self.x, self.n_bulk);
+        self.balanced_bulk =
+            self.inexact_rhs && drop_negligible_bulk_entries(&mut self.x, self.n_bulk);
         if self.balanced_bulk {
             return;
         }
