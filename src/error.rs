@@ -627,8 +627,10 @@ fn shorten_lines(message: &str) -> String {
     lines.join("\n")
 }
 
-/// Longest line of a message [`Error::readable`] leaves whole.
-const LONG_LINE: usize = 400;
+/// Longest line of a message [`Error::readable`] leaves whole: above the longest messages
+/// asperity composes itself (the memory check's, with its parts and the Krylov hint, about
+/// 640 characters), far below an echoed input.
+const LONG_LINE: usize = 1000;
 
 /// What is wrong with a mesh file ([`Error::Mesh`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -1328,6 +1330,25 @@ fn step_key(index: Option<usize>, key: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The longest message the solver composes, the memory check's with every part, reaches
+    /// the terminal and `summary.json` whole.
+    #[test]
+    fn the_memory_checks_message_is_not_cut() {
+        let error = Error::InsufficientMemory {
+            what: "the sparse factor of the bodies' stiffness 12.34 GB, the dense system of the \
+                   123456 interface unknowns 123.45 GB; `[solver] linear_solver = \"krylov\"` \
+                   needs no dense interface system"
+                .into(),
+            unknowns: 12_345_678,
+            needed: 123_456_789_012,
+            available: 12_345_678_901,
+            limit: Limit::AddressSpace,
+        };
+        let text = error.to_string();
+        assert!(text.chars().count() > 400, "{text}");
+        assert_eq!(error.readable(), text);
+    }
 
     #[test]
     fn long_numbers_are_written_in_exponent_form_but_names_are_left_alone() {
