@@ -91,7 +91,8 @@ impl ConductionSolver {
         let joints: Vec<usize> = (joint_nodes.iter())
             .filter_map(|&i| dofs.equation(i as usize))
             .collect();
-        let mut condensed = CondensedSolver::new(&pattern, &joints).map_err(conduction_error)?;
+        let mut condensed =
+            CondensedSolver::for_conduction(&pattern, &joints).map_err(conduction_error)?;
         condensed.solve_exactly();
         let (values, prescribed, tie) = constant_matrix(c, model, &dofs, &pattern);
         let matrix = SparseColMatRef::new(pattern.symbolic().as_ref(), &values);

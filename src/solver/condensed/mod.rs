@@ -335,18 +335,31 @@ fn bulk_order(global: SymbolicSparseColMatRef<'_, u32>, bulk: &[u32]) -> Result<
         .collect())
 }
 
+/// What a condensed solver's matrix is, for its messages.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SystemKind {
+    /// The bodies' stiffness, condensed onto the interface elements' unknowns.
+    Mechanical,
+    /// The conductivity matrix, condensed onto the conducting joints' nodes.
+    Conduction,
+}
+
 /// The parts of the condensed solver's storage, for a message: the sparse factor's `sparse`
 /// bytes and the `dense` bytes of the interface system of `n_i` unknowns (which the Krylov
-/// path does without, named when it is the larger part).
-fn storage_parts(sparse: u64, dense: u64, n_i: usize) -> String {
+/// path of the mechanics does without, named when it is the larger part).
+fn storage_parts(kind: SystemKind, sparse: u64, dense: u64, n_i: usize) -> String {
     let gb = crate::memory::gigabytes;
+    let (matrix, unknowns) = match kind {
+        SystemKind::Mechanical => ("the bodies' stiffness", "interface unknowns"),
+        SystemKind::Conduction => ("the heat conduction", "joint nodes"),
+    };
     let parts = format!(
-        "the sparse factor of the bodies' stiffness {:.2} GB, the dense system of the {n_i} \
-         interface unknowns {:.2} GB",
+        "the sparse factor of {matrix} {:.2} GB, the dense system of the {n_i} {unknowns} \
+         {:.2} GB",
         gb(sparse),
         gb(dense)
     );
-    if dense > sparse {
+    if dense > sparse && kind == SystemKind::Mechanical {
         format!("{parts}; `[solver] linear_solver = \"krylov\"` needs no dense interface system")
     } else {
         parts
@@ -358,7 +371,13 @@ impl CondensedSolver {
     /// equations `interface` (free equation numbers of the interface nodes, any order,
     /// duplicates allowed) last, factors symbolically, and allocates every buffer.
     pub fn new(pattern: &SparsityPattern, interface: &[usize]) -> Result<Self> {
-        Self::with_relaxation(pattern, interface, None)
+        Self::with_relaxation(pattern, interface, None, SystemKind::Mechanical)
+    }
+
+    /// [`Self::new`] for a conductivity matrix condensed onto the conducting joints' nodes
+    /// `joints` (its messages name the heat conduction).
+    pub fn for_conduction(pattern: &SparsityPattern, joints: &[usize]) -> Result<Self> {
+        Self::with_relaxation(pattern, joints, None, SystemKind::Conduction)
     }
 
     /// [`Self::new`] with faer's supernode relaxation thresholds `relax` (`None`: faer's
@@ -367,6 +386,7 @@ impl CondensedSolver {
         pattern: &SparsityPattern,
         interface: &[usize],
         relax: Option<&[(usize, f64)]>,
+        kind: SystemKind,
     ) -> Result<Self> {
         let global = pattern.symbolic();
         let n = global.nrows();
@@ -463,7 +483,8 @@ impl CondensedSolver {
             .map(|s| supernodal.col_ptr_for_val()[s] as usize);
         let sparse = 8 * (supernodal.len_val() + nnz_lower + 2 * n) as u64;
         let dense = 8 * (n_i * n_i) as u64 * if schur_in_factor.is_some() { 1 } else { 2 };
-        crate::solver::ensure_memory(|| storage_parts(sparse, dense, n_i), n, sparse + dense)?;
+        let what = || storage_parts(kind, sparse, dense, n_i);
+        crate::solver::ensure_memory(what, n, sparse + dense)?;
         // One thread for the bulk factorisation: see `BULK_FACTOR_PARALLELISM`.
         let par = BULK_FACTOR_PARALLELISM;
         let gather_len = (0..supernodal.n_supernodes())

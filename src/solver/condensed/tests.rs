@@ -175,7 +175,13 @@ fn relative_residual(
 /// Solves with the condensed solver and with dense LU of the assembled matrix; returns
 /// the relative difference and the relative residual of the condensed solution.
 fn compare(t: &TestSystem, relax: Option<&[(usize, f64)]>) -> (f64, f64) {
-    let mut solver = CondensedSolver::with_relaxation(&t.pattern, &t.interface_eqs, relax).unwrap();
+    let mut solver = CondensedSolver::with_relaxation(
+        &t.pattern,
+        &t.interface_eqs,
+        relax,
+        SystemKind::Mechanical,
+    )
+    .unwrap();
     compare_with(&mut solver, t, false)
 }
 
@@ -448,8 +454,13 @@ fn condensed_handles_supernodes_straddling_the_interface_border() {
     // Merging every pair of adjacent supernodes puts bulk and interface columns into one.
     let relax: &[(usize, f64)] = &[(usize::MAX, 1.0)];
     let t = test_system_with(6, 4, 1.5, &[], true);
-    let solver =
-        CondensedSolver::with_relaxation(&t.pattern, &t.interface_eqs, Some(relax)).unwrap();
+    let solver = CondensedSolver::with_relaxation(
+        &t.pattern,
+        &t.interface_eqs,
+        Some(relax),
+        SystemKind::Mechanical,
+    )
+    .unwrap();
     let sn = &solver.symbolic;
     let straddling = (0..sn.n_supernodes())
         .filter(|&s| {
@@ -747,13 +758,13 @@ fn condensed_without_interface_is_a_cholesky_solve() {
 /// system is the larger one (a long, finely meshed joint).
 #[test]
 fn the_storage_message_points_to_krylov_when_the_interface_system_dominates() {
-    let factor_larger = storage_parts(2_000_000_000, 500_000_000, 6000);
+    let factor_larger = storage_parts(SystemKind::Mechanical, 2_000_000_000, 500_000_000, 6000);
     assert_eq!(
         factor_larger,
         "the sparse factor of the bodies' stiffness 2.00 GB, the dense system of the 6000 \
          interface unknowns 0.50 GB"
     );
-    let dense_larger = storage_parts(500_000_000, 2_000_000_000, 12000);
+    let dense_larger = storage_parts(SystemKind::Mechanical, 500_000_000, 2_000_000_000, 12000);
     assert!(
         dense_larger.contains("12000 interface unknowns 2.00 GB"),
         "{dense_larger}"
@@ -761,6 +772,13 @@ fn the_storage_message_points_to_krylov_when_the_interface_system_dominates() {
     assert!(
         dense_larger.contains("linear_solver = \"krylov\""),
         "{dense_larger}"
+    );
+    // The conduction's names its own matrix and unknowns, and no Krylov path (it has none).
+    let conduction = storage_parts(SystemKind::Conduction, 500_000_000, 2_000_000_000, 12000);
+    assert_eq!(
+        conduction,
+        "the sparse factor of the heat conduction 0.50 GB, the dense system of the 12000 joint \
+         nodes 2.00 GB"
     );
 }
 
