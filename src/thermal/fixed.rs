@@ -84,8 +84,8 @@ impl Conduction {
                 continue;
             }
             let (net, gross) = heat[root as usize];
-            let (body, near) = self.region_cell(continuum, &mut regions, root);
             if net.abs() > 1e-12 * gross.max(f64::MIN_POSITIVE) {
+                let (body, near) = self.region_cell(continuum, &mut regions, root);
                 return Err(Error::Conduction(format!(
                     "{net:.4e} W flow into body '{body}' near ({:.4}, {:.4}), which the open \
                      contact pairs cut off from every held body in this increment: it has no \
@@ -95,6 +95,7 @@ impl Conduction {
                 )));
             }
             let Some(node) = tie[root as usize] else {
+                let (body, near) = self.region_cell(continuum, &mut regions, root);
                 return Err(Error::Conduction(format!(
                     "body '{body}' near ({:.4}, {:.4}) is cut off from every held body and \
                      touches no conducting joint",
@@ -107,7 +108,7 @@ impl Conduction {
     }
 
     /// The name of the body of a conducting cell in the region of `root`, and the cell's
-    /// first corner, for messages.
+    /// first corner, for messages (a search through the cells: for errors only).
     fn region_cell(
         &self,
         continuum: &ContinuumSet,
