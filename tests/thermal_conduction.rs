@@ -413,6 +413,27 @@ impl asperity::solver::state::Observer for Frames {
     }
 }
 
+/// The predictor extrapolates a coupled increment from the last one as a whole: its record
+/// of the last increment is the change over all of that increment's exchanges, not over its
+/// last exchange alone (which would extrapolate nothing).
+#[test]
+fn a_coupled_increment_is_recorded_whole_for_the_predictor() {
+    use asperity::solver::stepping::run_steps_from;
+    let case = stack_case(20.0, 1e-3, 0.8).step_factors(&[0.5, 1.0]).case();
+    let model = model(stack_mesh(4.0, 2.0), &case).unwrap();
+    let mut frames = Frames::default();
+    run_steps_from(&model, &settings(&case), None, &mut frames).unwrap();
+    let (first, second) = (&frames.resumes[0], &frames.resumes[1]);
+    assert!(second.solution.thermal.exchanges > 1, "the case exchanges");
+    let last = second.last_increment.as_ref().expect("the predictor is on");
+    assert!(last.ready);
+    let (u0, u1) = (&first.solution.u, &second.solution.u);
+    for (d, du) in last.du.iter().enumerate() {
+        assert_eq!(*du, u1[d] - u0[d], "dof {d}");
+    }
+    assert!(last.du.iter().any(|du| du.abs() > 0.0));
+}
+
 /// A thermal run continued from its restart record after any frame (as `--resume` reads
 /// it) repeats the uninterrupted run bit for bit: displacements, contact stresses,
 /// temperatures, heat flows and energy. The case couples both ways: a pressed block with a

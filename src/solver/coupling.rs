@@ -87,13 +87,34 @@ impl Temperatures {
         force_floor: f64,
     ) -> Result<NewtonLog> {
         self.start(model, solution, time)?;
+        if !model.is_thermally_coupled() {
+            let (u, mut problem) = solution.split(model);
+            return newton.solve_increment(&mut problem, u, external_force, force_floor);
+        }
+        newton.begin_coupled_increment();
+        let log = self.exchanges(model, newton, solution, time, external_force, force_floor);
+        let converged = log.as_ref().is_ok_and(|log| log.converged);
+        newton.end_coupled_increment(converged.then_some((&solution.u[..], external_force)));
+        log
+    }
+
+    /// The exchanges of a coupled increment ([`Self::solve_increment`]).
+    fn exchanges(
+        &mut self,
+        model: &Model,
+        newton: &mut Newton,
+        solution: &mut Solution,
+        time: f64,
+        external_force: &[f64],
+        force_floor: f64,
+    ) -> Result<NewtonLog> {
         let mut earlier = NewtonLog::default();
         loop {
             let (u, mut problem) = solution.split(model);
             let mut log = newton.solve_increment(&mut problem, u, external_force, force_floor)?;
             log.add_earlier(&earlier);
             earlier = log.totals();
-            if !log.converged || !model.is_thermally_coupled() {
+            if !log.converged {
                 return Ok(log);
             }
             let heat = self.heat(model, time, &solution.interface_trial)?;

@@ -429,6 +429,19 @@ pub struct Newton<'a> {
     work: SolverWork,
     /// Seconds of the condensed solver's ordering and symbolic analysis.
     condensed_analysis_seconds: f64,
+    /// A thermally coupled increment ([`Self::begin_coupled_increment`]): its Newton solves
+    /// record nothing of a converged increment until [`Self::end_coupled_increment`], and
+    /// those after its first predict nothing.
+    coupled: Option<CoupledIncrement>,
+}
+
+/// What a thermally coupled increment's Newton solves keep for its end.
+#[derive(Clone, Copy, Debug, Default)]
+struct CoupledIncrement {
+    /// Whether a solve of this increment ran (the next continues it).
+    continuing: bool,
+    /// The force flux of the last converged solve, and whether it was zero.
+    flux: Option<(f64, bool)>,
 }
 
 impl<'a> Newton<'a> {
@@ -460,6 +473,7 @@ impl<'a> Newton<'a> {
             arc: None,
             work: SolverWork::default(),
             condensed_analysis_seconds: 0.0,
+            coupled: None,
         })
     }
 
@@ -806,6 +820,33 @@ impl<'a> Newton<'a> {
     /// already hold this increment's values) for the external forces `f_ext` (all dofs).
     /// `force_floor` is an absolute force level below which residuals count as zero (e.g.
     /// from earlier steps), for increments whose loads vanish.
+    /// Records a converged increment that ended in `u` under `f_ext` with the force `flux`
+    /// (and whether it was zero): the history of q̃ and the predictor's last increment.
+    fn record_converged(&mut self, (flux, zero_flux): (f64, bool), u: &[f64], f_ext: &[f64]) {
+        if self.settings.criteria.average_force.is_none() {
+            self.flux_history.record(flux, zero_flux);
+        }
+        self.predictor.record(u, f_ext);
+    }
+
+    /// Starts a thermally coupled increment, whose exchanges solve it several times (each
+    /// with the temperatures of the last conduction): the first solve predicts from the last
+    /// increment as any increment does, the later ones continue from where the last one
+    /// ended, and none records a converged increment — the predictor would take the last
+    /// exchange's small change for the increment's and extrapolate nothing from it.
+    pub fn begin_coupled_increment(&mut self) {
+        self.coupled = Some(CoupledIncrement::default());
+    }
+
+    /// Ends the coupled increment begun by [`Self::begin_coupled_increment`]: if it
+    /// converged, in `u` under `f_ext`, it is recorded once (from the state it started from).
+    pub fn end_coupled_increment(&mut self, converged: Option<(&[f64], &[f64])>) {
+        let flux = self.coupled.take().and_then(|c| c.flux);
+        if let (Some((u, f_ext)), Some(flux)) = (converged, flux) {
+            self.record_converged(flux, u, f_ext);
+        }
+    }
+
     /// The converged increments' record of the time-averaged force q̃ (for a restart record).
     pub fn force_average(&self) -> ForceAverage {
         self.flux_history.past
@@ -842,8 +883,12 @@ impl<'a> Newton<'a> {
         self.increment_start.copy_from_slice(u);
         self.flux_history.start();
         log.factorization_seconds += self.begin_increment(problem)?;
-        if settings.extrapolate {
+        let continuing = self.coupled.as_ref().is_some_and(|c| c.continuing);
+        if settings.extrapolate && !continuing {
             log.predictor = self.predictor.predict(dofs, u, f_ext);
+        }
+        if let Some(c) = self.coupled.as_mut() {
+            c.continuing = true;
         }
         let f_ext_norm = norm(f_ext);
         let mut last_correction = f64::INFINITY;
@@ -920,10 +965,10 @@ impl<'a> Newton<'a> {
                     log.residuals.pop();
                     continue;
                 }
-                if criteria.average_force.is_none() {
-                    self.flux_history.record(flux, zero_flux);
+                match self.coupled.as_mut() {
+                    Some(c) => c.flux = Some((flux, zero_flux)),
+                    None => self.record_converged((flux, zero_flux), u, f_ext),
                 }
-                self.predictor.record(u, f_ext);
                 log.converged = true;
                 return Ok(log);
             }
