@@ -75,8 +75,8 @@ impl Temperatures {
     /// Solves the increment ending at pseudo-time `time` (prescribed displacements already
     /// set in `solution.u`): temperatures, then Newton, then, for a coupled model, the
     /// exchanges. The log's iterations, solves and seconds count every Newton solve of the
-    /// exchanges; an increment whose exchanges do not settle within [`MAX_EXCHANGES`] returns a log that
-    /// did not converge.
+    /// exchanges; an increment whose exchanges do not settle within [`MAX_EXCHANGES`]
+    /// returns a log that did not converge.
     pub fn solve_increment(
         &mut self,
         model: &Model,
@@ -87,31 +87,40 @@ impl Temperatures {
         force_floor: f64,
     ) -> Result<NewtonLog> {
         self.start(model, solution, time)?;
-        if !model.is_thermally_coupled() {
-            let (u, mut problem) = solution.split(model);
-            return newton.solve_increment(&mut problem, u, external_force, force_floor);
+        let coupled = model.is_thermally_coupled();
+        if coupled {
+            newton.begin_coupled_increment();
         }
-        newton.begin_coupled_increment();
-        let log = self.exchanges(model, newton, solution, time, external_force, force_floor);
-        let converged = log.as_ref().is_ok_and(|log| log.converged);
-        newton.end_coupled_increment(converged.then_some((&solution.u[..], external_force)));
+        let log = {
+            let mut mechanics = |solution: &mut Solution| {
+                let (u, mut problem) = solution.split(model);
+                newton.solve_increment(&mut problem, u, external_force, force_floor)
+            };
+            if coupled {
+                self.exchanges(model, solution, time, mechanics)
+            } else {
+                mechanics(solution)
+            }
+        };
+        if coupled {
+            let converged = log.as_ref().is_ok_and(|log| log.converged);
+            newton.end_coupled_increment(converged.then_some((&solution.u[..], external_force)));
+        }
         log
     }
 
-    /// The exchanges of a coupled increment ([`Self::solve_increment`]).
+    /// The exchanges of a coupled increment at pseudo-time `time` ([`Self::solve_increment`]),
+    /// `mechanics` solving the mechanics with the temperatures of `solution`.
     fn exchanges(
         &mut self,
         model: &Model,
-        newton: &mut Newton,
         solution: &mut Solution,
         time: f64,
-        external_force: &[f64],
-        force_floor: f64,
+        mut mechanics: impl FnMut(&mut Solution) -> Result<NewtonLog>,
     ) -> Result<NewtonLog> {
         let mut earlier = NewtonLog::default();
         loop {
-            let (u, mut problem) = solution.split(model);
-            let mut log = newton.solve_increment(&mut problem, u, external_force, force_floor)?;
+            let mut log = mechanics(solution)?;
             log.add_earlier(&earlier);
             earlier = log.totals();
             if !log.converged {
