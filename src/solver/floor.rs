@@ -1,6 +1,8 @@
 //! The floor of a run (issue 29): the time no run of the method can go below on its model and
 //! machine — reading the mesh, one assembly, one factorisation, one solve per increment and
-//! writing the frames — measured in the run itself, and the run's ratio to it.
+//! writing the frames, and with conducting bodies one factorisation of the conduction and one
+//! conduction solve per increment ([`ConductionWork`]) — measured in the run itself, and the
+//! run's ratio to it.
 //!
 //! The Newton solver tallies its work by kind ([`SolverWork`]: element loops with and
 //! without the tangent, interface loops, K·u products, factorisations of the bulk and of the
