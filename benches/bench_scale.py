@@ -44,7 +44,14 @@ def commit() -> str:
 
 
 def run(case: Path, size: float, work: Path, binary: Path, timeout: float) -> dict:
-    spec = tomllib.loads(case.read_text())
+    if not case.is_file():
+        sys.exit(f"--case {case}: no such file")
+    try:
+        spec = tomllib.loads(case.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        sys.exit(f"--case {case}: not a TOML case file ({e})")
+    if not isinstance(spec.get("mesh"), dict) or "geo" not in spec["mesh"]:
+        sys.exit(f"--case {case}: needs a [mesh] table with `geo` (the .geo script to refine)")
     work.mkdir(parents=True, exist_ok=True)
     msh = work / "mesh.msh"
     gmsh_s = bc.mesh_case(case, spec, size, msh, binary=True)  # as `asperity run` meshes
@@ -101,7 +108,8 @@ def table(r: dict, load: tuple[float, float]) -> str:
             else "")
     verdict = ("within" if r["wall_s"] < WALL_LIMIT_S and r["rss_mb"] < MEMORY_LIMIT_MB else "OUTSIDE")
     beyond = beyond_floor(floor, p)
-    case_name = Path(r["case"]).resolve().relative_to(bc.ROOT)
+    case_path = Path(r["case"]).resolve()
+    case_name = case_path.relative_to(bc.ROOT) if case_path.is_relative_to(bc.ROOT) else case_path
     case_option = "" if Path(r["case"]).resolve() == CASE.resolve() else f" --case {case_name}"
     heated = ", heated through the cone, thermal–mechanical coupling" if "conduction" in p else ""
     return "\n".join([
