@@ -144,7 +144,6 @@ impl ConductionSolver {
         let load = c.load(&multiplier);
         let mut t = vec![0.0; c.size()];
         c.set_prescribed(&multiplier, &mut t);
-        self.rhs.fill(0.0);
         self.dofs.gather_free(&load.f, &mut self.rhs);
         for &(i, j, v) in &self.prescribed {
             if let Some(e) = self.dofs.equation(i as usize) {
