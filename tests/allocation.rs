@@ -26,6 +26,7 @@ use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use asperity::assembly::{AssemblyInput, DenseScatter, DofMap, GlobalSystem, PrescribedCouplings};
+use asperity::element::thermal_load::ThermalLoad;
 use asperity::model::Model;
 use asperity::solver::mechanics::Mechanics;
 use asperity::solver::newton::{
@@ -143,6 +144,14 @@ impl Problem for Marked<'_> {
 
     fn bulk_is_linear(&self) -> bool {
         self.inner.bulk_is_linear()
+    }
+
+    fn thermal_load(&self) -> asperity::Result<Option<ThermalLoad>> {
+        self.inner.thermal_load()
+    }
+
+    fn thermal_force(&self, load: &ThermalLoad, force: &mut [f64]) {
+        self.inner.thermal_force(load, force);
     }
 
     fn interface_scatter(

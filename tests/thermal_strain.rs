@@ -335,3 +335,61 @@ fn a_heated_hub_loosens_its_fit_as_lame_says() {
         );
     }
 }
+
+/// A linear bulk under a temperature field on the condensed path takes its force as
+/// K u − G ΔT: no element loop for forces in any increment, one for the states of each
+/// converged increment (its energy terms), the stiffness assembled once. Its answer is that
+/// of the Krylov path, which evaluates the elements at every iteration: the hub heated in
+/// four increments, in plane stress and in plane strain.
+#[test]
+fn a_linear_bulk_under_a_temperature_field_needs_no_element_loop_for_its_forces() {
+    let dt = 0.6 * DELTA / (ALPHA * A);
+    for plane_stress in [true, false] {
+        let run = |linear_solver: &str| {
+            let (mesh, case) = shrink_fit(plane_stress, dt);
+            let case = case
+                .step_factors(&[0.25, 0.5, 0.75, 1.0])
+                .set("solver", "linear_solver", linear_solver)
+                .case();
+            let model = common::model(mesh, &case).expect("model builds");
+            let (solution, stats) =
+                asperity::solver::stepping::run_steps(&model, &settings(&case), |_| Ok(0.0))
+                    .expect("solves");
+            (solution, stats)
+        };
+        let (condensed, stats) = run("condensed");
+        let work = &stats.work.solver;
+        assert_eq!(stats.increments, 4);
+        assert_eq!(work.force_assemblies.calls, 0, "{work:?}");
+        assert_eq!(work.tangent_assemblies.calls, 1, "{work:?}");
+        assert_eq!(work.state_evaluations.calls, 4, "{work:?}");
+        let (krylov, _) = run("krylov");
+        let scale = krylov.u.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let difference =
+            (condensed.u.iter().zip(&krylov.u)).fold(0.0_f64, |m, (a, b)| m.max((a - b).abs()));
+        // Both converge to the Newton tolerance (1e-8 of the displacements by default).
+        assert!(
+            difference < 1e-7 * scale,
+            "plane stress {plane_stress}: {difference:e} of {scale:e}"
+        );
+        let pressure = contact_pressure(&condensed);
+        assert!(pressure > 0.0);
+        let relative = (pressure - contact_pressure(&krylov)).abs() / pressure;
+        assert!(
+            relative < 1e-7,
+            "plane stress {plane_stress}: pressure {relative:e}"
+        );
+        // The stresses of the committed states are those of the elements at u and ΔT.
+        let stress = |s: &asperity::solver::state::Solution| {
+            s.committed
+                .iter()
+                .map(|p| p.stress.amax())
+                .fold(0.0, f64::max)
+        };
+        let relative = (stress(&condensed) - stress(&krylov)).abs() / stress(&krylov);
+        assert!(
+            relative < 1e-7,
+            "plane stress {plane_stress}: stresses {relative:e}"
+        );
+    }
+}

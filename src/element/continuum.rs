@@ -48,7 +48,10 @@ use super::shape::cell_shape;
 use super::small::{
     add_transposed_matrix_product, add_transposed_product, matrix_product, product,
 };
-use super::{Analysis, ElementInput, ElementMatrix, ElementOutput, ElementVector};
+use super::{
+    Analysis, ElementInput, ElementMatrix, ElementOutput, ElementVector, MAX_ELEMENT_DOFS,
+    MAX_ELEMENT_NODES,
+};
 use crate::material::{Material, OutOfPlane, PointState, R_THETA, Tangent, Voigt, ZZ};
 use crate::mesh::CellKind;
 use nalgebra::{SMatrix, SVector};
@@ -303,6 +306,64 @@ fn evaluate_cell_inline(
     }
 }
 
+/// The thermal load matrix G of a cell of a linear material: column j holds the nodal forces
+/// of a unit temperature change at node j, G_j = ∫ B̄ᵀ (D m) α N_j dV (rows in the element
+/// vector's order), so that the cell's internal force under nodal temperature changes ΔT is
+/// K u − G ΔT: the thermal strain α ΔT m, with ΔT interpolated by the shape functions, is
+/// subtracted from B̄ u before the linear material sees it ([`evaluate_cell`]). D m is the
+/// material's own stress of the unit strain m (plane stress condenses it as the cell does).
+/// Same points and weights as the cell's force.
+pub fn thermal_load_matrix(
+    analysis: &Analysis,
+    kind: CellKind,
+    coords: &[[f64; 2]; 8],
+    formulation: Formulation,
+    material: &dyn Material,
+    expansion: f64,
+) -> SMatrix<f64, MAX_ELEMENT_DOFS, MAX_ELEMENT_NODES> {
+    let out_of_plane = if analysis.is_plane_stress() {
+        OutOfPlane::StressFree
+    } else {
+        OutOfPlane::StrainGiven
+    };
+    let mut unit = Voigt::zeros();
+    for c in NORMAL_COMPONENTS {
+        unit[c] = 1.0;
+    }
+    let stress = material
+        .update(&unit, &PointState::default(), out_of_plane)
+        .0
+        .stress;
+    let (plane, theta) = (
+        stress.fixed_rows::<PLANE_STRAINS>(0),
+        stress.fixed_rows::<2>(R_THETA),
+    );
+    let mut points = CellPoints::zeroed(kind);
+    fill_cell_kinematics(analysis, kind, coords, formulation, &mut points);
+    let d = analysis.dofs_per_node();
+    let twist = analysis.has_twist();
+    let mut g = SMatrix::<f64, MAX_ELEMENT_DOFS, MAX_ELEMENT_NODES>::zeros();
+    for (p, pk) in cell_rule(kind).iter().zip(points.iter()) {
+        let (mut f_plane, mut f_theta) = (SVector::<f64, 16>::zeros(), SVector::<f64, 8>::zeros());
+        add_transposed_product(&mut f_plane, pk.dvol * expansion, &pk.b, &plane);
+        if twist {
+            add_transposed_product(&mut f_theta, pk.dvol * expansion, &pk.twist, &theta);
+        }
+        let n = cell_shape(kind, p.xi, p.eta).n;
+        for (j, &nj) in n.iter().enumerate().take(kind.node_count()) {
+            for a in 0..16 {
+                g[(d * (a / 2) + a % 2, j)] += f_plane[a] * nj;
+            }
+            if twist {
+                for i in 0..8 {
+                    g[(3 * i + 2, j)] += f_theta[i] * nj;
+                }
+            }
+        }
+    }
+    g
+}
+
 /// The in-plane (u_x, u_y) and circumferential (u_θ) nodal displacements of an element
 /// vector: without twist the leading 16 entries and zeros.
 #[inline(always)]
@@ -470,6 +531,87 @@ mod tests {
             u[3 * i + 2] = s * (0.6 * x[0] * x[1] + 0.2 * x[0] * x[0] - 0.1 * x[1] * x[1]);
         }
         u
+    }
+
+    /// The thermal load matrix against the element itself: for nodal temperature changes
+    /// ΔT and displacements u, the cell's force under ΔT is its force without it less G ΔT
+    /// (f = K u − G ΔT), for every analysis, both formulations and both kinds.
+    #[test]
+    fn the_thermal_load_matrix_gives_the_cells_thermal_force() {
+        let elastic = LinearElastic::new(200_000.0, 0.3).unwrap();
+        let expansion = 1.2e-5;
+        let nodal = [30.0, -12.0, 55.0, 8.0, 21.0, -40.0, 3.0, 17.0];
+        let stress = Analysis::PlaneStress { thickness: 2.0 };
+        let cases = [(PLANE, false), (stress, false), (AXI, false), (TWIST, true)];
+        let virgin = vec![PointState::default(); MAX_CELL_POINTS];
+        for (analysis, twist) in cases {
+            for kind in [CellKind::Quad8, CellKind::Tri6] {
+                for formulation in [Formulation::Full, Formulation::Bbar] {
+                    if formulation == Formulation::Bbar && analysis.is_plane_stress() {
+                        continue;
+                    }
+                    let n = kind.node_count();
+                    let mut dt = [0.0; 8];
+                    dt[..n].copy_from_slice(&nodal[..n]);
+                    let u = if twist {
+                        twist_field(kind, 1e-3)
+                    } else {
+                        field(kind, 1e-3)
+                    };
+                    let force = |temperature: Option<&CellTemperature>| {
+                        let mut f = ElementVector::zeros();
+                        let mut trial = vec![PointState::default(); MAX_CELL_POINTS];
+                        evaluate_cell(
+                            &analysis,
+                            kind,
+                            &cell(kind),
+                            CellBody {
+                                formulation,
+                                material: &elastic,
+                                temperature,
+                                history: None,
+                            },
+                            &ElementInput {
+                                u: &u,
+                                committed: &virgin,
+                                algorithm: Default::default(),
+                            },
+                            ElementOutput {
+                                trial: &mut trial,
+                                k: None,
+                                f: Some(&mut f),
+                            },
+                        );
+                        f
+                    };
+                    let heated = CellTemperature {
+                        expansion,
+                        nodal: dt,
+                    };
+                    let g = thermal_load_matrix(
+                        &analysis,
+                        kind,
+                        &cell(kind),
+                        formulation,
+                        &elastic,
+                        expansion,
+                    );
+                    let dt = SVector::<f64, 8>::from(dt);
+                    let expected = force(None) - g * dt;
+                    let got = force(Some(&heated));
+                    let scale = (g * dt).amax();
+                    assert!(scale > 1.0, "{analysis:?} {kind:?}: a thermal force");
+                    let error = (got - expected).amax() / scale;
+                    assert!(
+                        error < 1e-12,
+                        "{analysis:?} {kind:?} {formulation:?}: relative error {error:e}"
+                    );
+                    // Only the element's own dofs carry forces.
+                    let d = analysis.dofs_per_node();
+                    assert!(g.rows(d * n, MAX_ELEMENT_DOFS - d * n).amax() == 0.0);
+                }
+            }
+        }
     }
 
     #[test]

@@ -15,6 +15,7 @@ pub mod quadrature;
 pub mod set;
 pub mod shape;
 mod small;
+pub mod thermal_load;
 
 use nalgebra::{SMatrix, SVector};
 use serde::Deserialize;

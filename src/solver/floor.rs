@@ -63,13 +63,13 @@ pub struct SolverWork {
     /// included.
     pub tangent_assemblies: Tally,
     /// The same loops for the internal force alone (a line search's steps shorter than the
-    /// full one, whose trial is a tangent loop; for a linear bulk under a temperature field,
-    /// the continuum's check of a state reached with K·Δu; a resumed run's states left out
-    /// of its record).
+    /// full one, whose trial is a tangent loop; a resumed run's states left out of its
+    /// record).
     pub force_assemblies: Tally,
-    /// Linear bulk without a temperature field, whose force is K·u: the loops that evaluate
-    /// point states alone (no force, no matrix) other than a frame's — the exact strain
-    /// increment of an increment whose bound exceeds the plausibility limit.
+    /// Linear bulk, whose force is K·u (K·u − G·ΔT under a temperature field): the loops that
+    /// evaluate point states alone (no force, no matrix) other than a frame's — the exact
+    /// strain increment of an increment whose bound exceeds the plausibility limit, and
+    /// under a temperature field the states of each converged increment (its energy terms).
     pub state_evaluations: Tally,
     /// The same loops making the point states of a converged state that a frame's fields
     /// read (its increments evaluate none: their force is K·u). Part of the frame's output
@@ -79,7 +79,8 @@ pub struct SolverWork {
     /// internal force alone.
     pub interface_tangent_assemblies: Tally,
     pub interface_force_assemblies: Tally,
-    /// Linear bulk on the condensed path: the continuum's internal force as f(u_ref) + K·Δu.
+    /// Linear bulk on the condensed path: the continuum's internal force as K·u, under a
+    /// temperature field K·u − G·ΔT and the G·ΔT of each Newton solve's temperatures.
     pub products: Tally,
     /// Residual evaluations of line searches (also counted by the kinds above).
     pub line_search_evaluations: usize,

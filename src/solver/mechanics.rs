@@ -15,11 +15,13 @@ use crate::element::set::{
     ContinuumInContext, ElementSet, INTERFACE_POINTS, InterfaceSet, InternalLayout,
     TemperatureField,
 };
+use crate::element::thermal_load::ThermalLoad;
 use crate::element::{ElementInput, ElementMatrix, ElementOutput};
 use crate::material::{PointState, equivalent_strain};
 use crate::model::{Model, continuum_connectivity};
 use crate::solver::energy::largest;
 use crate::solver::newton::Problem;
+use crate::{Error, Result};
 
 /// The interface elements seen as the difference between their elastic-tangent matrix and
 /// the matrix of the iteration's tangent, K_elastic − K_algorithm. Added to the global
@@ -176,10 +178,21 @@ impl Problem for Mechanics<'_> {
             .any(|(cell, states)| unsymmetric(cell.body) && states.iter().any(|s| s.yielding))
     }
 
-    /// Thermal strains: the temperature field can change from one increment (and thermal
-    /// exchange) to the next.
-    fn bulk_loads_vary(&self) -> bool {
-        !self.temperature.bodies.is_empty()
+    /// The expanding bodies' G, when the model has temperatures.
+    fn thermal_load(&self) -> Result<Option<ThermalLoad>> {
+        if !self.model.has_temperature() {
+            return Ok(None);
+        }
+        ThermalLoad::new(&self.model.continuum).map_err(|_| {
+            Error::allocation_failed(
+                "the bodies' thermal load matrices",
+                self.model.dofs.dof_count(),
+            )
+        })
+    }
+
+    fn thermal_force(&self, load: &ThermalLoad, force: &mut [f64]) {
+        load.force(&self.model.continuum, self.temperature, force);
     }
 
     fn interface_scatter(

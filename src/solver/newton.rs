@@ -38,12 +38,11 @@
 //! an iteration the interface law is iterated to convergence against the bodies'
 //! linearisation before they are back-substituted (`newton/interface_iterations.rs`): the contact
 //! statuses settle without new assemblies of the bodies. With
-//! linear-elastic bodies and no temperature field the continuum's force is K_c u from the
-//! stored stiffness throughout (reactions included), iterations re-evaluate the interface
-//! elements alone, and a converged increment's point states come from one loop that
-//! evaluates them alone. Under a temperature field the continuum is evaluated at the start
-//! of an increment, iterations take its force as f_c(u₀) + K_c (u − u₀), and a converged
-//! increment is confirmed by one full evaluation (its states and reactions). Models
+//! linear-elastic bodies the continuum's force is K_c u from the stored stiffness throughout
+//! (reactions included), under a temperature field K_c u − G ΔT with the thermal load
+//! matrices G made once ([`ThermalLoad`]); iterations re-evaluate the interface elements
+//! alone, and a converged increment's point states come from one loop that evaluates them
+//! alone, when something reads them. Models
 //! without contact pairs, and [`LinearSolver::Krylov`], use [`CholeskySolver`] (with BiCGSTAB
 //! for unsymmetric tangents).
 //!
@@ -64,6 +63,7 @@ use crate::assembly::{
     AssemblyInput, DenseScatter, DofMap, GlobalSystem, PrescribedCouplings, SparsityPattern,
 };
 use crate::contact::ContactAlgorithm;
+use crate::element::thermal_load::ThermalLoad;
 use crate::solver::condensed::CondensedSolver;
 use crate::solver::floor::SolverWork;
 use crate::solver::linear::CholeskySolver;
@@ -162,13 +162,14 @@ pub trait Problem: Send {
         true
     }
 
-    /// Whether the bulk's internal force at fixed displacements can change from one
-    /// increment to the next (thermal strains of a temperature field). A linear bulk then
-    /// evaluates its elements at the start of every increment instead of continuing from
-    /// the committed state by K·Δu. By default it can.
-    fn bulk_loads_vary(&self) -> bool {
-        true
-    }
+    /// A linear bulk's thermal load operator G ([`ThermalLoad`]), whose force under the
+    /// problem's temperatures is K_c u − G ΔT: `None` when no thermal strain can change the
+    /// bulk's force at fixed displacements (no temperature field, or no body expands), which
+    /// is then K_c u. Made once, on the condensed path; fails only for want of memory.
+    fn thermal_load(&self) -> Result<Option<ThermalLoad>>;
+
+    /// The nodal forces G ΔT (all dofs) of the problem's temperature field into `force`.
+    fn thermal_force(&self, load: &ThermalLoad, force: &mut [f64]);
 
     /// Adds the bulk's internal force into `system` and, if `input.tangent`, sets its matrix
     /// values to the bulk's tangent (whatever they held: no need to clear them first).
@@ -229,32 +230,32 @@ struct Condensed {
     /// Linear bulk: whether K_c is assembled and factored.
     bulk_ready: bool,
     /// Linear bulk: the continuum stiffness over all dofs (its free block is the system's
-    /// matrix), whose product with a displacement change gives the change of the
-    /// continuum's internal force, reactions included. Made by the first evaluation.
+    /// matrix), whose product with the displacements gives the continuum's internal force,
+    /// reactions included. Made by the first evaluation. The force is f_c(u) = K_c u − G ΔT
+    /// (`thermal`) exactly, so every evaluation after the one that made K_c is a product,
+    /// and a converged increment evaluates no element: its point states are made only when
+    /// something reads them ([`Newton::complete_states`]).
     stiffness: Option<BulkStiffness>,
-    /// Linear bulk under a temperature field: the continuum internal force (all dofs) at the
-    /// displacements `u_ref` (all dofs), evaluated at the start of the increment (empty
-    /// otherwise, as is `du`).
-    bulk_force: Vec<f64>,
-    u_ref: Vec<f64>,
-    /// Workspace: Δu = u − u_ref over all dofs.
-    du: Vec<f64>,
-    /// Whether the internal force of the last evaluation came from K_c Δu rather than from
-    /// the continuum elements.
-    extrapolated: bool,
-    /// Linear bulk whose force at fixed displacements never changes (no temperature field):
-    /// f_c(u) = K_c u exactly (u_ref = 0, f_c(0) = 0), so every evaluation after the one
-    /// that made K_c is a product, and a converged increment evaluates no element: its
-    /// point states are made only when something reads them ([`Newton::complete_states`]).
-    by_product: bool,
+    /// Linear bulk under a temperature field with expanding bodies: G and the force G ΔT of
+    /// the increment's temperatures.
+    thermal: Option<ThermalForce>,
     /// Whether the bulk's trial states are not those of the last evaluation's displacements
     /// (it took its force from a product with K_c and evaluated no element).
     states_stale: bool,
-    /// `by_product`: the bodies' elastic energy ½ u·K_c u at the last evaluation (over all
-    /// dofs, reactions included), taken from its product: that of a converged state.
+    /// Linear bulk without thermal strains: the bodies' elastic energy ½ u·K_c u at the last
+    /// evaluation (over all dofs, reactions included), taken from its product: that of a
+    /// converged state.
     continuum_energy: f64,
     /// The workspaces of the interface iterations.
     iterations: InterfaceIterations,
+}
+
+/// A linear bulk's thermal load G and the force G ΔT (all dofs) of the temperatures of the
+/// increment being solved ([`Newton::begin_increment`] makes it).
+#[derive(Debug)]
+struct ThermalForce {
+    load: ThermalLoad,
+    force: Vec<f64>,
 }
 
 impl Condensed {
@@ -488,22 +489,21 @@ impl<'a> Newton<'a> {
     }
 
     /// Whether the bulk's point states of the last evaluation were left out: a linear bulk
-    /// whose force is K_c u (no temperature field) evaluates no element in an
-    /// increment. The trial states are then not those of the converged state, and a
+    /// whose force is K_c u − G ΔT evaluates no element in an increment. The trial states are then not those of the converged state, and a
     /// [`Solution`](crate::solver::state::Solution) committed from them holds stale point
     /// states until [`Self::complete_states`] makes them.
     pub fn states_pending(&self) -> bool {
         self.condensed
             .as_ref()
-            .is_some_and(|c| c.by_product && c.states_stale)
+            .is_some_and(|c| c.linear_bulk && c.states_stale)
     }
 
     /// The bodies' elastic energy ½ u·K_c u at the last evaluation, for a linear bulk whose
-    /// force is that product (`None` otherwise): the states' Σ ½ σ:ε dV to rounding, K_c
-    /// being Σ Bᵀ D B dV over the same points.
+    /// force is that product, without thermal strains (`None` otherwise): the states'
+    /// Σ ½ σ:ε dV to rounding, K_c being Σ Bᵀ D B dV over the same points.
     pub fn linear_bulk_energy(&self) -> Option<f64> {
         (self.condensed.as_ref())
-            .filter(|c| c.by_product && c.bulk_ready)
+            .filter(|c| c.linear_bulk && c.thermal.is_none() && c.bulk_ready)
             .map(|c| c.continuum_energy)
     }
 
@@ -513,16 +513,34 @@ impl<'a> Newton<'a> {
     /// [`SolverWork::frame_states`]: states are completed for what reads them, a frame's
     /// fields.
     pub fn complete_states(&mut self, problem: &mut impl Problem, u: &[f64]) -> f64 {
-        if !self.states_pending() {
+        let Some(seconds) = self.make_pending_states(problem, u) else {
             return 0.0;
+        };
+        self.work.frame_states.add(seconds);
+        seconds
+    }
+
+    /// [`Self::complete_states`] for a converged increment's pass over its point states
+    /// (a linear bulk under thermal strains: its energy terms are the states'), tallied as a
+    /// state evaluation.
+    pub fn complete_increment_states(&mut self, problem: &mut impl Problem, u: &[f64]) {
+        if let Some(seconds) = self.make_pending_states(problem, u) {
+            self.work.state_evaluations.add(seconds);
+        }
+    }
+
+    /// Makes the pending point states ([`Self::states_pending`]) at `u`; returns the seconds
+    /// (`None`: nothing was pending).
+    fn make_pending_states(&mut self, problem: &mut impl Problem, u: &[f64]) -> Option<f64> {
+        if !self.states_pending() {
+            return None;
         }
         let t = Instant::now();
         self.bulk_states_at(problem, u);
         if let Some(c) = self.condensed.as_mut() {
             c.states_stale = false;
         }
-        self.work.frame_states.since(t);
-        t.elapsed().as_secs_f64()
+        Some(t.elapsed().as_secs_f64())
     }
 
     /// The largest equivalent strain increment of the bulk's points from the displacements
@@ -618,12 +636,11 @@ impl<'a> Newton<'a> {
         }
         let n = self.dofs.dof_count();
         let linear_bulk = problem.bulk_is_linear();
-        let by_product = linear_bulk && !problem.bulk_loads_vary();
         // A linear bulk's stiffness (its free block, and the couplings of its prescribed
         // dofs) is assembled while the solver orders and analyses the free pattern: the
         // ordering and the symbolic factorisation run on one core, the element loop takes the
         // other (and both once the analysis is done).
-        let stiffness_at = start.filter(|_| by_product);
+        let stiffness_at = start.filter(|_| linear_bulk);
         let (pattern, dofs, algorithm) = (
             self.system.pattern.clone(),
             self.dofs,
@@ -661,8 +678,16 @@ impl<'a> Newton<'a> {
             }
         }
         let iterations = InterfaceIterations::new(unknown_dofs, interface_dofs, n);
-        // Only a linear bulk under a temperature field continues from a reference state.
-        let reference_len = if linear_bulk && !by_product { n } else { 0 };
+        let thermal = match linear_bulk {
+            true => problem.thermal_load()?,
+            false => None,
+        };
+        if let Some(load) = &thermal {
+            tracing::debug!(
+                megabytes = load.memory_bytes() >> 20,
+                "thermal load matrices"
+            );
+        }
         tracing::debug!(
             matrix_entries = self.system.pattern.nnz(),
             solver_megabytes = solver.memory_bytes() >> 20,
@@ -679,11 +704,10 @@ impl<'a> Newton<'a> {
             bulk_dirty: false,
             bulk_ready: false,
             stiffness: None,
-            bulk_force: vec![0.0; reference_len],
-            u_ref: vec![0.0; reference_len],
-            du: vec![0.0; reference_len],
-            extrapolated: false,
-            by_product,
+            thermal: thermal.map(|load| ThermalForce {
+                load,
+                force: vec![0.0; n],
+            }),
             states_stale: false,
             continuum_energy: 0.0,
             iterations,
@@ -744,7 +768,6 @@ impl<'a> Newton<'a> {
             return symmetric;
         };
         let system = &mut self.system;
-        c.extrapolated = false;
         if !c.linear_bulk {
             // The bulk's tangent assembly sets the matrix (a plastic bulk's from its kept
             // elastic sum in one pass, without zeroing it first).
@@ -756,54 +779,40 @@ impl<'a> Newton<'a> {
                 self.bulk_symmetric = problem.bulk_is_symmetric();
             }
         } else {
-            let force_input = AssemblyInput {
-                tangent: false,
-                ..input
-            };
             let first = !c.bulk_ready;
             if first {
                 // The continuum's elements, once: K_c (the system's free block, and the
-                // entries of prescribed rows and columns kept for K·u), with the force and
-                // states at u.
+                // entries of prescribed rows and columns kept for K·u), with the states at u.
                 let couplings =
                     assemble_linear_bulk(problem, system, self.dofs, u, input.algorithm);
                 keep_linear_bulk(c, self.dofs, &couplings);
                 work.tangent_assemblies.since(t);
-            } else if fresh && c.by_product {
-                problem.bulk_states(&force_input);
-                work.state_evaluations.since(t);
             } else if fresh {
-                system.clear(false);
-                problem.assemble_bulk(system, &force_input);
-                work.force_assemblies.since(t);
+                problem.bulk_states(&AssemblyInput {
+                    tangent: false,
+                    ..input
+                });
+                work.state_evaluations.since(t);
             }
             c.states_stale = !(first || fresh);
-            if (first || fresh) && !c.by_product {
-                // The elements' force at u is the reference the next evaluations continue
-                // from.
-                c.bulk_force.copy_from_slice(&system.internal_force);
-                c.u_ref.copy_from_slice(u);
-            } else {
-                // f_c(u) = K_c u, or f_c(u_ref) + K_c (u − u_ref), over all dofs.
-                let t = Instant::now();
-                let stiffness = c.stiffness.as_mut().expect("linear bulk");
-                let f = &mut system.internal_force;
-                if c.by_product {
-                    stiffness.multiply(&system.pattern, &system.values, self.dofs, u, f);
-                    c.continuum_energy =
-                        0.5 * u.iter().zip(f.iter()).map(|(a, b)| a * b).sum::<f64>();
-                } else {
-                    for ((d, a), b) in c.du.iter_mut().zip(u).zip(&c.u_ref) {
-                        *d = a - b;
-                    }
-                    stiffness.multiply(&system.pattern, &system.values, self.dofs, &c.du, f);
-                    for (f, f0) in f.iter_mut().zip(&c.bulk_force) {
-                        *f += f0;
+            // f_c(u) = K_c u − G ΔT over all dofs (the first evaluation's too: the same
+            // arithmetic at every evaluation).
+            let t = Instant::now();
+            let stiffness = c.stiffness.as_mut().expect("linear bulk");
+            let f = &mut system.internal_force;
+            stiffness.multiply(&system.pattern, &system.values, self.dofs, u, f);
+            match &c.thermal {
+                Some(thermal) => {
+                    for (f, f_t) in f.iter_mut().zip(&thermal.force) {
+                        *f -= f_t;
                     }
                 }
-                c.extrapolated = true;
-                work.products.since(t);
+                None => {
+                    c.continuum_energy =
+                        0.5 * u.iter().zip(f.iter()).map(|(a, b)| a * b).sum::<f64>();
+                }
             }
+            work.products.since(t);
         }
         // The bodies' nodal forces, before the interface's are added (they balance them).
         self.flux = Flux::of(&system.internal_force);
@@ -883,6 +892,7 @@ impl<'a> Newton<'a> {
         self.increment_start.copy_from_slice(u);
         self.flux_history.start();
         log.factorization_seconds += self.begin_increment(problem)?;
+        log.assembly_seconds += self.update_thermal_force(problem);
         let continuing = self.coupled.as_ref().is_some_and(|c| c.continuing);
         if settings.extrapolate && !continuing {
             log.predictor = self.predictor.predict(dofs, u, f_ext);
@@ -894,10 +904,9 @@ impl<'a> Newton<'a> {
         let mut last_correction = f64::INFINITY;
         let mut correction_max = f64::INFINITY;
         let mut initial_residual = None;
-        // Whether the next evaluation runs the bulk's elements: at the start of the increment
-        // unless a linear bulk's force is K_c u, and for the check of a converged state
-        // reached with extrapolated bulk forces.
-        let mut fresh = !self.condensed.as_ref().is_some_and(|c| c.by_product);
+        // Whether the first evaluation runs the bulk's elements: unless a linear bulk's force
+        // is K_c u − G ΔT.
+        let mut fresh = !self.condensed.as_ref().is_some_and(|c| c.linear_bulk);
         // The symmetry of a tangent the line search already evaluated at u (its full step).
         let mut evaluated: Option<bool> = None;
         loop {
@@ -952,19 +961,6 @@ impl<'a> Newton<'a> {
                     last_correction.min(next_correction),
                 );
             if engineering && norms {
-                if self
-                    .condensed
-                    .as_ref()
-                    .is_some_and(|c| c.extrapolated && !c.by_product)
-                {
-                    // Confirm with the continuum's elements (its states and reactions too):
-                    // their force is f_c(u_ref) + K_c Δu only while the bulk's loads stand
-                    // still. (f_c = K_c u exactly leaves the states alone missing, made
-                    // when read: `complete_states`.)
-                    fresh = true;
-                    log.residuals.pop();
-                    continue;
-                }
                 match self.coupled.as_mut() {
                     Some(c) => c.flux = Some((flux, zero_flux)),
                     None => self.record_converged((flux, zero_flux), u, f_ext),
@@ -1031,13 +1027,13 @@ impl<'a> Newton<'a> {
     }
 
     /// Sets the state the run starts from, `u` (all dofs; the committed displacements of a
-    /// new or resumed run): a linear bulk on the condensed path without a temperature field
-    /// makes its stiffness there (and the states at `u`), its force being K_c u from then on:
-    /// a resumed run multiplies the same K_c and u as the uninterrupted one, to the same
-    /// bits. Other problems are left to their first increment, unless `states`: then the
-    /// bulk's elements are evaluated at `u` for their trial states (those a restart record
-    /// leaves out when they follow from the displacements). The log holds the seconds spent
-    /// (making the condensed solver counts as factorisation, as in an increment).
+    /// new or resumed run): a linear bulk on the condensed path makes its stiffness there
+    /// (and the states at `u`), its force being K_c u − G ΔT from then on: a resumed run
+    /// multiplies the same K_c and u as the uninterrupted one, to the same bits. Other
+    /// problems are left to their first increment, unless `states`: then the bulk's elements
+    /// are evaluated at `u` for their trial states (those a restart record leaves out when
+    /// they follow from the displacements). The log holds the seconds spent (making the
+    /// condensed solver counts as factorisation, as in an increment).
     pub fn start_from(
         &mut self,
         problem: &mut impl Problem,
@@ -1045,14 +1041,11 @@ impl<'a> Newton<'a> {
         states: bool,
     ) -> Result<NewtonLog> {
         let mut log = NewtonLog::default();
-        let fixed_loads = !problem.bulk_loads_vary();
-        if fixed_loads {
-            (log.factorization_seconds, log.assembly_seconds) =
-                self.prepare_condensed(problem, Some(u))?;
-        }
-        // A bulk whose force is K_c u was assembled at u beside the analysis.
-        let by_product = self.condensed.as_ref().is_some_and(|c| c.by_product);
-        if states && !by_product {
+        (log.factorization_seconds, log.assembly_seconds) =
+            self.prepare_condensed(problem, Some(u))?;
+        // A linear bulk was assembled at u beside the analysis.
+        let linear_bulk = self.condensed.as_ref().is_some_and(|c| c.linear_bulk);
+        if states && !linear_bulk {
             let t = Instant::now();
             self.evaluate(problem, u, false, true);
             log.assembly_seconds += t.elapsed().as_secs_f64();
@@ -1070,6 +1063,18 @@ impl<'a> Newton<'a> {
             c.solver.start_increment();
         }
         Ok(self.prepare_condensed(problem, None)?.0)
+    }
+
+    /// Makes a linear bulk's thermal force G ΔT of the temperatures `problem` has now (those
+    /// of the increment about to be solved); returns the seconds (0 without one).
+    fn update_thermal_force(&mut self, problem: &impl Problem) -> f64 {
+        let Some(thermal) = self.condensed.as_mut().and_then(|c| c.thermal.as_mut()) else {
+            return 0.0;
+        };
+        let t = Instant::now();
+        problem.thermal_force(&thermal.load, &mut thermal.force);
+        self.work.products.since(t);
+        t.elapsed().as_secs_f64()
     }
 
     /// Factors the tangent of the last evaluation: on the condensed path the bulk (when its

@@ -375,7 +375,8 @@ pub(crate) fn start_newton(
 /// arithmetic of a pass over stored states, so that the plausibility verdict is the
 /// states' own to the last bit — ε(Δu) would round differently, and a limit within rounding
 /// of an increment's strain would then cut back differently). A linear bulk whose force is
-/// K·u evaluated no element in the increment: its stored energy is ½ u·K u.
+/// K·u evaluated no element in the increment: its stored energy is ½ u·K u; one under
+/// thermal strains (K·u − G ΔT) has its states made here, for the pass.
 pub(crate) fn increment_sums(
     model: &Model,
     newton: &mut Newton,
@@ -383,12 +384,18 @@ pub(crate) fn increment_sums(
     u_old: &[f64],
     bound: &mut Option<StrainBound>,
 ) -> BodySums {
-    if !solution.states_follow_displacements {
-        return solution.scan_increment(model);
-    }
     let energy = newton
         .linear_bulk_energy()
         .filter(|_| newton.states_pending());
+    if energy.is_none() {
+        // A linear bulk under thermal strains left its states out too: its stored and
+        // thermal energy terms are theirs.
+        let (u, mut problem) = solution.split(model);
+        newton.complete_increment_states(&mut problem, u);
+    }
+    if !solution.states_follow_displacements {
+        return solution.scan_increment(model);
+    }
     let mut sums = match energy {
         Some(energy) => BodySums::of_linear_bulk(model, energy),
         None => solution.scan_increment(model),

@@ -81,6 +81,7 @@ impl Newton<'_> {
         log: &mut NewtonLog,
     ) -> Result<f64, ArcFailure> {
         log.factorization_seconds += self.begin_increment(problem)?;
+        log.assembly_seconds += self.update_thermal_force(problem);
         self.increment_start.copy_from_slice(u);
         self.evaluate_symmetric(problem, u, log)?;
         self.factor(log)?;
