@@ -84,10 +84,20 @@ impl ConductionSolver {
         };
         let started = Instant::now();
         let dofs = DofMap::new(&c.prescribed());
-        let elements = c.element_nodes(&model.continuum, &model.interface);
+        let joint_nodes = c.joint_indices(&model.interface);
+        // The joints' nodes couple in the pattern as one dense block (zero in K_c): the
+        // factor's last supernode is then their whole Schur complement, with every subtree
+        // of the bodies under it, a postorder whose subtrees the factorisation and the
+        // substitutions run in parallel. Without it each body's joint nodes made supernodes
+        // of their own, the bodies' subtrees hung under different ones, and everything ran
+        // on one thread.
+        let mut elements = c.element_nodes(&model.continuum, &model.interface);
+        let mut block = joint_nodes.clone();
+        block.sort_unstable();
+        block.dedup();
+        elements.push(block);
         let pattern = SparsityPattern::new(c.size(), &dofs, elements.iter().map(|e| e.as_slice()));
         drop(elements);
-        let joint_nodes = c.joint_indices(&model.interface);
         let joints: Vec<usize> = (joint_nodes.iter())
             .filter_map(|&i| dofs.equation(i as usize))
             .collect();

@@ -57,6 +57,7 @@ use faer::sparse::SparseColMatRef;
 use faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky;
 use faer::{Accum, MatMut, MatRef, Par};
 use rayon::prelude::*;
+use std::ops::Range;
 use std::sync::Mutex;
 
 /// No parent: a root of the elimination forest.
@@ -310,6 +311,36 @@ impl TreeCholesky {
             Some(schedule) => walk.forest(schedule, &schedule.roots),
             None => walk.task((0..self.parent.len()).rev()),
         }
+    }
+
+    /// A cut of the elimination forest into subtrees of less than `1 / pieces` of the
+    /// factorisation's work each (the largest such: ranges of consecutive supernodes, in
+    /// increasing order) and the supernodes above them (in increasing order), the same on
+    /// any number of threads; `None` without a schedule (supernodes not in postorder).
+    pub(crate) fn cut(&self, pieces: usize) -> Option<(Vec<Range<usize>>, Vec<usize>)> {
+        let schedule = self.schedule.as_ref()?;
+        let total: f64 = schedule
+            .roots
+            .iter()
+            .map(|&r| schedule.work[r as usize])
+            .sum();
+        let grain = total / pieces.max(1) as f64;
+        let (mut subtrees, mut above) = (Vec::new(), Vec::new());
+        // Depth first from the roots, children in increasing order: subtrees come out in
+        // increasing order; the supernodes above are sorted afterwards.
+        let mut stack: Vec<u32> = schedule.roots.iter().rev().copied().collect();
+        while let Some(s) = stack.pop() {
+            let s = s as usize;
+            if schedule.work[s] < grain {
+                subtrees.push(schedule.first[s] as usize..s + 1);
+                continue;
+            }
+            above.push(s);
+            let kids = schedule.child_ptr[s] as usize..schedule.child_ptr[s + 1] as usize;
+            stack.extend(schedule.children[kids].iter().rev());
+        }
+        above.sort_unstable();
+        Some((subtrees, above))
     }
 
     /// Scratch for one task: from the pool, or new.

@@ -77,7 +77,8 @@ mod symbolic;
 mod unsymmetric;
 
 use supernodal::{
-    backward_bulk, first_interface_supernode, forward_bulk, schur_of, trailing_supernode,
+    ForwardPlan, backward_bulk, first_interface_supernode, forward_bulk, schur_of,
+    trailing_supernode,
 };
 use unsymmetric::UnsymmetricBulk;
 
@@ -233,6 +234,8 @@ pub struct CondensedSolver {
     /// The gather buffers of the backward substitution's parallel tasks, kept from solve to
     /// solve.
     backward_gathers: Mutex<Vec<Vec<f64>>>,
+    /// How the forward substitution splits the tree into parallel tasks.
+    forward: ForwardPlan,
     /// Right-hand side / solution in elimination order, and a gather buffer.
     x: Vec<f64>,
     gather: Vec<f64>,
@@ -544,6 +547,7 @@ impl CondensedSolver {
                 },
             )?,
             x: vec![0.0; n],
+            forward: ForwardPlan::new(&supernodal, &tree, gather_len),
             gather: vec![0.0; gather_len],
             backward_gathers: Mutex::new(Vec::new()),
             par,
@@ -700,6 +704,7 @@ impl CondensedSolver {
             + self.changed_columns.len()
             + self.refactor.len()
             + self.tree.memory_bytes()
+            + self.forward.memory_bytes()
     }
 
     /// The continuum Schur complement S_c on the interface (valid after
@@ -980,7 +985,13 @@ impl CondensedSolver {
             u.eliminate_bulk(x_b, x_i);
         } else {
             let llt = SupernodalLltRef::new(&self.symbolic, &self.factor);
-            forward_bulk(llt, n_bulk, &mut self.x, &mut self.gather);
+            forward_bulk(
+                llt,
+                &mut self.forward,
+                n_bulk,
+                &mut self.x,
+                &mut self.gather,
+            );
         }
     }
 

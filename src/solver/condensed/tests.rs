@@ -29,17 +29,19 @@ struct TestSystem {
 }
 
 fn test_system(nx: usize, ny: usize, slip: f64, fixed_interface_nodes: &[usize]) -> TestSystem {
-    test_system_with(nx, ny, slip, fixed_interface_nodes, false)
+    test_system_with(nx, ny, slip, fixed_interface_nodes, false, false)
 }
 
 /// With `single_body`, body A is left out and the interface "elements" join neighbouring
-/// nodes on the top of body B instead.
+/// nodes on the top of body B instead. With `dense_interface` the pattern couples all
+/// interface nodes (with zero values), as the conduction's does.
 fn test_system_with(
     nx: usize,
     ny: usize,
     slip: f64,
     fixed_interface_nodes: &[usize],
     single_body: bool,
+    dense_interface: bool,
 ) -> TestSystem {
     let mut rng = Rng(12345);
     let per_body = (nx + 1) * (ny + 1);
@@ -84,10 +86,18 @@ fn test_system_with(
         fixed[..2 * per_body].fill(true);
     }
     let dofs = DofMap::new(&fixed);
+    let mut all: Vec<u32> = pairs.concat();
+    all.sort_unstable();
+    all.dedup();
+    let block = dense_interface.then_some(all);
     let pattern = SparsityPattern::new(
         node_count,
         &dofs,
-        cells.iter().chain(&pairs).map(|v| v.as_slice()),
+        cells
+            .iter()
+            .chain(&pairs)
+            .chain(&block)
+            .map(|v| v.as_slice()),
     );
     let n = dofs.free_count();
     let mut kc = Mat::<f64>::zeros(n, n);
@@ -453,7 +463,7 @@ fn condensed_matches_dense_lu_with_prescribed_interface_dofs() {
 fn condensed_handles_supernodes_straddling_the_interface_border() {
     // Merging every pair of adjacent supernodes puts bulk and interface columns into one.
     let relax: &[(usize, f64)] = &[(usize::MAX, 1.0)];
-    let t = test_system_with(6, 4, 1.5, &[], true);
+    let t = test_system_with(6, 4, 1.5, &[], true, false);
     let solver = CondensedSolver::with_relaxation(
         &t.pattern,
         &t.interface_eqs,
@@ -727,6 +737,48 @@ fn condense_and_expand_split_a_solve_and_balance_the_bulk_for_any_interface_unkn
             bulk_residual < 1e-12,
             "unsymmetric {unsymmetric}: {bulk_residual:e}"
         );
+    }
+}
+
+/// The forward substitution cut into subtrees run as parallel tasks (each pushing the rows
+/// above it into a buffer of its own) solves as the one sequence does, to rounding, with
+/// supernodes straddling the interface border too, and gives the same bits on one thread and
+/// on two.
+#[test]
+fn the_forward_substitution_cut_into_subtrees_solves_alike_on_any_number_of_threads() {
+    let relax: &[(usize, f64)] = &[(usize::MAX, 1.0)];
+    for (single_body, relax) in [(false, None), (true, Some(relax))] {
+        let t = test_system_with(12, 8, 0.5, &[], single_body, true);
+        let n = t.dofs.free_count();
+        let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+        let solve = |pieces: Option<usize>, threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let kind = SystemKind::Mechanical;
+                let mut solver =
+                    CondensedSolver::with_relaxation(&t.pattern, &t.interface_eqs, relax, kind)
+                        .unwrap();
+                let gather_len = solver.gather.len();
+                solver.forward =
+                    ForwardPlan::cut_into(&solver.symbolic, &solver.tree, gather_len, pieces);
+                let block = factor_bulk_of(&mut solver, &t, false);
+                let mut x = b.clone();
+                solver.solve(block.as_ref(), &mut x).unwrap();
+                (x, solver.forward.subtrees())
+            })
+        };
+        let (whole, _) = solve(None, 1);
+        let (one, tasks) = solve(Some(16), 1);
+        let (two, _) = solve(Some(16), 2);
+        assert!(tasks > 4, "{tasks} subtrees");
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&one), bits(&two), "single body {single_body}");
+        let scale = whole.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let difference = (one.iter().zip(&whole)).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(difference < 1e-12 * scale, "{difference:e} of {scale:e}");
     }
 }
 
