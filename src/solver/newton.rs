@@ -251,7 +251,7 @@ struct Condensed {
 }
 
 /// A linear bulk's thermal load G and the force G ΔT (all dofs) of the temperatures of the
-/// increment being solved ([`Newton::begin_increment`] makes it).
+/// increment being solved (made at its start: [`Newton::update_thermal_force`]).
 #[derive(Debug)]
 struct ThermalForce {
     load: ThermalLoad,
@@ -489,7 +489,8 @@ impl<'a> Newton<'a> {
     }
 
     /// Whether the bulk's point states of the last evaluation were left out: a linear bulk
-    /// whose force is K_c u − G ΔT evaluates no element in an increment. The trial states are then not those of the converged state, and a
+    /// whose force is K_c u − G ΔT evaluates no element in an increment. The trial states
+    /// are then not those of the converged state, and a
     /// [`Solution`](crate::solver::state::Solution) committed from them holds stale point
     /// states until [`Self::complete_states`] makes them.
     pub fn states_pending(&self) -> bool {
