@@ -733,3 +733,15 @@ fn a_body_whose_temperature_nothing_fixes_is_refused_before_the_run() {
         ),
     }
 }
+
+/// Conducting bodies that do not expand, pressed together through a conducting joint: the
+/// bulk's force is K u (no thermal load), and the energy ledger balances — its pass reads
+/// the bodies' point states, made for it although no element was evaluated in the increment.
+#[test]
+fn conducting_bodies_without_expansion_balance_their_energy() {
+    let case = stack_case(20.0, 1e-3, 0.8).step_factors(&[0.5, 1.0]);
+    let (_, solution) = solve(stack_mesh(4.0, 2.0), &case.case());
+    let e = &solution.energy.total;
+    assert!(e.external_work > 0.0, "{e:?}");
+    assert!(e.imbalance().abs() < 1e-9 * e.external_work, "{e:?}");
+}

@@ -387,9 +387,9 @@ pub(crate) fn increment_sums(
     let energy = newton
         .linear_bulk_energy()
         .filter(|_| newton.states_pending());
-    if energy.is_none() {
-        // A linear bulk under thermal strains left its states out too: its stored and
-        // thermal energy terms are theirs.
+    if energy.is_none() || !solution.states_follow_displacements {
+        // The pass reads the point states, which a linear bulk's increment left out (under
+        // a temperature field too: its stored and thermal energy terms are theirs).
         let (u, mut problem) = solution.split(model);
         newton.complete_increment_states(&mut problem, u);
     }
