@@ -375,8 +375,9 @@ pub(crate) fn start_newton(
 /// arithmetic of a pass over stored states, so that the plausibility verdict is the
 /// states' own to the last bit — ε(Δu) would round differently, and a limit within rounding
 /// of an increment's strain would then cut back differently). A linear bulk whose force is
-/// K·u evaluated no element in the increment: its stored energy is ½ u·K u; one under
-/// thermal strains (K·u − G ΔT) has its states made here, for the pass.
+/// K·u evaluated no element in the increment: its stored energy is ½ u·K u; under a
+/// temperature field (K·u − G ΔT, or K·u for bodies that do not expand) its states are made
+/// here, for the pass.
 pub(crate) fn increment_sums(
     model: &Model,
     newton: &mut Newton,
