@@ -84,7 +84,12 @@ impl ConductionSolver {
         };
         let started = Instant::now();
         let dofs = DofMap::new(&c.prescribed());
-        let joint_nodes = c.joint_indices(&model.interface);
+        let mut joint_nodes = c.joint_indices(&model.interface);
+        joint_nodes.sort_unstable();
+        joint_nodes.dedup();
+        let joints: Vec<usize> = (joint_nodes.iter())
+            .filter_map(|&i| dofs.equation(i as usize))
+            .collect();
         // The joints' nodes couple in the pattern as one dense block (zero in K_c): the
         // factor's last supernode is then their whole Schur complement, with every subtree
         // of the bodies under it, a postorder whose subtrees the factorisation and the
@@ -92,15 +97,9 @@ impl ConductionSolver {
         // of their own, the bodies' subtrees hung under different ones, and everything ran
         // on one thread.
         let mut elements = c.element_nodes(&model.continuum, &model.interface);
-        let mut block = joint_nodes.clone();
-        block.sort_unstable();
-        block.dedup();
-        elements.push(block);
+        elements.push(joint_nodes);
         let pattern = SparsityPattern::new(c.size(), &dofs, elements.iter().map(|e| e.as_slice()));
         drop(elements);
-        let joints: Vec<usize> = (joint_nodes.iter())
-            .filter_map(|&i| dofs.equation(i as usize))
-            .collect();
         let mut condensed =
             CondensedSolver::for_conduction(&pattern, &joints).map_err(conduction_error)?;
         condensed.solve_exactly();

@@ -679,9 +679,10 @@ impl<'a> Newton<'a> {
             }
         }
         let iterations = InterfaceIterations::new(unknown_dofs, interface_dofs, n);
-        let thermal = match linear_bulk {
-            true => problem.thermal_load()?,
-            false => None,
+        let thermal = if linear_bulk {
+            problem.thermal_load()?
+        } else {
+            None
         };
         if let Some(load) = &thermal {
             tracing::debug!(
