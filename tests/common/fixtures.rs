@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use toml::Table;
 
-use super::case::{CaseBuilder, elastic, linear_coulomb};
+use super::case::{CaseBuilder, elastic, linear_coulomb, with_keys};
 
 /// The path of `tests/fixtures/<name>`.
 pub fn fixture(name: &str) -> PathBuf {
@@ -47,6 +47,21 @@ pub fn two_blocks_on(lower: Table, friction: f64) -> CaseBuilder {
             ],
             linear_coulomb(1e4, 1e4, friction),
         )
+}
+
+/// Two blocks on a frictional joint, the lower one elasto-plastic (σ_Y = 4 MPa, E = 1000
+/// MPa, H = 100 MPa), the upper one pressed down and sheared by its lid in four increments:
+/// a few cells of the lower block yield (4 of 43 at the end), most of its cells and all of
+/// the upper block's stay elastic.
+pub fn plastic_blocks_pressed_and_sheared(linear_solver: &str) -> CaseBuilder {
+    let lower = with_keys(
+        block_material(),
+        &[("yield_stress", 4.0), ("hardening", 100.0)],
+    );
+    two_blocks_on(lower, 0.2)
+        .support("lid", &[("ux", 0.01), ("uy", -0.006)])
+        .step_factors(&[0.25, 0.5, 0.75, 1.0])
+        .set("solver", "linear_solver", linear_solver)
 }
 
 /// One block held at its bottom (plane strain, `two_bodies_ascii.msh`): body "body_a" of

@@ -892,6 +892,17 @@ impl CondensedSolver {
         }
         // Set again only by a comparison with a Cholesky factor's matrix that runs through.
         self.changes_known = false;
+        // An increment's first call keeps only a factor of the same matrix; the later ones
+        // of the increment compare with its own factorisations. Cleared before the first
+        // factorisation returns too: a resumed run factors first where the uninterrupted one
+        // compared, and its next call must decide alike (it kept the factor at the next
+        // iteration where the resumed run made a new one: different bits after --resume).
+        let threshold = if self.increment_started {
+            0.0
+        } else {
+            self.reuse_threshold
+        };
+        self.increment_started = false;
         if !self.factored {
             return Ok(false);
         }
@@ -901,12 +912,6 @@ impl CondensedSolver {
             _ => f64::INFINITY,
         };
         self.last_change = change;
-        let threshold = if self.increment_started {
-            0.0
-        } else {
-            self.reuse_threshold
-        };
-        self.increment_started = false;
         if change <= threshold {
             self.reuses += 1;
             tracing::debug!(change, "bulk factorisation kept");
