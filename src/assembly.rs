@@ -531,6 +531,9 @@ struct Reference {
     /// valid only if `off_reference_current` (not after a plain tangent assembly).
     off_reference: Vec<bool>,
     off_reference_current: bool,
+    /// Workspaces of the product K_ref u over the free equations (elements left out).
+    u_free: Vec<f64>,
+    force_free: Vec<f64>,
 }
 
 /// A raw pointer that may be shared between threads; its users make the writes through it
@@ -653,6 +656,7 @@ impl GlobalSystem {
             dense: None,
             frozen: None,
             prescribed: side,
+            left_out: None,
         };
         scatter(
             &self.pattern,
@@ -677,6 +681,14 @@ impl GlobalSystem {
     /// run repeats the uninterrupted one bit for bit), and equals [`Self::assemble`]'s up to
     /// rounding. Meant for one set per system (K_ref is made again if another set's size is
     /// seen); the first call allocates K_ref (one value array) and the flags.
+    ///
+    /// With `left_out` (a flag per element), the flagged elements are not evaluated at all:
+    /// the caller vouches that their force is k_ref,e u_e and their tangent their reference
+    /// one (points that stay linear elastic), and that none has a prescribed dof. The force
+    /// is then K_ref u (free equations) plus, for each evaluated element, f_e − k_ref,e u_e
+    /// over its free dofs (f_e alone in prescribed rows): one sparse product and the
+    /// evaluated elements, instead of every element. Their trial states are left as they
+    /// were.
     pub fn assemble_reusing<S: ElementSet>(
         &mut self,
         input: &AssemblyInput,
@@ -684,46 +696,29 @@ impl GlobalSystem {
         coloring: &Coloring,
         committed: &[S::State],
         trial: &mut [S::State],
+        left_out: Option<&[bool]>,
     ) {
-        if !input.tangent {
+        if !input.tangent && left_out.is_none() {
             return self.assemble(input, set, coloring, committed, trial);
         }
-        let nnz = self.values.len();
-        let reference = match &mut self.reference {
-            Some(r) if r.frozen.len() == set.len() && r.values.len() == nnz => r,
-            slot => {
-                let mut values = filled_in_parallel(0.0, nnz);
-                let target = SharedMut(values.as_mut_ptr());
-                let pattern = &self.pattern;
-                for_each_element(coloring, |e, scratch| {
-                    let ke = &mut scratch.ke;
-                    ke.fill(0.0);
-                    set.reference_tangent(e, ke);
-                    let nodes = (set.nodes(e), set.dofs_per_node());
-                    // SAFETY: elements of one colour share no dof.
-                    unsafe {
-                        add_element_matrix(pattern, input.dofs, nodes, ke, 1.0, target.get())
-                    };
-                });
-                slot.insert(Reference {
-                    values,
-                    frozen: vec![false; set.len()],
-                    off_reference: vec![false; input.dofs.free_count()],
-                    off_reference_current: false,
-                })
+        self.make_reference(input, set, coloring);
+        let reference = self.reference.as_mut().expect("made above");
+        if input.tangent {
+            // The values are set, not added to: 0 + K_ref, the bits of K_ref added to a
+            // cleared matrix, in one pass over it instead of two.
+            for (v, r) in self.values.iter_mut().zip(&reference.values) {
+                *v = 0.0 + r;
             }
-        };
-        // The values are set, not added to: 0 + K_ref, the bits of K_ref added to a cleared
-        // matrix, in one pass over it instead of two.
-        for (v, r) in self.values.iter_mut().zip(&reference.values) {
-            *v = 0.0 + r;
         }
         let targets = Targets {
-            values: Some(SharedMut(self.values.as_mut_ptr())),
+            values: input.tangent.then_some(SharedMut(self.values.as_mut_ptr())),
             force: Some(SharedMut(self.internal_force.as_mut_ptr())),
             dense: None,
-            frozen: Some(SharedMut(reference.frozen.as_mut_ptr())),
+            frozen: input
+                .tangent
+                .then_some(SharedMut(reference.frozen.as_mut_ptr())),
             prescribed: None,
+            left_out,
         };
         scatter(
             &self.pattern,
@@ -734,6 +729,20 @@ impl GlobalSystem {
             trial,
             targets,
         );
+        if left_out.is_some() {
+            let dofs = input.dofs;
+            dofs.gather_free(input.u, &mut reference.u_free);
+            symmetric_product(
+                &self.pattern,
+                &reference.values,
+                &reference.u_free,
+                &mut reference.force_free,
+            );
+            dofs.add_free(1.0, &reference.force_free, &mut self.internal_force);
+        }
+        if !input.tangent {
+            return;
+        }
         let off = &mut reference.off_reference;
         off.clear();
         off.resize(input.dofs.free_count(), false);
@@ -748,6 +757,42 @@ impl GlobalSystem {
             }
         }
         reference.off_reference_current = true;
+    }
+
+    /// Makes the K_ref of [`Self::assemble_reusing`] (with its flags and workspaces) unless
+    /// there is one for a set of this size.
+    fn make_reference<S: ElementSet>(
+        &mut self,
+        input: &AssemblyInput,
+        set: &S,
+        coloring: &Coloring,
+    ) {
+        let nnz = self.values.len();
+        let fits = (self.reference.as_ref())
+            .is_some_and(|r| r.frozen.len() == set.len() && r.values.len() == nnz);
+        if fits {
+            return;
+        }
+        let mut values = filled_in_parallel(0.0, nnz);
+        let target = SharedMut(values.as_mut_ptr());
+        let pattern = &self.pattern;
+        for_each_element(coloring, |e, scratch| {
+            let ke = &mut scratch.ke;
+            ke.fill(0.0);
+            set.reference_tangent(e, ke);
+            let nodes = (set.nodes(e), set.dofs_per_node());
+            // SAFETY: elements of one colour share no dof.
+            unsafe { add_element_matrix(pattern, input.dofs, nodes, ke, 1.0, target.get()) };
+        });
+        let free = input.dofs.free_count();
+        self.reference = Some(Reference {
+            values,
+            frozen: vec![false; set.len()],
+            off_reference: vec![false; free],
+            off_reference_current: false,
+            u_free: vec![0.0; free],
+            force_free: vec![0.0; free],
+        });
     }
 
     /// After a tangent assembly by [`Self::assemble_reusing`]: per free equation, whether its
@@ -793,6 +838,7 @@ impl GlobalSystem {
             }),
             frozen: None,
             prescribed: None,
+            left_out: None,
         };
         scatter(
             &self.pattern,
@@ -824,6 +870,7 @@ impl GlobalSystem {
             dense: None,
             frozen: None,
             prescribed: None,
+            left_out: None,
         };
         scatter(
             &self.pattern,
@@ -851,6 +898,9 @@ struct Targets<'m> {
     /// With the tangent alone (not with `frozen`): the flagged elements' matrices, added
     /// again over every dof ([`GlobalSystem::assemble_with_prescribed`]).
     prescribed: Option<Side<'m>>,
+    /// The elements [`GlobalSystem::assemble_reusing`] leaves out: K_ref u stands for every
+    /// element's force, so an evaluated one adds f_e − k_ref,e u_e (free dofs).
+    left_out: Option<&'m [bool]>,
 }
 
 /// A second value array over every dof, for the matrices of some elements alone.
@@ -1025,6 +1075,7 @@ fn scatter<S: ElementSet>(
         dense,
         frozen,
         prescribed,
+        left_out,
     } = targets;
     let AssemblyInput {
         dofs, u, algorithm, ..
@@ -1038,12 +1089,19 @@ fn scatter<S: ElementSet>(
     // the rest of the scratch matrix is never touched.
     let used = MAX_ELEMENT_NODES * d;
     for_each_element(coloring, |e: usize, scratch: &mut ElementScratch| {
-        let nodes = set.nodes(e);
-        let ue = element_displacements(nodes, d, u);
         // SAFETY: every element is evaluated exactly once, and its state slots (and its
         // frozen flag) are its own.
-        let trial_e = unsafe { std::slice::from_raw_parts_mut(states.get().add(e * ppe), ppe) };
         let frozen = frozen.map(|f| unsafe { &mut *f.get().add(e) });
+        if left_out.is_some_and(|l| l[e]) {
+            // Linear elastic (the caller's guarantee): its tangent is its reference one.
+            if let Some(frozen) = frozen {
+                *frozen = true;
+            }
+            return;
+        }
+        let nodes = set.nodes(e);
+        let ue = element_displacements(nodes, d, u);
+        let trial_e = unsafe { std::slice::from_raw_parts_mut(states.get().add(e * ppe), ppe) };
         let was_frozen = frozen.as_deref().copied().unwrap_or(false);
         let element_input = ElementInput {
             u: &ue,
@@ -1070,6 +1128,18 @@ fn scatter<S: ElementSet>(
         };
         set.evaluate(e, &element_input, output);
         let global = |a: usize| d * nodes[a / d] as usize + a % d;
+        // With elements left out, K_ref u stands for every element's force: this one's
+        // reference part comes off over its free dofs.
+        let reference = left_out.map(|_| {
+            let mut kr = ElementMatrix::zeros();
+            set.reference_tangent(e, &mut kr);
+            let n = d * nodes.len();
+            for a in (0..n).filter(|&a| dofs.equation(global(a)).is_some()) {
+                let free_b = (0..n).filter(|&b| dofs.equation(global(b)).is_some());
+                fe[a] -= free_b.map(|b| kr[(a, b)] * ue[b]).sum::<f64>();
+            }
+            kr
+        });
         if let Some(force) = force {
             for a in 0..d * nodes.len() {
                 // SAFETY: elements of one colour share no node, hence no dof.
@@ -1129,8 +1199,11 @@ fn scatter<S: ElementSet>(
                 };
                 set.evaluate(e, &element_input, output);
             }
-            let mut kr = ElementMatrix::zeros();
-            set.reference_tangent(e, &mut kr);
+            let kr = reference.unwrap_or_else(|| {
+                let mut kr = ElementMatrix::zeros();
+                set.reference_tangent(e, &mut kr);
+                kr
+            });
             *ke -= kr;
         }
         // SAFETY: as above; the entries of this element's dofs are written by no other
@@ -1264,6 +1337,51 @@ pub fn combine_state_changes<S: ElementSet>(
             change(e, &start[..ppe], &end[..ppe])
         })
         .reduce(|| 0.0, combine)
+}
+
+/// y = A x over the free equations for a symmetric A with the values `values` over
+/// `pattern`: each y_j is column j's dot product with x (A's row j), the columns split
+/// between the cores with no two writing the same y_j, every y_j summed in one order
+/// whatever the number of threads (the same bits on any of them). For element matrices,
+/// symmetric up to rounding, this is Aᵀ x, equal to A x within rounding.
+pub(crate) fn symmetric_product(
+    pattern: &SparsityPattern,
+    values: &[f64],
+    x: &[f64],
+    y: &mut [f64],
+) {
+    let symbolic = pattern.symbolic();
+    let (cp, ri) = (symbolic.col_ptr(), symbolic.row_idx());
+    y.par_iter_mut()
+        .enumerate()
+        .with_min_len(PRODUCT_COLUMNS_PER_TASK)
+        .for_each(|(eq, yj)| {
+            let column = cp[eq] as usize..cp[eq + 1] as usize;
+            *yj = dot(&ri[column.clone()], &values[column], x);
+        });
+}
+
+/// Columns per parallel task of [`symmetric_product`] (at least): ~50 k entries, enough to
+/// outweigh a task's cost.
+const PRODUCT_COLUMNS_PER_TASK: usize = 2048;
+
+/// Σ values[k] x[rows[k]], in four interleaved partial sums (a single sum's additions would
+/// wait on each other), added pairwise at the end.
+#[inline]
+fn dot(rows: &[u32], values: &[f64], x: &[f64]) -> f64 {
+    let mut sums = [0.0; 4];
+    let (row_chunks, value_chunks) = (rows.chunks_exact(4), values.chunks_exact(4));
+    let (row_rest, value_rest) = (row_chunks.remainder(), value_chunks.remainder());
+    for (r, v) in row_chunks.zip(value_chunks) {
+        for lane in 0..4 {
+            sums[lane] += v[lane] * x[r[lane] as usize];
+        }
+    }
+    let mut sum = (sums[0] + sums[1]) + (sums[2] + sums[3]);
+    for (&r, &v) in row_rest.iter().zip(value_rest) {
+        sum += v * x[r as usize];
+    }
+    sum
 }
 
 /// Runs `element(e, scratch)` for every element of `coloring`: colour by colour, in
@@ -1455,12 +1573,12 @@ mod tests {
             plain.clear(true);
             plain.assemble(&input, &set, &coloring, &committed, &mut trial_a);
             reusing.clear(true);
-            reusing.assemble_reusing(&input, &set, &coloring, &committed, &mut trial_b);
+            reusing.assemble_reusing(&input, &set, &coloring, &committed, &mut trial_b, None);
             assert_eq!(trial_a, trial_b);
             // Independent of the assemblies before: a new system's first gives the same bits.
             let mut fresh = GlobalSystem::new(plain.pattern.clone(), dofs.dof_count());
             let mut trial_c = committed.clone();
-            fresh.assemble_reusing(&input, &set, &coloring, &committed, &mut trial_c);
+            fresh.assemble_reusing(&input, &set, &coloring, &committed, &mut trial_c, None);
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&fresh.values), bits(&reusing.values));
             assert_eq!(plain.internal_force, reusing.internal_force);
@@ -1495,7 +1613,7 @@ mod tests {
             // A cleared matrix has none (until the next reusing assembly).
             reusing.clear(true);
             assert!(reusing.off_reference_columns().is_none());
-            reusing.assemble_reusing(&input, &set, &coloring, &committed, &mut trial_b);
+            reusing.assemble_reusing(&input, &set, &coloring, &committed, &mut trial_b, None);
         }
         // Elastic, partly plastic (more cells at larger amplitudes), elastic again.
         assert_eq!(frozen[0], set.len());
@@ -1505,6 +1623,89 @@ mod tests {
         );
         assert_eq!(frozen[4], set.len());
         assert_eq!(frozen[6], set.len());
+    }
+
+    #[test]
+    fn cells_left_out_give_the_force_and_tangent_of_their_evaluation() {
+        let (set, node_count, fixed) = plastic_block(4, 3);
+        let dofs = DofMap::new(&fixed);
+        let connectivity = (0..set.len()).map(|e| set.nodes(e));
+        let pattern = SparsityPattern::new(node_count, &dofs, connectivity);
+        let coloring = Coloring::new(&set, node_count);
+        let ppe = set.points_per_element();
+        let committed = vec![PointState::default(); set.len() * ppe];
+        // The shear of the test above at an amplitude where the right-hand cells yield, and
+        // a vertical stretch so that the prescribed bottom row moves too (u_y = 1e-4).
+        let mut u = vec![0.0; dofs.dof_count()];
+        for n in 0..node_count {
+            let (i, j) = (n % 9, n / 9);
+            let (x, y) = (i as f64 / 2.0, j as f64 / 2.0);
+            u[2 * n] = 1.2e-3 * y * (1.0 + x / 4.0);
+            u[2 * n + 1] = 1e-4 + 2e-4 * y - 0.3 * 1.2e-3 * y * x / 4.0;
+        }
+        for tangent in [true, false] {
+            let input = AssemblyInput {
+                dofs: &dofs,
+                u: &u,
+                tangent,
+                algorithm: Default::default(),
+            };
+            let mut whole = GlobalSystem::new(pattern.clone(), dofs.dof_count());
+            let mut trial = committed.clone();
+            whole.assemble_reusing(&input, &set, &coloring, &committed, &mut trial, None);
+            // Left out: the cells with no prescribed dof none of whose points yielded.
+            let held = |e: usize| {
+                (set.nodes(e).iter()).any(|&n| (0..2).any(|c| fixed[2 * n as usize + c]))
+            };
+            let left_out: Vec<bool> = (0..set.len())
+                .map(|e| !held(e) && !trial[e * ppe..(e + 1) * ppe].iter().any(|s| s.yielding))
+                .collect();
+            let count = left_out.iter().filter(|&&l| l).count();
+            assert!(count > 0 && count < set.len() - 3, "{count} left out");
+            let mut leaving = GlobalSystem::new(pattern.clone(), dofs.dof_count());
+            let sentinel = PointState {
+                equivalent_plastic_strain: 7.0,
+                ..PointState::default()
+            };
+            let mut trial_left = vec![sentinel; set.len() * ppe];
+            leaving.assemble_reusing(
+                &input,
+                &set,
+                &coloring,
+                &committed,
+                &mut trial_left,
+                Some(&left_out),
+            );
+            for e in 0..set.len() {
+                let (mine, theirs) = (
+                    &trial_left[e * ppe..(e + 1) * ppe],
+                    &trial[e * ppe..(e + 1) * ppe],
+                );
+                if left_out[e] {
+                    assert!(
+                        mine.iter().all(|s| *s == sentinel),
+                        "cell {e} was evaluated"
+                    );
+                } else {
+                    assert_eq!(mine, theirs, "cell {e}");
+                }
+            }
+            // Forces over all dofs (reactions included) and the tangent to rounding: K_ref u
+            // sums the left-out cells' k_e u_e in another order than their points did.
+            let close = |a: &[f64], b: &[f64], what: &str| {
+                let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let difference = (a.iter().zip(b)).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+                assert!(
+                    difference <= 1e-12 * scale,
+                    "{what}: {difference:e} of {scale:e}"
+                );
+            };
+            close(&leaving.internal_force, &whole.internal_force, "force");
+            if tangent {
+                close(&leaving.values, &whole.values, "tangent");
+                assert_eq!(leaving.frozen_elements(), whole.frozen_elements());
+            }
+        }
     }
 
     #[test]

@@ -28,6 +28,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use asperity::assembly::{AssemblyInput, DenseScatter, DofMap, GlobalSystem, PrescribedCouplings};
 use asperity::element::thermal_load::ThermalLoad;
 use asperity::model::Model;
+use asperity::solver::elastic_cells::ElasticCells;
 use asperity::solver::mechanics::Mechanics;
 use asperity::solver::newton::{
     ArcIncrement, LinearSolver, Newton, NewtonLog, NewtonSettings, Problem, norm,
@@ -162,8 +163,17 @@ impl Problem for Marked<'_> {
         self.inner.interface_scatter(dofs, local)
     }
 
-    fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) {
-        self.inner.assemble_bulk(system, input);
+    fn assemble_bulk(
+        &mut self,
+        system: &mut GlobalSystem,
+        input: &AssemblyInput,
+        elastic: Option<&mut ElasticCells>,
+    ) {
+        self.inner.assemble_bulk(system, input, elastic);
+    }
+
+    fn elastic_cells(&self, dofs: &DofMap) -> Option<ElasticCells> {
+        self.inner.elastic_cells(dofs)
     }
 
     fn assemble_linear_bulk(

@@ -32,6 +32,7 @@ mod cyclic_press_fit;
 mod cyclic_resume;
 mod determinism;
 mod diagnosis;
+mod elastic_cells;
 mod energy;
 mod exit_codes;
 mod fit;

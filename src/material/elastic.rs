@@ -1,6 +1,6 @@
 //! Isotropic linear elasticity.
 
-use super::{Material, OutOfPlane, PointState, SHEAR, Tangent, Voigt, ZZ};
+use super::{LinearRange, Material, OutOfPlane, PointState, SHEAR, Tangent, Voigt, ZZ};
 use crate::error::ParameterError;
 
 /// Isotropic linear-elastic material with Young's modulus `e` (MPa) and Poisson's ratio `nu`.
@@ -98,6 +98,13 @@ impl LinearElastic {
 impl Material for LinearElastic {
     fn is_linear(&self) -> bool {
         true
+    }
+
+    fn linear_range(&self, _committed: &PointState) -> Option<LinearRange> {
+        Some(LinearRange {
+            von_mises: f64::INFINITY,
+            shear_modulus: self.shear_modulus(),
+        })
     }
 
     fn update(

@@ -50,8 +50,8 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::elastic::LinearElastic;
 use super::{
-    Material, OutOfPlane, PointState, SHEAR, Tangent, Voigt, ZZ, bracketed_root, engineering,
-    identity, voigt, von_mises,
+    LinearRange, Material, OutOfPlane, PointState, SHEAR, Tangent, Voigt, ZZ, bracketed_root,
+    engineering, identity, voigt, von_mises,
 };
 use crate::error::ParameterError;
 
@@ -378,6 +378,18 @@ impl Material for J2Plasticity {
             OutOfPlane::StrainGiven => self.update_strain_given(strain, committed),
             OutOfPlane::StressFree => self.update_stress_free(strain, committed),
         }
+    }
+
+    /// A point that never yielded (no plastic strain, none accumulated) stays elastic while
+    /// the trial stress D ε is below the initial yield stress (the elastic check of the
+    /// updates above, whose tolerance only widens it).
+    fn linear_range(&self, committed: &PointState) -> Option<LinearRange> {
+        let virgin = committed.equivalent_plastic_strain == 0.0
+            && committed.plastic_strain.iter().all(|&e| e == 0.0);
+        virgin.then(|| LinearRange {
+            von_mises: self.flow_stress(0.0),
+            shear_modulus: self.elastic.shear_modulus(),
+        })
     }
 
     /// The elastic part of the strain alone stores energy; the plastic work σ:dεᵖ (including

@@ -126,6 +126,17 @@ pub struct PointState {
     pub yielding: bool,
 }
 
+/// Where a point's update is linear elastic ([`Material::linear_range`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinearRange {
+    /// The von Mises stress below which the update is σ = D ε (infinite for an elastic
+    /// material).
+    pub von_mises: f64,
+    /// The shear modulus G of D: a strain change Δε changes the von Mises stress by at most
+    /// 3 G times its equivalent strain √(⅔ Δε:Δε) (dev Δσ = 2 G dev Δε).
+    pub shear_modulus: f64,
+}
+
 /// A bulk constitutive model.
 pub trait Material: Send + Sync + std::fmt::Debug {
     /// Stress update for the total strain `strain` (its zz entry is ignored when
@@ -153,6 +164,16 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     /// history (then the bodies' stiffness is constant and needs assembling only once).
     fn is_linear(&self) -> bool {
         false
+    }
+
+    /// The range within which an update from `committed` is linear elastic: the stress is
+    /// the elastic stiffness times the whole strain (the reference tangent's D ε) while its
+    /// von Mises value stays below [`LinearRange::von_mises`]. `None` (the default) where
+    /// that is not so: a point that has yielded (its plastic strain enters the stress), a
+    /// material with other internal variables. Lets assembly leave such points' cells out
+    /// while they provably stay in the range (`solver::elastic_cells`).
+    fn linear_range(&self, _committed: &PointState) -> Option<LinearRange> {
+        None
     }
 
     /// Whether the consistent tangent of a yielding point may be unsymmetric (kinematic

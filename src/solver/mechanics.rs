@@ -19,6 +19,7 @@ use crate::element::thermal_load::ThermalLoad;
 use crate::element::{ElementInput, ElementMatrix, ElementOutput};
 use crate::material::{PointState, equivalent_strain};
 use crate::model::{Model, continuum_connectivity};
+use crate::solver::elastic_cells::ElasticCells;
 use crate::solver::energy::largest;
 use crate::solver::newton::Problem;
 use crate::{Error, Result};
@@ -130,7 +131,7 @@ impl<'a> Mechanics<'a> {
 
 impl Problem for Mechanics<'_> {
     fn assemble(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) -> bool {
-        self.assemble_bulk(system, input);
+        self.assemble_bulk(system, input, None);
         let m = self.model;
         let (ic, it) = (self.interface_committed, &mut *self.interface_trial);
         system.assemble(input, &m.interface, &m.interface_coloring, ic, it);
@@ -204,11 +205,17 @@ impl Problem for Mechanics<'_> {
     }
 
     /// A nonlinear (plastic) continuum keeps the sum of its cells' elastic matrices and
-    /// evaluates tangents only for cells with a yielding point
+    /// evaluates tangents only for cells with a yielding point, and with `elastic` cells
+    /// nothing at all of the cells that provably stay elastic
     /// ([`GlobalSystem::assemble_reusing`]); a linear one
     /// is assembled plainly (its stiffness is assembled once per model, and keeping a copy
     /// would only cost memory).
-    fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput) {
+    fn assemble_bulk(
+        &mut self,
+        system: &mut GlobalSystem,
+        input: &AssemblyInput,
+        mut elastic: Option<&mut ElasticCells>,
+    ) {
         let m = self.model;
         let (bodies, cc, ct) = self.bodies();
         if !bodies.has_history() && m.continuum.is_linear() {
@@ -216,9 +223,17 @@ impl Problem for Mechanics<'_> {
                 system.clear_values();
             }
             system.assemble(input, &bodies, &m.continuum_coloring, cc, ct);
-        } else {
-            system.assemble_reusing(input, &bodies, &m.continuum_coloring, cc, ct);
+            return;
         }
+        let left_out = (elastic.as_deref_mut()).and_then(|cells| cells.select(m, input.u));
+        system.assemble_reusing(input, &bodies, &m.continuum_coloring, cc, ct, left_out);
+        if let Some(cells) = elastic.filter(|cells| !cells.anchored()) {
+            cells.anchor(m, cc, ct, input.u);
+        }
+    }
+
+    fn elastic_cells(&self, dofs: &DofMap) -> Option<ElasticCells> {
+        ElasticCells::new(self.model, dofs)
     }
 
     /// The couplings are those of the cells with a node on a support.

@@ -10,6 +10,7 @@ pub mod conduction;
 pub mod coupling;
 pub mod cycles;
 pub mod diagnosis;
+pub mod elastic_cells;
 pub mod energy;
 pub mod floor;
 pub mod interface_lu;

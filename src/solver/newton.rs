@@ -65,6 +65,7 @@ use crate::assembly::{
 use crate::contact::ContactAlgorithm;
 use crate::element::thermal_load::ThermalLoad;
 use crate::solver::condensed::CondensedSolver;
+use crate::solver::elastic_cells::ElasticCells;
 use crate::solver::floor::SolverWork;
 use crate::solver::linear::CholeskySolver;
 
@@ -172,8 +173,21 @@ pub trait Problem: Send {
     fn thermal_force(&self, load: &ThermalLoad, force: &mut [f64]);
 
     /// Adds the bulk's internal force into `system` and, if `input.tangent`, sets its matrix
-    /// values to the bulk's tangent (whatever they held: no need to clear them first).
-    fn assemble_bulk(&mut self, system: &mut GlobalSystem, input: &AssemblyInput);
+    /// values to the bulk's tangent (whatever they held: no need to clear them first). A
+    /// plastic bulk with `elastic` cells leaves out those that provably stay linear elastic
+    /// (and anchors them when they have no anchor: [`ElasticCells`]).
+    fn assemble_bulk(
+        &mut self,
+        system: &mut GlobalSystem,
+        input: &AssemblyInput,
+        elastic: Option<&mut ElasticCells>,
+    );
+
+    /// The cells of a plastic bulk that its evaluations may leave out ([`ElasticCells`]),
+    /// dofs numbered by `dofs`; `None` (the default) for none.
+    fn elastic_cells(&self, _dofs: &DofMap) -> Option<ElasticCells> {
+        None
+    }
 
     /// A linear bulk's tangent assembly (`input.tangent`): as [`Self::assemble_bulk`], and
     /// returns the stiffness's entries in the prescribed rows and columns of `input.dofs`
@@ -242,6 +256,9 @@ struct Condensed {
     /// Whether the bulk's trial states are not those of the last evaluation's displacements
     /// (it took its force from a product with K_c and evaluated no element).
     states_stale: bool,
+    /// Plastic bulk: the cells its evaluations may leave out (their trial states then not
+    /// those of the last evaluation).
+    elastic: Option<ElasticCells>,
     /// Linear bulk without thermal strains: the bodies' elastic energy ½ u·K_c u at the last
     /// evaluation (over all dofs, reactions included), taken from its product: that of a
     /// converged state.
@@ -489,14 +506,16 @@ impl<'a> Newton<'a> {
     }
 
     /// Whether the bulk's point states of the last evaluation were left out: a linear bulk
-    /// whose force is K_c u − G ΔT evaluates no element in an increment. The trial states
+    /// whose force is K_c u − G ΔT evaluates no element in an increment, a plastic one leaves
+    /// out its cells that provably stay elastic ([`ElasticCells`]). The trial states
     /// are then not those of the converged state, and a
     /// [`Solution`](crate::solver::state::Solution) committed from them holds stale point
     /// states until [`Self::complete_states`] makes them.
     pub fn states_pending(&self) -> bool {
-        self.condensed
-            .as_ref()
-            .is_some_and(|c| c.linear_bulk && c.states_stale)
+        self.condensed.as_ref().is_some_and(|c| {
+            (c.linear_bulk && c.states_stale)
+                || c.elastic.as_ref().is_some_and(ElasticCells::states_pending)
+        })
     }
 
     /// The bodies' elastic energy ½ u·K_c u at the last evaluation, for a linear bulk whose
@@ -540,6 +559,9 @@ impl<'a> Newton<'a> {
         self.bulk_states_at(problem, u);
         if let Some(c) = self.condensed.as_mut() {
             c.states_stale = false;
+            if let Some(elastic) = c.elastic.as_mut() {
+                elastic.states_made();
+            }
         }
         Some(t.elapsed().as_secs_f64())
     }
@@ -690,6 +712,11 @@ impl<'a> Newton<'a> {
                 "thermal load matrices"
             );
         }
+        let elastic = if linear_bulk {
+            None
+        } else {
+            problem.elastic_cells(self.dofs)
+        };
         tracing::debug!(
             matrix_entries = self.system.pattern.nnz(),
             solver_megabytes = solver.memory_bytes() >> 20,
@@ -711,6 +738,7 @@ impl<'a> Newton<'a> {
                 force: vec![0.0; n],
             }),
             states_stale: false,
+            elastic,
             continuum_energy: 0.0,
             iterations,
         });
@@ -774,7 +802,11 @@ impl<'a> Newton<'a> {
             // The bulk's tangent assembly sets the matrix (a plastic bulk's from its kept
             // elastic sum in one pass, without zeroing it first).
             system.clear(false);
-            problem.assemble_bulk(system, &input);
+            // A solve's first evaluation anchors the cells it may leave out later.
+            if fresh && let Some(elastic) = c.elastic.as_mut() {
+                elastic.unanchor();
+            }
+            problem.assemble_bulk(system, &input, c.elastic.as_mut());
             bulk_work.since(t);
             if tangent {
                 c.bulk_dirty = true;
@@ -1063,6 +1095,9 @@ impl<'a> Newton<'a> {
     fn begin_increment(&mut self, problem: &mut impl Problem) -> Result<f64> {
         if let Some(c) = &mut self.condensed {
             c.solver.start_increment();
+            if let Some(elastic) = c.elastic.as_mut() {
+                elastic.unanchor();
+            }
         }
         Ok(self.prepare_condensed(problem, None)?.0)
     }

@@ -80,33 +80,40 @@ impl StrainBound {
     /// The bound on the largest equivalent strain increment of any integration point from
     /// the displacements `u_old` to `u` (all dofs). NaN if a displacement is not a number.
     pub fn of(&self, model: &Model, u: &[f64], u_old: &[f64]) -> f64 {
-        let d = model.continuum.analysis.dofs_per_node();
-        (model.continuum.cells.par_iter())
-            .zip(self.cells.par_iter())
+        (0..self.cells.len())
+            .into_par_iter()
             .with_min_len(256)
-            .map(|(cell, &[relative, ref uniform @ ..])| {
-                let nodes = &cell.nodes[..cell.kind.node_count()];
-                let increment = |n: u32, c: usize| {
-                    let dof = d * n as usize + c;
-                    u[dof] - u_old[dof]
-                };
-                let mut mean = [0.0; 3];
-                for &n in nodes {
-                    for (c, m) in mean.iter_mut().enumerate().take(d) {
-                        *m += increment(n, c);
-                    }
-                }
-                mean.iter_mut().for_each(|m| *m /= nodes.len() as f64);
-                let mut spread = 0.0;
-                for &n in nodes {
-                    for (c, m) in mean.iter().enumerate().take(d) {
-                        spread += (increment(n, c) - m).powi(2);
-                    }
-                }
-                let translation: f64 = uniform.iter().zip(mean).map(|(c, m)| c * m.abs()).sum();
-                relative * spread.sqrt() + translation
-            })
+            .map(|e| self.of_cell(model, e, u, u_old))
             .reduce(|| 0.0, largest)
+    }
+
+    /// The bound on the largest equivalent strain increment of cell `e`'s integration points
+    /// from the displacements `u_old` to `u` (all dofs). NaN if a displacement is not a
+    /// number.
+    pub fn of_cell(&self, model: &Model, e: usize, u: &[f64], u_old: &[f64]) -> f64 {
+        let d = model.continuum.analysis.dofs_per_node();
+        let cell = &model.continuum.cells[e];
+        let [relative, ref uniform @ ..] = self.cells[e];
+        let nodes = &cell.nodes[..cell.kind.node_count()];
+        let increment = |n: u32, c: usize| {
+            let dof = d * n as usize + c;
+            u[dof] - u_old[dof]
+        };
+        let mut mean = [0.0; 3];
+        for &n in nodes {
+            for (c, m) in mean.iter_mut().enumerate().take(d) {
+                *m += increment(n, c);
+            }
+        }
+        mean.iter_mut().for_each(|m| *m /= nodes.len() as f64);
+        let mut spread = 0.0;
+        for &n in nodes {
+            for (c, m) in mean.iter().enumerate().take(d) {
+                spread += (increment(n, c) - m).powi(2);
+            }
+        }
+        let translation: f64 = uniform.iter().zip(mean).map(|(c, m)| c * m.abs()).sum();
+        relative * spread.sqrt() + translation
     }
 }
 

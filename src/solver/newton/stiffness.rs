@@ -13,11 +13,9 @@
 //! threads, so the product has the same bits on any of them. (Element matrices are
 //! symmetric up to rounding only, so this is K_cᵀ u, equal to K_c u within rounding.)
 
-use rayon::prelude::*;
-
 use faer::sparse::SparseColMatRef;
 
-use crate::assembly::{DofMap, SparsityPattern};
+use crate::assembly::{DofMap, SparsityPattern, symmetric_product};
 
 /// The entries of the bulk stiffness K_c (over all dofs) in a prescribed row or column, by
 /// column, and the dof of each equation.
@@ -83,17 +81,7 @@ impl BulkStiffness {
         y: &mut [f64],
     ) {
         dofs.gather_free(x, &mut self.x_free);
-        let symbolic = pattern.symbolic();
-        let (cp, ri) = (symbolic.col_ptr(), symbolic.row_idx());
-        let x_free = &self.x_free;
-        self.y_free
-            .par_iter_mut()
-            .enumerate()
-            .with_min_len(PRODUCT_COLUMNS_PER_TASK)
-            .for_each(|(eq, yf)| {
-                let column = cp[eq] as usize..cp[eq + 1] as usize;
-                *yf = dot(&ri[column.clone()], &values[column], x_free);
-            });
+        symmetric_product(pattern, values, &self.x_free, &mut self.y_free);
         y.fill(0.0);
         for (&yf, &dof) in self.y_free.iter().zip(&self.dof_of) {
             y[dof as usize] = yf;
@@ -113,29 +101,6 @@ impl BulkStiffness {
     pub(super) fn len(&self) -> usize {
         self.values.len()
     }
-}
-
-/// Columns of the free block per parallel task of [`BulkStiffness::multiply`] (at least):
-/// ~50 k entries, enough to outweigh a task's cost.
-const PRODUCT_COLUMNS_PER_TASK: usize = 2048;
-
-/// Σ values[k] x[rows[k]], in four interleaved partial sums (a single sum's additions would
-/// wait on each other), added pairwise at the end.
-#[inline]
-fn dot(rows: &[u32], values: &[f64], x: &[f64]) -> f64 {
-    let mut sums = [0.0; 4];
-    let (row_chunks, value_chunks) = (rows.chunks_exact(4), values.chunks_exact(4));
-    let (row_rest, value_rest) = (row_chunks.remainder(), value_chunks.remainder());
-    for (r, v) in row_chunks.zip(value_chunks) {
-        for lane in 0..4 {
-            sums[lane] += v[lane] * x[r[lane] as usize];
-        }
-    }
-    let mut sum = (sums[0] + sums[1]) + (sums[2] + sums[3]);
-    for (&r, &v) in row_rest.iter().zip(value_rest) {
-        sum += v * x[r as usize];
-    }
-    sum
 }
 
 #[cfg(test)]
