@@ -1101,6 +1101,7 @@ fn scatter<S: ElementSet>(
         }
         let nodes = set.nodes(e);
         let ue = element_displacements(nodes, d, u);
+        // SAFETY: as above.
         let trial_e = unsafe { std::slice::from_raw_parts_mut(states.get().add(e * ppe), ppe) };
         let was_frozen = frozen.as_deref().copied().unwrap_or(false);
         let element_input = ElementInput {

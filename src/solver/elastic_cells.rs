@@ -5,9 +5,9 @@
 //!
 //! A point whose committed state never yielded (J2: no plastic strain) updates to σ = D ε
 //! while the von Mises value of D ε stays below the initial yield stress
-//! ([`crate::material::Material::linear_range`]; an elastic material always). The first evaluation of every
-//! Newton solve evaluates every cell (the anchor, displacements u_a); for a later one at u,
-//! since dev Δσ = 2 G dev Δε for an isotropic D,
+//! ([`crate::material::Material::linear_range`]; an elastic material always). The first
+//! evaluation of every Newton solve evaluates every cell (the anchor, displacements u_a); for
+//! a later one at u, since dev Δσ = 2 G dev Δε for an isotropic D,
 //!
 //! ```text
 //! σ_eq(D ε(u)) ≤ σ_eq(σ_a) + 3 G ε_eq(ε(u) − ε(u_a)) ≤ σ_eq(σ_a) + 3 G β_e(u − u_a),
@@ -24,9 +24,11 @@
 //! states before they are read ([`crate::solver::newton::Newton::states_pending`]). Cells
 //! with a prescribed dof are always evaluated (their force in the prescribed rows is
 //! reactions, which K_ref over the free equations does not give), as are all cells under a
-//! temperature field (the thermal strain is not D ε's). An evaluation that could leave out
-//! fewer than half the cells evaluates all of them: every evaluated cell then also
-//! subtracts its elastic force, which costs about as much as its evaluation.
+//! temperature field (the thermal strain is not D ε's) and every cell of an arc-length
+//! iteration (each of its evaluations is a solve's first). An evaluation that could leave
+//! out fewer than half the cells evaluates all of them: with cells left out, every evaluated
+//! cell also makes its elastic matrix to take off its elastic force, which costs about as
+//! much as its evaluation.
 //!
 //! Everything here follows from the anchor's displacements and states, made by the solve's
 //! first evaluation, not from earlier increments.
