@@ -73,6 +73,11 @@ impl DofMap {
         (e != FIXED).then_some(e as usize)
     }
 
+    /// Whether one of the `nodes` (`d` dofs each) has a prescribed dof.
+    pub fn holds_prescribed(&self, nodes: &[u32], d: usize) -> bool {
+        (nodes.iter()).any(|&n| (0..d).any(|c| self.equation(d * n as usize + c).is_none()))
+    }
+
     /// Gathers the free components of a full dof vector into an equation vector.
     pub fn gather_free(&self, full: &[f64], out: &mut [f64]) {
         for (dof, &v) in full.iter().enumerate() {
@@ -258,10 +263,7 @@ impl PrescribedCouplings {
     /// `dofs`.
     pub fn new(node_count: usize, dofs: &DofMap, connectivity: &[ElementNodes]) -> Self {
         let d = dofs.dof_count() / node_count.max(1);
-        let held = |element: &ElementNodes| {
-            let node_held = |&n: &u32| (0..d).any(|c| dofs.equation(d * n as usize + c).is_none());
-            element.nodes.iter().any(node_held)
-        };
+        let held = |element: &ElementNodes| dofs.holds_prescribed(element.nodes, d);
         let elements: Vec<bool> = connectivity.par_iter().map(held).collect();
         let all = DofMap::new(&vec![false; dofs.dof_count()]);
         let held_elements = connectivity
@@ -1135,8 +1137,12 @@ fn scatter<S: ElementSet>(
             let mut kr = ElementMatrix::zeros();
             set.reference_tangent(e, &mut kr);
             let n = d * nodes.len();
-            for a in (0..n).filter(|&a| dofs.equation(global(a)).is_some()) {
-                let free_b = (0..n).filter(|&b| dofs.equation(global(b)).is_some());
+            let mut free = [false; MAX_ELEMENT_DOFS];
+            for (a, f) in free.iter_mut().enumerate().take(n) {
+                *f = dofs.equation(global(a)).is_some();
+            }
+            for a in (0..n).filter(|&a| free[a]) {
+                let free_b = (0..n).filter(|&b| free[b]);
                 fe[a] -= free_b.map(|b| kr[(a, b)] * ue[b]).sum::<f64>();
             }
             kr
@@ -1469,6 +1475,19 @@ mod tests {
         (set, node_count, fixed)
     }
 
+    /// [`plastic_block`] with its dof numbering, pattern and colouring.
+    fn plastic_system(
+        nx: usize,
+        ny: usize,
+    ) -> (ContinuumSet, usize, DofMap, SparsityPattern, Coloring) {
+        let (set, node_count, fixed) = plastic_block(nx, ny);
+        let dofs = DofMap::new(&fixed);
+        let connectivity = (0..set.len()).map(|e| set.nodes(e));
+        let pattern = SparsityPattern::new(node_count, &dofs, connectivity);
+        let coloring = Coloring::new(&set, node_count);
+        (set, node_count, dofs, pattern, coloring)
+    }
+
     #[test]
     fn assembling_with_the_prescribed_couplings_splits_the_all_dof_assembly_bit_for_bit() {
         let (set, node_count, fixed) = plastic_block(3, 2);
@@ -1542,11 +1561,7 @@ mod tests {
 
     #[test]
     fn reusing_assembly_equals_plain_assembly_while_cells_yield_and_unload() {
-        let (set, node_count, fixed) = plastic_block(4, 3);
-        let dofs = DofMap::new(&fixed);
-        let connectivity = (0..set.len()).map(|e| set.nodes(e));
-        let pattern = SparsityPattern::new(node_count, &dofs, connectivity);
-        let coloring = Coloring::new(&set, node_count);
+        let (set, node_count, dofs, pattern, coloring) = plastic_system(4, 3);
         let mut plain = GlobalSystem::new(pattern.clone(), dofs.dof_count());
         let mut reusing = GlobalSystem::new(pattern, dofs.dof_count());
         let points = set.len() * set.points_per_element();
@@ -1628,11 +1643,7 @@ mod tests {
 
     #[test]
     fn cells_left_out_give_the_force_and_tangent_of_their_evaluation() {
-        let (set, node_count, fixed) = plastic_block(4, 3);
-        let dofs = DofMap::new(&fixed);
-        let connectivity = (0..set.len()).map(|e| set.nodes(e));
-        let pattern = SparsityPattern::new(node_count, &dofs, connectivity);
-        let coloring = Coloring::new(&set, node_count);
+        let (set, node_count, dofs, pattern, coloring) = plastic_system(4, 3);
         let ppe = set.points_per_element();
         let committed = vec![PointState::default(); set.len() * ppe];
         // The shear of the test above at an amplitude where the right-hand cells yield, and
@@ -1655,11 +1666,11 @@ mod tests {
             let mut trial = committed.clone();
             whole.assemble_reusing(&input, &set, &coloring, &committed, &mut trial, None);
             // Left out: the cells with no prescribed dof none of whose points yielded.
-            let held = |e: usize| {
-                (set.nodes(e).iter()).any(|&n| (0..2).any(|c| fixed[2 * n as usize + c]))
-            };
             let left_out: Vec<bool> = (0..set.len())
-                .map(|e| !held(e) && !trial[e * ppe..(e + 1) * ppe].iter().any(|s| s.yielding))
+                .map(|e| {
+                    !dofs.holds_prescribed(set.nodes(e), 2)
+                        && !trial[e * ppe..(e + 1) * ppe].iter().any(|s| s.yielding)
+                })
                 .collect();
             let count = left_out.iter().filter(|&&l| l).count();
             assert!(count > 0 && count < set.len() - 3, "{count} left out");

@@ -76,12 +76,7 @@ impl ElasticCells {
         }
         let d = continuum.analysis.dofs_per_node();
         let held: Vec<bool> = (continuum.cells.par_iter())
-            .map(|cell| {
-                let nodes = &cell.nodes[..cell.kind.node_count()];
-                nodes
-                    .iter()
-                    .any(|&n| (0..d).any(|c| dofs.equation(d * n as usize + c).is_none()))
-            })
+            .map(|cell| dofs.holds_prescribed(&cell.nodes[..cell.kind.node_count()], d))
             .collect();
         let cells = held.len();
         Some(Self {
