@@ -35,6 +35,7 @@ mod diagnosis;
 mod elastic_cells;
 mod energy;
 mod exit_codes;
+mod factor_reuse;
 mod fit;
 mod floor;
 mod friction_circle;

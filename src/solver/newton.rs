@@ -241,6 +241,9 @@ struct Condensed {
     linear_bulk: bool,
     /// Whether the system's values hold a continuum tangent not yet factored.
     bulk_dirty: bool,
+    /// Whether the last correction was solved with a kept bulk factor of another tangent (a
+    /// chord step), whose contraction the next iteration checks (`CHORD_CONTRACTION`).
+    chord_step: bool,
     /// Linear bulk: whether K_c is assembled and factored.
     bulk_ready: bool,
     /// Linear bulk: the continuum stiffness over all dofs (its free block is the system's
@@ -413,6 +416,13 @@ pub fn distance(a: &[f64], b: &[f64]) -> f64 {
 /// Relative residual above which corrections are checked by a line search. Below it Newton is
 /// in its quadratic phase and full steps are taken without the extra residual evaluation.
 const LINE_SEARCH_ABOVE: f64 = 1e-3;
+
+/// Largest residual ratio ‖r_{k+1}‖/‖r_k‖ accepted from a chord step (a correction solved with
+/// a kept bulk factor of an earlier tangent) before the rest of the increment refactors every
+/// changed tangent. The reuse test admits a change whose chord rate is bounded by τ = 0.01
+/// (docs/theory.md §7.6); a step that does not even quarter the residual shows the change
+/// measure failed (e.g. a nearly incompressible body yielding) and would cost many iterations.
+const CHORD_CONTRACTION: f64 = 0.25;
 
 /// The Newton-Raphson solver of a model's increments, with its workspaces.
 #[derive(Debug)]
@@ -731,6 +741,7 @@ impl<'a> Newton<'a> {
             map,
             linear_bulk,
             bulk_dirty: false,
+            chord_step: false,
             bulk_ready: false,
             stiffness: None,
             thermal: thermal.map(|load| ThermalForce {
@@ -973,6 +984,7 @@ impl<'a> Newton<'a> {
                 increment_max: max_change(u, &self.increment_start),
             };
             log.residuals.push(residual);
+            self.check_chord_contraction(&log.residuals);
             tracing::debug!(
                 iteration = log.iterations,
                 residual = Criteria::ratio(&measures),
@@ -1095,6 +1107,7 @@ impl<'a> Newton<'a> {
     fn begin_increment(&mut self, problem: &mut impl Problem) -> Result<f64> {
         if let Some(c) = &mut self.condensed {
             c.solver.start_increment();
+            c.chord_step = false;
             if let Some(elastic) = c.elastic.as_mut() {
                 elastic.unanchor();
             }
@@ -1114,6 +1127,24 @@ impl<'a> Newton<'a> {
         t.elapsed().as_secs_f64()
     }
 
+    /// After a chord step: stops the bulk factor's reuse for the rest of the increment if the
+    /// residual (the last of `residuals`) fell by less than `CHORD_CONTRACTION`.
+    fn check_chord_contraction(&mut self, residuals: &[f64]) {
+        let Some(c) = self.condensed.as_mut().filter(|c| c.chord_step) else {
+            return;
+        };
+        c.chord_step = false;
+        if let [.., before, now] = residuals
+            && (*now > CHORD_CONTRACTION * before || !now.is_finite())
+        {
+            tracing::debug!(
+                ratio = now / before,
+                "chord step did not contract: refactoring"
+            );
+            c.solver.stop_reuse_in_increment();
+        }
+    }
+
     /// Factors the tangent of the last evaluation: on the condensed path the bulk (when its
     /// tangent changed) and the interface block, otherwise by Cholesky (a symmetric tangent);
     /// an unsymmetric bulk tangent by LU.
@@ -1123,6 +1154,7 @@ impl<'a> Newton<'a> {
         let work = &mut self.work;
         if let Some(c) = self.condensed.as_mut() {
             if c.bulk_dirty {
+                c.chord_step = false;
                 let factored = if self.bulk_symmetric {
                     let varying = self.system.off_reference_columns();
                     c.solver.factor_bulk_varying(matrix, varying)?
@@ -1136,6 +1168,7 @@ impl<'a> Newton<'a> {
                 let kind = if factored {
                     &mut work.factorisations
                 } else {
+                    c.chord_step = c.solver.last_change() > 0.0;
                     &mut work.kept_factorisations
                 };
                 kind.since(t);

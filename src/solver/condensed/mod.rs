@@ -210,6 +210,9 @@ pub struct CondensedSolver {
     /// Set by [`Self::start_increment`]: the next factorisation request keeps the factor only
     /// for an unchanged matrix.
     increment_started: bool,
+    /// Set by [`Self::stop_reuse_in_increment`], cleared by [`Self::start_increment`]: until
+    /// then every factorisation request keeps the factor only for an unchanged matrix.
+    reuse_stopped: bool,
     /// Numeric factorisations done, and calls of [`Self::factor_bulk`] that kept the factor.
     factorizations: usize,
     reuses: usize,
@@ -527,6 +530,7 @@ impl CondensedSolver {
             refactor: Vec::with_capacity(supernodal.n_supernodes()),
             reuse_threshold: DEFAULT_REUSE_THRESHOLD,
             increment_started: false,
+            reuse_stopped: false,
             factorizations: 0,
             reuses: 0,
             interface_diagonal,
@@ -576,10 +580,11 @@ impl CondensedSolver {
 
     /// Sets the reuse threshold τ of [`Self::factor_bulk`]: the last factorisation of K̃ is
     /// kept for a new continuum matrix K when
-    /// max_ij |K_ij − K̃_ij| / √(|K̃_ii| |K̃_jj|) ≤ τ. τ = 0 (the default) keeps it only for an
+    /// max_ij |K_ij − K̃_ij| / √(|K̃_ii| |K̃_jj|) ≤ τ. τ = 0 keeps it only for an
     /// unchanged matrix; τ > 0 makes Newton a chord (inexact Newton) iteration with the exact
     /// residual while the change stays below τ (see docs/theory.md, "Reusing the bulk
-    /// factorisation"). Default [`DEFAULT_REUSE_THRESHOLD`].
+    /// factorisation"), unless [`Self::stop_reuse_in_increment`]. Default
+    /// [`DEFAULT_REUSE_THRESHOLD`].
     pub fn set_reuse_threshold(&mut self, threshold: f64) {
         self.reuse_threshold = threshold.max(0.0);
     }
@@ -599,6 +604,17 @@ impl CondensedSolver {
     /// bit.
     pub fn start_increment(&mut self) {
         self.increment_started = true;
+        self.reuse_stopped = false;
+    }
+
+    /// Keeps the factor only for an unchanged matrix until the next [`Self::start_increment`]:
+    /// for a Newton iteration whose chord step (a kept factor of another matrix) did not
+    /// contract. The change measure of [`Self::factor_bulk`] is a proxy of the chord rate that
+    /// can fail by orders of magnitude: a nearly incompressible body's diagonal carries its
+    /// bulk modulus, so losing all its shear stiffness to yielding shows as a change of
+    /// G/λ ~ 1e-5 (ν = 0.49999).
+    pub fn stop_reuse_in_increment(&mut self) {
+        self.reuse_stopped = true;
     }
 
     /// The scaled change of the continuum matrix measured by the last [`Self::factor_bulk`]
@@ -897,7 +913,7 @@ impl CondensedSolver {
         // factorisation returns too: a resumed run factors first where the uninterrupted one
         // compared, and its next call must decide alike (it kept the factor at the next
         // iteration where the resumed run made a new one: different bits after --resume).
-        let threshold = if self.increment_started {
+        let threshold = if self.increment_started || self.reuse_stopped {
             0.0
         } else {
             self.reuse_threshold
