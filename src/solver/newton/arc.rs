@@ -153,6 +153,7 @@ impl Newton<'_> {
                 .max(f64::MIN_POSITIVE);
             let residual = norm(r) / reference;
             log.residuals.push(residual);
+            self.check_chord_contraction(&log.residuals);
             if !residual.is_finite() {
                 return Err(ArcFailure::NotFinite);
             }
