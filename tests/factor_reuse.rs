@@ -1,5 +1,5 @@
 //! The condensed path keeps a plastic bulk's factor while the tangent changes little (a chord
-//! step, `[solver]`'s reuse threshold), and stops keeping it for the rest of an increment
+//! step, the condensed solver's reuse threshold τ = 0.01), and stops keeping it for the rest of an increment
 //! once a chord step fails to contract: the change measure, relative to the diagonal, can
 //! understate the chord rate by orders of magnitude.
 
@@ -10,20 +10,9 @@ use asperity::solver::state::{RunStatistics, Solution};
 use asperity::solver::stepping::run_steps;
 use common::*;
 
-/// The two plastic blocks pressed and sheared, the lower one nearly incompressible
-/// (ν = 0.49999, H = 10 MPa): its diagonal carries the bulk modulus λ ≈ 1.7e7 MPa, so the
-/// loss of its shear stiffness (G ≈ 333 MPa) to yielding measures as a change of ~2e-5,
-/// far below the threshold 0.01, while the chord step with the old factor hardly contracts.
+/// [`incompressible_plastic_blocks`] solved on `linear_solver`'s path.
 fn run(linear_solver: &str) -> (Solution, RunStatistics) {
-    let lower = with_keys(
-        block_material(),
-        &[("nu", 0.49999), ("yield_stress", 4.0), ("hardening", 10.0)],
-    );
-    let case = two_blocks_on(lower, 0.2)
-        .support("lid", &[("ux", 0.01), ("uy", -0.006)])
-        .step_factors(&[0.25, 0.5, 0.75, 1.0])
-        .set("solver", "linear_solver", linear_solver)
-        .case();
+    let case = incompressible_plastic_blocks(linear_solver).case();
     let mesh = read_msh(&fixture("contact_pair.msh")).unwrap();
     let built = model(mesh, &case).unwrap();
     run_steps(&built, &settings(&case), |_| Ok(0.0)).expect("solves")

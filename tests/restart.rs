@@ -16,7 +16,8 @@ use asperity::solver::energy::{Energy, EnergyLedger};
 use asperity::solver::newton::ForceAverage;
 use asperity::solver::state::{LoopState, RunStatistics, Solution, StiffnessHistory};
 use common::{
-    CaseBuilder, fixture, held_block, list, plastic_blocks_pressed_and_sheared, table, two_blocks,
+    CaseBuilder, fixture, held_block, incompressible_plastic_blocks, list,
+    plastic_blocks_pressed_and_sheared, table, two_blocks,
 };
 use toml::Table;
 
@@ -433,6 +434,17 @@ fn a_plastic_run_resumed_from_any_frame_is_bit_identical() {
     let frames =
         resumed_from_any_frame_is_bit_identical(plastic_blocks_pressed_and_sheared("condensed"));
     assert_eq!(frames.frames.len(), 4);
+}
+
+/// The same with a chord step that fails to contract (a nearly incompressible lower block,
+/// in the fourth increment): the factor's reuse, stopped for the rest of that increment, is
+/// allowed again in the fifth, as in a run resumed there.
+#[test]
+fn a_run_whose_chord_steps_stall_resumed_from_any_frame_is_bit_identical() {
+    let builder =
+        incompressible_plastic_blocks("condensed").step_factors(&[0.25, 0.5, 0.75, 1.0, 1.05]);
+    let frames = resumed_from_any_frame_is_bit_identical(builder);
+    assert_eq!(frames.frames.len(), 5);
 }
 
 /// Runs `builder`'s case on the two-block mesh, then resumes it from the record of every

@@ -64,6 +64,22 @@ pub fn plastic_blocks_pressed_and_sheared(linear_solver: &str) -> CaseBuilder {
         .set("solver", "linear_solver", linear_solver)
 }
 
+/// [`plastic_blocks_pressed_and_sheared`] with a nearly incompressible lower block
+/// (ν = 0.49999, H = 10 MPa): its diagonal carries the bulk modulus λ ≈ 1.7e7 MPa, so the
+/// loss of its shear stiffness (G ≈ 333 MPa) to yielding measures as a change of the
+/// condensed bulk matrix of ~2e-5, far below the factor reuse threshold 0.01, while a chord
+/// step with the old factor hardly contracts.
+pub fn incompressible_plastic_blocks(linear_solver: &str) -> CaseBuilder {
+    let lower = with_keys(
+        block_material(),
+        &[("nu", 0.49999), ("yield_stress", 4.0), ("hardening", 10.0)],
+    );
+    two_blocks_on(lower, 0.2)
+        .support("lid", &[("ux", 0.01), ("uy", -0.006)])
+        .step_factors(&[0.25, 0.5, 0.75, 1.0])
+        .set("solver", "linear_solver", linear_solver)
+}
+
 /// One block held at its bottom (plane strain, `two_bodies_ascii.msh`): body "body_a" of
 /// [`block_material`], its "bottom" held (u_x = u_y = 0) and its "corner" point held in x.
 /// Nothing loads it: the steps are the tests' own.
