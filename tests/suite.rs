@@ -42,6 +42,7 @@ mod friction_circle;
 mod history;
 mod interface_topology;
 mod lame;
+mod line_search;
 mod load_history;
 mod locking;
 mod logging;

@@ -954,6 +954,10 @@ impl<'a> Newton<'a> {
         let mut fresh = !self.condensed.as_ref().is_some_and(|c| c.linear_bulk);
         // The symmetry of a tangent the line search already evaluated at u (its full step).
         let mut evaluated: Option<bool> = None;
+        // Whether the residual rose at an iteration of this increment: every later step is
+        // then line-searched, below `LINE_SEARCH_ABOVE` too (a full step that would rise
+        // again, e.g. friction statuses flipping back and forth, is shortened).
+        let mut rose = false;
         loop {
             let t = std::time::Instant::now();
             let symmetric = match evaluated.take() {
@@ -985,6 +989,7 @@ impl<'a> Newton<'a> {
             };
             log.residuals.push(residual);
             self.check_chord_contraction(&log.residuals);
+            rose |= matches!(log.residuals[..], [.., before, now] if now > before);
             tracing::debug!(
                 iteration = log.iterations,
                 residual = Criteria::ratio(&measures),
@@ -1054,7 +1059,7 @@ impl<'a> Newton<'a> {
                 self.work.solves.since(t);
             }
             let before = norm(u);
-            let step = if residual > LINE_SEARCH_ABOVE {
+            let step = if residual > LINE_SEARCH_ABOVE || rose {
                 let t = std::time::Instant::now();
                 let alpha;
                 (alpha, evaluated) = self.line_search(problem, u, residual * reference);
