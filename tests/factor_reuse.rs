@@ -5,23 +5,12 @@
 
 use crate::common;
 
-use asperity::mesh::msh::read_msh;
-use asperity::solver::state::{RunStatistics, Solution};
-use asperity::solver::stepping::run_steps;
 use common::*;
-
-/// [`incompressible_plastic_blocks`] solved on `linear_solver`'s path.
-fn run(linear_solver: &str) -> (Solution, RunStatistics) {
-    let case = incompressible_plastic_blocks(linear_solver).case();
-    let mesh = read_msh(&fixture("contact_pair.msh")).unwrap();
-    let built = model(mesh, &case).unwrap();
-    run_steps(&built, &settings(&case), |_| Ok(0.0)).expect("solves")
-}
 
 #[test]
 fn a_chord_step_that_does_not_contract_ends_the_reuse_of_the_factor() {
-    let (condensed, stats) = run("condensed");
-    let (krylov, krylov_stats) = run("krylov");
+    let (condensed, stats) = solve_two_blocks(incompressible_plastic_blocks("condensed"));
+    let (krylov, krylov_stats) = solve_two_blocks(incompressible_plastic_blocks("krylov"));
     // Without the contraction check the condensed run kept its factor through 42 of 48
     // iterations, cut its last step back after 25 of them stagnating at a relative residual
     // of 2e-3, and ended 5e-4 away from the Krylov path's answer (its residual just under
@@ -33,9 +22,7 @@ fn a_chord_step_that_does_not_contract_ends_the_reuse_of_the_factor() {
         stats.iterations,
         krylov_stats.iterations
     );
-    let largest = |v: &mut dyn Iterator<Item = f64>| v.fold(0.0_f64, |m, x| m.max(x.abs()));
-    let scale = largest(&mut krylov.u.iter().copied());
-    let difference = largest(&mut condensed.u.iter().zip(&krylov.u).map(|(a, b)| a - b));
+    let (difference, scale) = largest_difference(&condensed.u, &krylov.u);
     assert!(difference < 1e-6 * scale, "{difference:e} of {scale:e}");
     // The factor was still kept where a chord step contracted.
     let work = &stats.work.solver;

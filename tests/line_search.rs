@@ -6,26 +6,19 @@
 
 use crate::common;
 
-use asperity::mesh::msh::read_msh;
-use asperity::solver::state::{RunStatistics, Solution};
-use asperity::solver::stepping::run_steps;
 use common::*;
 
-/// The two blocks pressed and sheared (`plastic_blocks_pressed_and_sheared`), the lower one
+/// The two blocks pressed and sheared ([`plastic_blocks_pressed_and_sheared`]), the lower one
 /// yielding almost at once (σ_Y = 1e-3 MPa, H = 100 MPa), solved on `linear_solver`'s path.
-fn run(linear_solver: &str) -> (Solution, RunStatistics) {
+fn blocks_yielding_at_once(linear_solver: &str) -> CaseBuilder {
     let lower = with_keys(
         block_material(),
         &[("yield_stress", 1e-3), ("hardening", 100.0)],
     );
-    let case = two_blocks_on(lower, 0.2)
+    two_blocks_on(lower, 0.2)
         .support("lid", &[("ux", 0.01), ("uy", -0.006)])
         .step_factors(&[0.25, 0.5, 0.75, 1.0])
         .set("solver", "linear_solver", linear_solver)
-        .case();
-    let mesh = read_msh(&fixture("contact_pair.msh")).unwrap();
-    let built = model(mesh, &case).unwrap();
-    run_steps(&built, &settings(&case), |_| Ok(0.0)).expect("solves")
 }
 
 #[test]
@@ -34,8 +27,8 @@ fn a_newton_cycle_on_a_frictional_joint_is_broken_by_the_line_search() {
     // below a residual of 1e-3 took it through 229 iterations and 8 cut-backs here (at
     // σ_Y = 1e-9 the cycle never ended and the run failed); now 16, as few as the condensed
     // path's interface iterations need within a factor of three.
-    let (krylov, stats) = run("krylov");
-    let (condensed, condensed_stats) = run("condensed");
+    let (krylov, stats) = solve_two_blocks(blocks_yielding_at_once("krylov"));
+    let (condensed, condensed_stats) = solve_two_blocks(blocks_yielding_at_once("condensed"));
     assert_eq!(stats.cutbacks, 0, "{stats:?}");
     assert!(
         stats.iterations <= 3 * condensed_stats.iterations,
@@ -43,8 +36,6 @@ fn a_newton_cycle_on_a_frictional_joint_is_broken_by_the_line_search() {
         stats.iterations,
         condensed_stats.iterations
     );
-    let largest = |v: &mut dyn Iterator<Item = f64>| v.fold(0.0_f64, |m, x| m.max(x.abs()));
-    let scale = largest(&mut condensed.u.iter().copied());
-    let difference = largest(&mut krylov.u.iter().zip(&condensed.u).map(|(a, b)| a - b));
+    let (difference, scale) = largest_difference(&krylov.u, &condensed.u);
     assert!(difference < 1e-6 * scale, "{difference:e} of {scale:e}");
 }

@@ -237,6 +237,26 @@ pub fn solve(mesh: Mesh, case: &Case) -> (Model, Solution) {
     (model, solution)
 }
 
+/// Solves `builder`'s case on the two-block mesh (`contact_pair.msh`, [`two_blocks`]), with
+/// the run's statistics.
+pub fn solve_two_blocks(
+    builder: CaseBuilder,
+) -> (Solution, asperity::solver::state::RunStatistics) {
+    let case = builder.case();
+    let mesh = asperity::mesh::msh::read_msh(&fixture("contact_pair.msh")).unwrap();
+    let built = model(mesh, &case).unwrap();
+    run_steps(&built, &settings(&case), |_| Ok(0.0)).expect("solves")
+}
+
+/// The largest |a_i − b_i| and the largest |b_i|: a difference and its scale.
+pub fn largest_difference(a: &[f64], b: &[f64]) -> (f64, f64) {
+    let largest = |v: &mut dyn Iterator<Item = f64>| v.fold(0.0_f64, |m, x| m.max(x.abs()));
+    (
+        largest(&mut a.iter().zip(b).map(|(x, y)| x - y)),
+        largest(&mut b.iter().copied()),
+    )
+}
+
 /// Displacement of node `n`.
 pub fn displacement(solution: &Solution, n: usize) -> [f64; 2] {
     [solution.u[2 * n], solution.u[2 * n + 1]]
