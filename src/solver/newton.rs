@@ -414,7 +414,8 @@ pub fn distance(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// Relative residual above which corrections are checked by a line search. Below it Newton is
-/// in its quadratic phase and full steps are taken without the extra residual evaluation.
+/// in its quadratic phase and full steps are taken without the extra residual evaluation,
+/// unless the residual has risen earlier in the increment (docs/theory.md §7.3).
 const LINE_SEARCH_ABOVE: f64 = 1e-3;
 
 /// Largest residual ratio ‖r_{k+1}‖/‖r_k‖ accepted from a chord step (a correction solved with
