@@ -1160,7 +1160,6 @@ impl<'a> Newton<'a> {
         let work = &mut self.work;
         if let Some(c) = self.condensed.as_mut() {
             if c.bulk_dirty {
-                c.chord_step = false;
                 let factored = if self.bulk_symmetric {
                     let varying = self.system.off_reference_columns();
                     c.solver.factor_bulk_varying(matrix, varying)?
@@ -1171,10 +1170,11 @@ impl<'a> Newton<'a> {
                     // Factored for good: K_c is constant.
                     c.solver.release_refactorisation_storage();
                 }
+                // A kept factor of a different matrix makes the next step a chord step.
+                c.chord_step = !factored && c.solver.last_change() > 0.0;
                 let kind = if factored {
                     &mut work.factorisations
                 } else {
-                    c.chord_step = c.solver.last_change() > 0.0;
                     &mut work.kept_factorisations
                 };
                 kind.since(t);
